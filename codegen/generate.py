@@ -21,6 +21,7 @@ from pathlib import Path
 
 from codegen import backends
 from codegen.backend import Module, RobotTarget, function_ir
+from codegen.certify.stored import model_section
 from codegen.controller_layout import ControllerLayout
 from codegen.progress import Progress, quiet
 from codegen.robot_functions import (
@@ -123,5 +124,6 @@ def generate_files(
         with progress.step("writing the report (MODEL.md)"):
             renderer = importlib.import_module(model.docs.get("report",
                                                               "codegen.robot_report"))
-            out[f"{root}MODEL.md"] = renderer.render(model, robot, op_counts(target)).encode()
+            report_text = renderer.render(model, robot, op_counts(target))
+            out[f"{root}MODEL.md"] = (report_text + model_section(model.prefix)).encode()
     return out

@@ -25,6 +25,10 @@ extern "C" {
  * @param[out] P [3] row-major (WMR_LYAPUNOV_P_P_SIZE) -- p11, p12, p22
  *
  * operations after CSE: 3 add, 9 mul, 2 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * P 2.4e-05 (largest entry).
  */
 void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P);
 
@@ -52,6 +56,10 @@ void wmr_lyapunov_p(const wmr_real_t *gains, wmr_real_t *P);
  * @param[out] gain [1] row-major (WMR_TDROC_WEIGHTED_GAIN_GAIN_SIZE)
  *
  * operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * gain 0.0003 (largest entry).
  */
 void wmr_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn_new,
     const wmr_real_t *dn_kept, const wmr_real_t *w, wmr_real_t *gain);
@@ -81,6 +89,10 @@ void wmr_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn_n
  * @param[out] H1hat [5] row-major (WMR_PAPER_TDE_H1HAT_SIZE)
  *
  * operations after CSE: 35 add, 48 mul, 2 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * H1hat 0.057 (largest entry).
  */
 void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev,
     const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span,
@@ -114,6 +126,10 @@ void wmr_paper_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_re
  * @param[out] H1hat [5] row-major (WMR_PAPER_TDE_TRIG_H1HAT_SIZE)
  *
  * operations after CSE: 35 add, 48 mul, 2 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * H1hat 0.056 (largest entry).
  */
 void wmr_paper_tde_trig(const wmr_params_t *p, const wmr_real_t *trig_prev,
     const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
@@ -131,6 +147,10 @@ void wmr_paper_tde_trig(const wmr_params_t *p, const wmr_real_t *trig_prev,
  * @param[out] norm [1] row-major (WMR_PAPER_MINV_NORM_NORM_SIZE)
  *
  * operations after CSE: 63 add, 127 mul, 5 div, 0 sin/cos, 1 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * norm 1.5e-05 (largest entry).
  */
 void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
 
@@ -160,6 +180,10 @@ void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  * @param[out] gain [1] row-major (WMR_PAPER_TDROC_GAIN_GAIN_SIZE)
  *
  * operations after CSE: 79 add, 49 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * gain 0.031 (largest entry).
  */
 void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, const wmr_real_t *w,
     wmr_real_t *gain);
@@ -181,6 +205,10 @@ void wmr_paper_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega, 
  * @param[out] norm [1] row-major (WMR_PAPER_OMEGA_DIFFERENCE_NORM_SIZE)
  *
  * operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * norm 0.00021 (largest entry).
  */
 void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older, wmr_real_t *norm);
 
@@ -220,6 +248,10 @@ void wmr_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older
  * @param[out] u [5] row-major (WMR_PAPER_TDC_LAW_U_SIZE)
  *
  * operations after CSE: 40 add, 46 mul, 1 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.00063 (largest entry).
  */
 void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -264,6 +296,10 @@ void wmr_paper_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  * @param[out] u [5] row-major (WMR_PAPER_TDC_LAW_TRIG_U_SIZE)
  *
  * operations after CSE: 40 add, 46 mul, 1 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.00064 (largest entry).
  */
 void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -315,6 +351,10 @@ void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const
  * @param[out] s_norm [1] row-major (WMR_PAPER_TDROC_LAW_S_NORM_SIZE)
  *
  * operations after CSE: 54 add, 66 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.42, s 5.4e-07, s_norm 5.4e-06 (largest entry).
  */
 void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -370,6 +410,10 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * @param[out] s_norm [1] row-major (WMR_PAPER_TDROC_LAW_TRIG_S_NORM_SIZE)
  *
  * operations after CSE: 54 add, 66 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.41, s 5.4e-07, s_norm 5.4e-06 (largest entry).
  */
 void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -424,6 +468,10 @@ void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, con
  * @param[out] gain [1] row-major (WMR_PAPER_ROC_LAW_GAIN_SIZE)
  *
  * operations after CSE: 74 add, 110 mul, 3 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.39, s 5.4e-07, s_norm 5.4e-06, gain 7.7e-05 (largest entry).
  */
 void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -480,6 +528,10 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  * @param[out] gain_next [1] row-major (WMR_PAPER_ASMC_LAW_GAIN_NEXT_SIZE)
  *
  * operations after CSE: 64 add, 101 mul, 2 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.42, s 5.4e-07, s_norm 5.4e-06, gain_next 1.3e-05 (largest entry).
  */
 void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -510,6 +562,10 @@ void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_re
  * @param[out] H1hat [2] row-major (WMR_MINIMAL_TDE_H1HAT_SIZE)
  *
  * operations after CSE: 11 add, 20 mul, 2 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * H1hat 0.00062 (largest entry).
  */
 void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_real_t *u_prev,
     const wmr_real_t *qdot_now, const wmr_real_t *qdot_then, const wmr_real_t *span,
@@ -527,6 +583,10 @@ void wmr_minimal_tde(const wmr_params_t *p, const wmr_real_t *q_prev, const wmr_
  * @param[out] norm [1] row-major (WMR_MINIMAL_MINV_NORM_NORM_SIZE)
  *
  * operations after CSE: 7 add, 20 mul, 2 div, 0 sin/cos, 1 sqrt, 1 fabs
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * norm 2e-05 (largest entry).
  */
 void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
 
@@ -554,6 +614,10 @@ void wmr_minimal_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
  * @param[out] gain [1] row-major (WMR_MINIMAL_TDROC_GAIN_GAIN_SIZE)
  *
  * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * gain 0.015 (largest entry).
  */
 void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega,
     const wmr_real_t *w, wmr_real_t *gain);
@@ -575,6 +639,10 @@ void wmr_minimal_tdroc_gain(const wmr_real_t *minv_norm, const wmr_real_t *omega
  * @param[out] norm [1] row-major (WMR_MINIMAL_OMEGA_DIFFERENCE_NORM_SIZE)
  *
  * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * norm 8.4e-05 (largest entry).
  */
 void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
     wmr_real_t *norm);
@@ -611,6 +679,10 @@ void wmr_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *old
  * @param[out] u [2] row-major (WMR_MINIMAL_TDC_LAW_U_SIZE)
  *
  * operations after CSE: 13 add, 22 mul, 1 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 3.6e-05 (largest entry).
  */
 void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -658,6 +730,10 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * @param[out] s_norm [1] row-major (WMR_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
  * operations after CSE: 20 add, 36 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.0082, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
 void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -709,6 +785,10 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
  * @param[out] gain [1] row-major (WMR_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
  * operations after CSE: 30 add, 56 mul, 3 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.0051, s 5.4e-07, s_norm 2.3e-06, gain 4e-05 (largest entry).
  */
 void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -762,6 +842,10 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  * @param[out] gain_next [1] row-major (WMR_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
  * operations after CSE: 26 add, 53 mul, 2 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.0081, s 5.4e-07, s_norm 2.3e-06, gain_next 9.4e-06 (largest entry).
  */
 void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -803,6 +887,10 @@ void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_
  * @param[out] integral_next [2] row-major (WMR_MINIMAL_PI_LAW_INTEGRAL_NEXT_SIZE)
  *
  * operations after CSE: 17 add, 21 mul, 1 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.49, integral_next 0.17 (largest entry).
  */
 void wmr_minimal_pi_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *q_des, const wmr_real_t *qdot_des, const wmr_real_t *integral,

@@ -30,6 +30,10 @@ extern "C" {
  * @param[out] xdot [7] row-major (WMR_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
  * operations after CSE: 22 add, 47 mul, 2 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * xdot 0.013 (largest entry).
  */
 void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *x,
     const wmr_real_t *tau, wmr_real_t *xdot);
@@ -48,6 +52,10 @@ void wmr_plant_state_derivative(const wmr_plant_params_t *pp, const wmr_real_t *
  * @param[out] params [8] row-major (WMR_PLANT_PARAMS_WITH_PAYLOAD_PARAMS_SIZE)
  *
  * operations after CSE: 5 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * params 3.6e-06 (largest entry).
  */
 void wmr_plant_params_with_payload(const wmr_plant_params_t *base, const wmr_real_t *payload,
     wmr_real_t *params);

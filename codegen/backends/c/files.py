@@ -36,6 +36,7 @@ from codegen.backends.c.prepared import (
     prepared_api,
     prepared_context,
 )
+from codegen.certify.header import certificate_doc
 from codegen.layout import is_scalar, is_vector
 from codegen.spec import Field, FunctionSpec
 
@@ -239,6 +240,8 @@ def module_context(
     contexts = []
     for f in functions:
         ctx = function_context(f, config, module)
+        ctx["doc_lines"] = [*ctx["doc_lines"],  # type: ignore[misc]
+                            *certificate_doc(f.name, ctx["body"], config.prefix.rstrip("_"))]
         if wrappers and f.spec.name in wrappers:
             ctx["wrapper"] = list(wrappers[f.spec.name])
             ctx["norms"] = []

@@ -26,6 +26,10 @@ extern "C" {
  * @param[out] P [3] row-major (TRAILER_LYAPUNOV_P_P_SIZE) -- p11, p12, p22
  *
  * operations after CSE: 3 add, 9 mul, 2 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * P 2.4e-05 (largest entry).
  */
 void trailer_lyapunov_p(const trailer_real_t *gains, trailer_real_t *P);
 
@@ -54,6 +58,10 @@ void trailer_lyapunov_p(const trailer_real_t *gains, trailer_real_t *P);
  * @param[out] gain [1] row-major (TRAILER_TDROC_WEIGHTED_GAIN_GAIN_SIZE)
  *
  * operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * gain 0.0003 (largest entry).
  */
 void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_real_t *dn_new,
     const trailer_real_t *dn_kept, const trailer_real_t *w, trailer_real_t *gain);
@@ -83,6 +91,10 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
  * @param[out] H1hat [2] row-major (TRAILER_MINIMAL_TDE_H1HAT_SIZE)
  *
  * operations after CSE: 40 add, 68 mul, 5 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * H1hat 0.0037 (largest entry).
  */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
@@ -116,6 +128,10 @@ void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev
  * @param[out] H1hat [2] row-major (TRAILER_MINIMAL_TDE_MHAT_H1HAT_SIZE)
  *
  * operations after CSE: 6 add, 6 mul, 1 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * H1hat 0.00027 (largest entry).
  */
 void trailer_minimal_tde_mhat(const trailer_params_t *p, const trailer_real_t *mhat_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
@@ -137,6 +153,10 @@ void trailer_minimal_tde_mhat(const trailer_params_t *p, const trailer_real_t *m
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_MINV_NORM_NORM_SIZE)
  *
  * operations after CSE: 37 add, 68 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * NOT proved over its declared box (node 152 (div): divisor may be 0); |float32 - exact|
+ * <= norm inf (largest entry).
  */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm);
@@ -158,6 +178,10 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_MINV_NORM_MHAT_NORM_SIZE)
  *
  * operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * NOT proved over its declared box (node 15 (div): divisor may be 0); |float32 - exact| <=
+ * norm inf (largest entry).
  */
 void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     trailer_real_t *norm);
@@ -180,6 +204,10 @@ void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_rea
  * @param[out] M [4] row-major (TRAILER_MINIMAL_MHAT_M_SIZE) -- 2x2 row-major
  *
  * operations after CSE: 58 add, 96 mul, 4 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * M 1e-06 (largest entry).
  */
 void trailer_minimal_mhat(const trailer_params_t *p, const trailer_real_t *q, trailer_real_t *M);
 
@@ -207,6 +235,10 @@ void trailer_minimal_mhat(const trailer_params_t *p, const trailer_real_t *q, tr
  * @param[out] gain [1] row-major (TRAILER_MINIMAL_TDROC_GAIN_GAIN_SIZE)
  *
  * operations after CSE: 31 add, 25 mul, 0 div, 0 sin/cos, 8 sqrt, 8 cmp
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * gain 0.015 (largest entry).
  */
 void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_real_t *omega,
     const trailer_real_t *w, trailer_real_t *gain);
@@ -228,6 +260,10 @@ void trailer_minimal_tdroc_gain(const trailer_real_t *minv_norm, const trailer_r
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_OMEGA_DIFFERENCE_NORM_SIZE)
  *
  * operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * norm 8.4e-05 (largest entry).
  */
 void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer_real_t *older,
     trailer_real_t *norm);
@@ -266,6 +302,10 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
  * @param[out] u [2] row-major (TRAILER_MINIMAL_TDC_LAW_U_SIZE)
  *
  * operations after CSE: 42 add, 70 mul, 4 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.00016 (largest entry).
  */
 void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -307,6 +347,10 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] u [2] row-major (TRAILER_MINIMAL_TDC_LAW_MHAT_U_SIZE)
  *
  * operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 2.1e-05 (largest entry).
  */
 void trailer_minimal_tdc_law_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -357,6 +401,10 @@ void trailer_minimal_tdc_law_mhat(const trailer_params_t *p, const trailer_real_
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
  * operations after CSE: 49 add, 84 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.016, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -412,6 +460,10 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_MHAT_S_NORM_SIZE)
  *
  * operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.008, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
 void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -467,6 +519,10 @@ void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_rea
  * @param[out] gain [1] row-major (TRAILER_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
  * operations after CSE: 84 add, 141 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.016, s 5.4e-07, s_norm 2.3e-06, gain 4e-05 (largest entry).
  */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
@@ -525,6 +581,10 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] gain_next [1] row-major (TRAILER_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
  * operations after CSE: 80 add, 138 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.022, s 5.4e-07, s_norm 2.3e-06, gain_next 9.4e-06 (largest entry).
  */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
@@ -569,6 +629,10 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
  * @param[out] integral_next [2] row-major (TRAILER_MINIMAL_PI_LAW_INTEGRAL_NEXT_SIZE)
  *
  * operations after CSE: 17 add, 22 mul, 2 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * u 0.43, integral_next 0.15 (largest entry).
  */
 void trailer_minimal_pi_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *q_des, const trailer_real_t *qdot_des,

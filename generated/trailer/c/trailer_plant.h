@@ -32,6 +32,10 @@ extern "C" {
  * @param[out] xdot [10] row-major (TRAILER_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
  * operations after CSE: 68 add, 122 mul, 5 div, 4 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * NOT proved over its declared box (node 235 (div): divisor may be 0); |float32 - exact|
+ * <= xdot inf (largest entry).
  */
 void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trailer_real_t *x,
     const trailer_real_t *tau, trailer_real_t *xdot);
@@ -53,6 +57,10 @@ void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trai
  * @param[out] params [15] row-major (TRAILER_PLANT_PARAMS_WITH_PAYLOAD_PARAMS_SIZE)
  *
  * operations after CSE: 5 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * params 4.7e-06 (largest entry).
  */
 void trailer_plant_params_with_payload(const trailer_plant_params_t *base,
     const trailer_real_t *payload, trailer_real_t *params);

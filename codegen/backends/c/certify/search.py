@@ -1,0 +1,181 @@
+"""The search for the largest float32 error: the printed program evaluated in numpy
+float32 (IEEE round to nearest, operation by operation in the printed order) against the
+function's own expressions evaluated by mpmath at 113 bits (SymPy's CSE of the spec's
+outputs without the printer's shared reciprocals: the same mathematics, another route).
+
+Random points of the box, then a coordinate search from the worst ones: each coordinate
+moved by a shrinking step while the error of the output being maximised grows.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import mpmath
+import numpy as np
+import numpy.typing as npt
+import sympy as sp
+
+from codegen.backend import FunctionIR
+from codegen.backends.c.certify.program import Program
+
+F32 = npt.NDArray[np.float32]
+EXACT_BITS = 113
+
+
+def float32_eval(program: Program, inputs: Mapping[sp.Symbol, F32]) -> list[F32]:
+    """The outputs of ``program`` in float32 for arrays of inputs (one entry per point).
+    sin and cos: the double result rounded once (within the helpers' stated 2 ulp)."""
+    vals: list[Any] = []  # float32 values, or booleans of comparisons
+    by_node = {program.inputs[s]: np.asarray(v, dtype=np.float32) for s, v in inputs.items()}
+    n = len(next(iter(by_node.values())))
+    with np.errstate(all="ignore"):
+        for idx, node in enumerate(program.nodes):
+            a = [vals[i] for i in node.args]
+            op = node.op
+            if op == "in":
+                r: Any = by_node[idx]
+            elif op == "lit":
+                r = np.full(n, node.value, dtype=np.float32)
+            elif op == "neg":
+                r = -a[0]
+            elif op in _ARITH:
+                r = _ARITH[op](a[0], a[1])
+            elif op == "call":
+                r = _call(node.name, a)
+            elif op == "cond":
+                r = np.where(a[0], a[1], a[2])
+            elif op in _COMPARE:
+                r = _COMPARE[op](a[0], a[1])
+            elif op == "and":
+                r = a[0] & a[1]
+            elif op == "or":
+                r = a[0] | a[1]
+            elif op == "not":
+                r = ~a[0]
+            else:
+                raise ValueError(f"cannot evaluate {op}")
+            vals.append(r)
+    return [np.asarray(vals[i], dtype=np.float32) for _, i in program.outputs]
+
+
+_ARITH: dict[str, Callable[[npt.NDArray[np.generic], npt.NDArray[np.generic]],
+                           npt.NDArray[np.generic]]] = {
+    "add": np.add, "sub": np.subtract, "mul": np.multiply, "div": np.divide}
+_COMPARE = {"lt": np.less, "le": np.less_equal, "gt": np.greater, "ge": np.greater_equal,
+            "eq": np.equal, "ne": np.not_equal}
+
+
+def _call(name: str, a: Sequence[npt.NDArray[np.generic]]) -> npt.NDArray[np.generic]:
+    base = name.removesuffix("_bounded")
+    if base in ("sin", "cos"):
+        f = np.sin if base == "sin" else np.cos
+        return f(a[0].astype(np.float64)).astype(np.float32)
+    if name == "sqrt":
+        return np.sqrt(a[0])
+    if name == "fabs":
+        return np.abs(a[0])
+    if name == "fmax":
+        return np.fmax(a[0], a[1])
+    if name == "fmin":
+        return np.fmin(a[0], a[1])
+    raise ValueError(f"cannot evaluate {name}")
+
+
+class Exact:
+    """The function's outputs at a point, in mpmath with :data:`EXACT_BITS` bits."""
+
+    def __init__(self, ir: FunctionIR, symbols: Sequence[sp.Symbol]) -> None:
+        plain = ir.plain
+        self.symbols = list(symbols)
+        temps = [t for t, _ in plain.temps]
+        args = self.symbols + [s for s in ir.spec.input_symbols() if s not in set(symbols)]
+        self._extra = len(args) - len(self.symbols)
+        self._temps = [sp.lambdify(args + temps[:k], e, modules="mpmath")
+                       for k, (_, e) in enumerate(plain.temps)]
+        flat = [e for exprs in plain.outputs[:len(ir.spec.outputs)] for e in exprs]
+        self._outs = [sp.lambdify(args + temps, e, modules="mpmath") for e in flat]
+
+    def __call__(self, point: Sequence[float]) -> list[mpmath.mpf]:
+        with mpmath.workprec(EXACT_BITS):
+            vals = [mpmath.mpf(float(v)) for v in point] + [mpmath.mpf(0)] * self._extra
+            for f in self._temps:
+                vals.append(f(*vals))
+            return [mpmath.mpf(f(*vals)) for f in self._outs]
+
+
+@dataclass(frozen=True)
+class Found:
+    """The largest error found per output, where, and how many points were tried."""
+
+    errors: tuple[float, ...]
+    points: tuple[tuple[float, ...], ...]
+    evaluated: int
+
+
+def errors_at(program: Program, exact: Exact, pts: npt.NDArray[np.float32]
+              ) -> npt.NDArray[np.float64]:
+    """|float32 - exact| per point (rows) and output (columns)."""
+    got = float32_eval(program, {s: pts[:, k] for k, s in enumerate(exact.symbols)})
+    out = np.empty((len(pts), len(got)))
+    for i, row in enumerate(pts):
+        try:
+            ref = exact([float(v) for v in row])
+        except ZeroDivisionError:  # the mathematics is undefined there (a singular M-hat
+            out[i] = 0.0  # of independent box entries): no exact value to compare
+            continue
+        for j, g in enumerate(got):
+            out[i, j] = float(abs(mpmath.mpf(float(g[i])) - ref[j]))
+    return out
+
+
+def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float, float]],
+           *, random_points: int = 200, climbs: int = 4, rounds: int = 3,
+           seed: int = 0) -> Found:
+    """Random then coordinate search over ``box`` for each output's largest error."""
+    rng = np.random.default_rng(seed)
+    symbols = sorted(program.inputs, key=lambda s: program.inputs[s])
+    exact = Exact(ir, symbols)
+    lo = np.array([box[s][0] for s in symbols], dtype=np.float64)
+    hi = np.array([box[s][1] for s in symbols], dtype=np.float64)
+
+    def inside(p: npt.NDArray[np.float64]) -> npt.NDArray[np.float32]:
+        q = np.clip(p, lo, hi).astype(np.float32)
+        # rounding to float32 may leave the box by half an ulp: step back in
+        q = np.where(q < lo, np.nextafter(q, np.float32(np.inf)), q)
+        return np.where(q > hi, np.nextafter(q, np.float32(-np.inf)), q).astype(np.float32)
+
+    corners = rng.integers(0, 2, size=(random_points // 4, len(symbols)))
+    pts = np.concatenate([lo + (hi - lo) * rng.random((random_points, len(symbols))),
+                          np.where(corners == 1, hi, lo)])
+    pts32 = inside(pts)
+    err = errors_at(program, exact, pts32)
+    evaluated = len(pts32)
+    best = err.max(axis=0)
+    where = [pts32[i] for i in err.argmax(axis=0)]
+    for j in range(err.shape[1]):  # climb from the worst points of each output
+        for start in np.argsort(-err[:, j])[:climbs]:
+            x = pts32[start].astype(np.float64)
+            cur = err[start, j]
+            step = 0.25 * (hi - lo)
+            for _ in range(rounds):
+                for k in rng.permutation(len(symbols)):
+                    if step[k] == 0:
+                        continue
+                    trial = np.stack([x, x])
+                    trial[0, k] += step[k]
+                    trial[1, k] -= step[k]
+                    t32 = inside(trial)
+                    e = errors_at(program, exact, t32)[:, j]
+                    evaluated += 2
+                    if e.max() > cur:
+                        cur = float(e.max())
+                        x = t32[int(e.argmax())].astype(np.float64)
+                step = step / 4
+            if cur > best[j]:
+                best[j] = cur
+                where[j] = inside(x[None, :])[0]
+    return Found(tuple(float(b) for b in best),
+                 tuple(tuple(float(v) for v in w) for w in where), evaluated)

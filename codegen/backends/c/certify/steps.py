@@ -1,0 +1,107 @@
+"""The controller steps' torque: each law's certificate with the errors its inputs carry
+from the rest of the step.
+
+A step (``wmr_<ctrl>_step``) computes, in float32: the tracking errors ``e = q_des - q``
+and ``edot = qdot_des - qdot`` (one subtraction each), sin and cos of the angles
+(``wmr_sincos_bounded``, 2 ulp), P from ``lyapunov_p`` (at ``_init``), H1hat from the
+TDE kernel, k-hat from the weighted gain over the window's difference norms, then the
+law; the torque is the law's rows of the driven wheels, saturated at tau_max (clamping
+is 1-Lipschitz: the bound holds after it). Against the exact step (every one of those in
+exact arithmetic on the same float32 inputs and state), the law's inputs therefore carry
+the certified bounds of the functions that computed them: :func:`step_certificates`
+certifies the law over its box with those input errors. The kernels a step inlines
+(``wmr_kernels.h``) evaluate the same temporaries in the same order as the public
+functions certified here (``codegen.backends.c.kernels`` splits one CSE at the
+parameters); state carried across steps (the PI integral, the window) is taken as stored.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+
+from codegen.backend import RobotTarget
+from codegen.backends.c.certify.analysis import U
+from codegen.backends.c.certify.bound import Certificate, certify
+from codegen.backends.c.certify.boxes import ENVELOPE, Envelope, Interval
+from codegen.backends.c.certify.program import Program
+
+# controller -> (estimator, gain, law) name stems; "{f}" is the formulation
+CHAINS: Mapping[str, tuple[str, str, str]] = {
+    "tdc": ("{f}_tde", "", "{f}_tdc_law"),
+    "tdroc": ("{f}_tde", "tdroc_weighted_gain", "{f}_tdroc_law"),
+    "roc": ("", "", "{f}_roc_law"),
+    "asmc": ("", "", "{f}_asmc_law"),
+    "pi": ("", "", "{f}_pi_law"),
+}
+
+
+@dataclass(frozen=True)
+class StepBound:
+    controller: str
+    formulation: str
+    law: str
+    torque_outputs: tuple[str, ...]
+    bound: float  # N m, the largest over the driven wheels
+    proved: bool
+    reason: str
+    tau_max: float
+
+
+def _pick(names: set[str], stem: str, paper: bool) -> str:
+    """The variant a step calls: ``_trig`` (paper: sin/cos once a step), ``_mhat``
+    (M-hat evaluated once a step), else the plain function."""
+    for suffix in (("_trig",) if paper else ("_mhat",)) + ("",):
+        if stem + suffix in names:
+            return stem + suffix
+    return ""
+
+
+def step_certificates(target: RobotTarget,
+                      certs: Mapping[str, tuple[Program, dict[object, Interval], Certificate]],
+                      env: Envelope = ENVELOPE, seconds: float = 3.0) -> Iterator[StepBound]:
+    """The torque bound of every controller step and formulation of ``target``."""
+    layout = target.layout
+    names = set(certs)
+    forms = (("paper", True), ("minimal", False)) if layout.paper else (("minimal", False),)
+
+    def bound_of(name: str) -> float:
+        return max(certs[name][2].bounds) if name in certs else float("inf")
+
+    for ctrl, (est, gain, law) in CHAINS.items():
+        for form, paper in forms:
+            law_name = _pick(names, law.format(f=form), paper)
+            if not law_name:
+                continue
+            prog, box, _ = certs[law_name]
+            errs: dict[object, float] = {}
+            notes: list[str] = []
+            est_name = _pick(names, est.format(f=form), paper) if est else ""
+            for sym, access in prog.input_names.items():
+                arg = access.split("[")[0]
+                if arg == "e":
+                    errs[sym] = U * max(abs(v) for v in box[sym])  # q_des - q, rounded once
+                elif arg == "edot":
+                    errs[sym] = U * max(abs(v) for v in box[sym])
+                elif arg in ("p12", "p22"):
+                    errs[sym] = bound_of("lyapunov_p")
+                elif arg == "trig":
+                    errs[sym] = 4.0 * U
+                elif arg == "H1hat" and est_name:
+                    errs[sym] = bound_of(est_name)
+                    lo, hi = box[sym]
+                    rng = certs[est_name][2].ranges
+                    if min(r[0] for r in rng) < lo or max(r[1] for r in rng) > hi:
+                        notes.append(f"{est_name}'s output leaves the declared H1hat box")
+                elif arg == "gain" and gain:
+                    errs[sym] = bound_of(gain)
+                elif arg == "mhat":
+                    errs[sym] = bound_of("minimal_mhat")
+            cert = certify(prog, box, errs, seconds=seconds)
+            rows = (tuple(f"u[{i}]" for i in layout.actuated) if paper
+                    else tuple(f"u[{i}]" for i in range(layout.nu)))
+            bounds = [cert.bounds[cert.outputs.index(r)] for r in rows if r in cert.outputs]
+            yield StepBound(ctrl, form, law_name, rows, max(bounds) if bounds else float("inf"),
+                            cert.proved and not notes, "; ".join(dict.fromkeys(
+                                [cert.reason] * (not cert.proved) + notes)),
+                            env.torque)
