@@ -91,6 +91,10 @@ payload_mass, payload_x, payload_y (kg, kg m^2, m)
  * @param[out] base [11] row-major (TRAILER_PLANT_PARAMS_FROM_PHYSICAL_BASE_SIZE)
  *
  * operations after CSE: 34 add, 34 mul, 0 div, 0 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
+ * certificate (the printed code changed since the
+ * last run: run it again).
  */
 void trailer_plant_params_from_physical(const trailer_real_t *phys, trailer_real_t *base);
 
