@@ -20,7 +20,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0xa38479dau
+#define WMR_CODE_ID 0x450bd281u
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
@@ -397,7 +397,8 @@ typedef enum {
     WMR_ERR_BAD_NOMINAL = -12, /* nominal parameters give a singular M-hat */
     WMR_ERR_BAD_TORQUE_LIMIT = -13, /* torque limit <= 0 or NaN */
     WMR_ERR_BAD_FORMULATION = -14, /* formulation is not PAPER or MINIMAL */
-    WMR_ERR_NOT_INITIALISED = -15, /* state not initialised by _init */
+    WMR_ERR_NOT_INITIALISED = -15, /* state not initialised by _init, or corrupted (an index it
+                                      holds out of range) */
     WMR_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
     WMR_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                     rate_window is outside [0, h] */

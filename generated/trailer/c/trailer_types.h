@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0x9aaf57ecu
+#define TRAILER_CODE_ID 0x901c44e3u
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;
@@ -375,7 +375,8 @@ typedef enum {
     TRAILER_ERR_BAD_NOMINAL = -12, /* nominal parameters give a singular M-hat */
     TRAILER_ERR_BAD_TORQUE_LIMIT = -13, /* torque limit <= 0 or NaN */
     TRAILER_ERR_BAD_FORMULATION = -14, /* formulation is not MINIMAL (the only one generated) */
-    TRAILER_ERR_NOT_INITIALISED = -15, /* state not initialised by _init */
+    TRAILER_ERR_NOT_INITIALISED = -15, /* state not initialised by _init, or corrupted (an index it
+                                          holds out of range) */
     TRAILER_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
     TRAILER_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                         rate_window is outside [0, h] */

@@ -47,7 +47,7 @@ STATUS: dict[str, int] = {
     "TRAILER_ERR_BAD_NOMINAL": -12,  # nominal parameters give a singular M-hat
     "TRAILER_ERR_BAD_TORQUE_LIMIT": -13,  # torque limit <= 0 or NaN
     "TRAILER_ERR_BAD_FORMULATION": -14,  # formulation is not MINIMAL (the only one generated)
-    "TRAILER_ERR_NOT_INITIALISED": -15,  # state not initialised by _init
+    "TRAILER_ERR_NOT_INITIALISED": -15,  # state not initialised by _init, or corrupted (an index it holds out of range)
     "TRAILER_ERR_BAD_BOUNDS": -16,  # ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0
     "TRAILER_ERR_BAD_ESTIMATOR": -17,  # accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h]
     "TRAILER_ERR_BAD_HELD_GAIN": -18,  # TDROC hold_gain is not 0 or 1, or held_gain < 0

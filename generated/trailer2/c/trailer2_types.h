@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER2_CODE_ID 0x784856b9u
+#define TRAILER2_CODE_ID 0xe0d9fe22u
 
 #ifdef TRAILER2_FLOAT32
 typedef float trailer2_real_t;
@@ -376,7 +376,8 @@ typedef enum {
     TRAILER2_ERR_BAD_NOMINAL = -12, /* nominal parameters give a singular M-hat */
     TRAILER2_ERR_BAD_TORQUE_LIMIT = -13, /* torque limit <= 0 or NaN */
     TRAILER2_ERR_BAD_FORMULATION = -14, /* formulation is not MINIMAL (the only one generated) */
-    TRAILER2_ERR_NOT_INITIALISED = -15, /* state not initialised by _init */
+    TRAILER2_ERR_NOT_INITIALISED = -15, /* state not initialised by _init, or corrupted (an index it
+                                           holds out of range) */
     TRAILER2_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
     TRAILER2_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                          rate_window is outside [0, h] */
