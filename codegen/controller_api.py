@@ -149,7 +149,8 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
             "the configuration differs from the one given to _init (any bit of any value)",
         ),
         StatusCode(f"{P}_ERR_BAD_TRACTION", -20,
-                   "traction check: friction coefficient or a wheel load <= 0"),
+                   "traction check: friction coefficient or a wheel load <= 0, mu N outside"
+                   " [1e-30, 1e30] N or a share outside [0, 1]"),
     )
 
 

@@ -52,7 +52,7 @@ STATUS: dict[str, int] = {
     "TRAILER_ERR_BAD_ESTIMATOR": -17,  # accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h]
     "TRAILER_ERR_BAD_HELD_GAIN": -18,  # TDROC hold_gain is not 0 or 1, or held_gain < 0
     "TRAILER_ERR_CONFIG_CHANGED": -19,  # the configuration differs from the one given to _init (any bit of any value)
-    "TRAILER_ERR_BAD_TRACTION": -20,  # traction check: friction coefficient or a wheel load <= 0
+    "TRAILER_ERR_BAD_TRACTION": -20,  # traction check: friction coefficient or a wheel load <= 0, mu N outside [1e-30, 1e30] N or a share outside [0, 1]
 }
 FORMULATION_PAPER = 0
 FORMULATION_MINIMAL = 1

@@ -299,16 +299,6 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
     if (state->magic != TRAILER2_STATE_MAGIC) {
         return trailer2_fail(detail, TRAILER2_ERR_NOT_INITIALISED, TRAILER2_FIELD_STATE, -1);
     }
-    /* The ring's head and count, bounded once, here, before any use: from a corrupted state
-       (a flipped bit, magic intact) the step fails instead of reading or writing outside
-       omega_ring, or counting past INT_MAX. One unsigned compare each (a negative int is
-       large); the locals, not the state, are used from here on. */
-    omega_head = state->omega_head;
-    omega_count = state->omega_count;
-    if (((unsigned int)omega_head >= (unsigned int)TRAILER2_MAX_WINDOW)
-        || ((unsigned int)omega_count > (unsigned int)TRAILER2_MAX_WINDOW + 1u)) {
-        return trailer2_fail(detail, TRAILER2_ERR_NOT_INITIALISED, TRAILER2_FIELD_STATE, -1);
-    }
 #ifdef TRAILER2_TDROC_FROZEN
     /* The compiled-in configuration and no other; read through cfg, the compiler folds it. */
     if (config != &trailer2_tdroc_frozen_config) {
@@ -387,7 +377,16 @@ trailer2_status_t trailer2_tdroc_step_detail(trailer2_tdroc_state_t *state,
        back by one, and the window after it is the new norm, then omega_ring[head + 1 ...],
        which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
        the state is written at the commit only (two values and the head). */
-    pushed = state->steps >= 2u;  /* omega_head and omega_count: read and bounded above */
+    pushed = state->steps >= 2u;
+    /* The ring's head and count, read once and bounded at their use: from a corrupted state
+       (a flipped bit, magic intact) the step fails, nothing written, instead of reading or
+       writing outside omega_ring. One unsigned compare each (a negative int is large). */
+    omega_head = state->omega_head;
+    omega_count = state->omega_count;
+    if (((unsigned int)omega_head >= (unsigned int)TRAILER2_MAX_WINDOW)
+        || ((unsigned int)omega_count > ((unsigned int)TRAILER2_MAX_WINDOW + 1u))) {
+        return trailer2_fail(detail, TRAILER2_ERR_NOT_INITIALISED, TRAILER2_FIELD_STATE, -1);
+    }
     if (pushed) {
         trailer2_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
         omega_head = omega_head == 0 ? TRAILER2_MAX_WINDOW - 1 : omega_head - 1;
