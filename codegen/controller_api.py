@@ -128,7 +128,10 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
         StatusCode(f"{P}_ERR_BAD_NOMINAL", -12, "nominal parameters give a singular M-hat"),
         StatusCode(f"{P}_ERR_BAD_TORQUE_LIMIT", -13, "torque limit <= 0 or NaN"),
         StatusCode(f"{P}_ERR_BAD_FORMULATION", -14, f"formulation is not {formulations}"),
-        StatusCode(f"{P}_ERR_NOT_INITIALISED", -15, "state not initialised by _init"),
+        StatusCode(
+            f"{P}_ERR_NOT_INITIALISED", -15,
+            "state not initialised by _init, or corrupted (an index it holds out of range)",
+        ),
         StatusCode(
             f"{P}_ERR_BAD_BOUNDS", -16, "ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0"
         ),
@@ -146,7 +149,8 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
             "the configuration differs from the one given to _init (any bit of any value)",
         ),
         StatusCode(f"{P}_ERR_BAD_TRACTION", -20,
-                   "traction check: friction coefficient or a wheel load <= 0"),
+                   "traction check: friction coefficient or a wheel load <= 0, mu N outside"
+                   " [1e-30, 1e30] N or a share outside [0, 1]"),
     )
 
 

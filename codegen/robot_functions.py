@@ -380,6 +380,11 @@ def _contact_forces_spec(model: RobotModel, base: FunctionSpec) -> FunctionSpec:
                    definitions=(*forms.stage.definitions_for(exprs), *guard_defs))
 
 
+# The friction budget mu N_k a traction function accepts (N): normal in float32 and in
+# double, so its margins are finite and signed right for every finite force (issue 52).
+FRICTION_MIN, FRICTION_MAX = 1e-30, 1e30
+
+
 def _traction_specs(model: RobotModel, base: FunctionSpec) -> tuple[FunctionSpec, ...]:
     """``traction_margins`` and ``traction_check``: each driven wheel's traction margin
     mu N_w - sqrt(F_x^2 + (s_w F_y)^2) on a friction circle, from the contact forces of (9)
@@ -404,8 +409,13 @@ def _traction_specs(model: RobotModel, base: FunctionSpec) -> tuple[FunctionSpec
     mu = sp.Symbol("mu_floor", positive=True)
     loads = sp.symbols(f"load_w0:{m}", positive=True)
     shares = sp.symbols(f"share_w0:{m}", real=True)
-    margins = [mu * loads[i] - sp.sqrt(fx[i] ** 2 + (shares[i] * fy[row_of[i]]) ** 2)
-               for i in range(m)]
+    # Each wheel's share of its axle's lateral force, a quantity of its own so that the
+    # root is printed as the backends' 2-norm (C: <prefix>_norm2, scaled beyond the range
+    # where the squares overflow or underflow): squaring Fy before the share overflowed
+    # float32 above 1.8e19 N and underflowed below 1e-19 N (issue 52).
+    lateral_share = sp.symbols(f"lateral_w0:{m}", real=True)
+    definitions = tuple((lateral_share[i], shares[i] * fy[row_of[i]]) for i in range(m))
+    margins = [mu * loads[i] - sp.sqrt(fx[i] ** 2 + lateral_share[i] ** 2) for i in range(m)]
     wheels = ", ".join(f"'{w}'" for w in rows.driven)
     inputs = (array("longitudinal", fx, "N, per driven wheel (wheel_contact_forces)"),
               array("lateral", fy, "N, per no-side-slip row (wheel_contact_forces)"),
@@ -414,16 +424,30 @@ def _traction_specs(model: RobotModel, base: FunctionSpec) -> tuple[FunctionSpec
               array("shares", shares, "each driven wheel's share of its axle's lateral force "
                     "(the slip monitor's: N_w / sum of its axle's N)"))
     bad = status(model, "ERR_BAD_TRACTION")
+
+    def within(x: sp.Expr, lo: float, hi: float) -> sp.Expr:
+        return sp.Piecewise((sp.S.One, sp.And(x >= lo, x <= hi)), (sp.S.Zero, True))
+
+    # The range where every margin the function returns is finite when the true one is, with
+    # its sign (a normal mu N_k far from both ends of float32's range; |share Fy| <= |Fy|).
     guards = (Guard(bad, mu, "mu > 0"),
-              *(Guard(bad, n, f"loads[{i}] > 0") for i, n in enumerate(loads)))
+              *(Guard(bad, n, f"loads[{i}] > 0") for i, n in enumerate(loads)),
+              *(Guard(bad, within(mu * n, FRICTION_MIN, FRICTION_MAX),
+                      f"mu loads[{i}] in [{FRICTION_MIN:g}, {FRICTION_MAX:g}] N")
+                for i, n in enumerate(loads)),
+              *(Guard(bad, within(s, 0.0, 1.0), f"shares[{i}] in [0, 1]")
+                for i, s in enumerate(shares)))
     doc = ("Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +\n"
            "(share_k Fy_axle)^2) (N) of driven wheel " + wheels + ", Fx, Fy the contact\n"
            "forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel\n"
-           "needs more traction than the floor gives and slips.")
+           "needs more traction than the floor gives and slips. The root is a scaled 2-norm:\n"
+           "a margin is finite whenever the true one is, with its sign, for every finite\n"
+           f"force (mu N_k in [{FRICTION_MIN:g}, {FRICTION_MAX:g}] N, shares in [0, 1]: else "
+           "ERR_BAD_TRACTION).")
     margin_spec = replace(
         base, name="traction_margins", doc=doc, inputs=inputs,
         outputs=(out("margins", margins, "N, per driven wheel"),),
-        equations=("(9)", "(10)-(12)"), guards=guards, definitions=(), prepared=False)
+        equations=("(9)", "(10)-(12)"), guards=guards, definitions=definitions, prepared=False)
     warn = status(model, "WARN_TRACTION")
     check = replace(
         margin_spec, name="traction_check",

@@ -668,7 +668,7 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
 }
 
 /* wmr_traction_margins: documented in wmr_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real_t *lateral,
     const wmr_real_t *mu, const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins)
 {
@@ -685,7 +685,10 @@ wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real
             | wmr_exp_carry(share_w0) | wmr_exp_carry(share_w1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = force_y0*force_y0;
+    const wmr_real_t _t0 = load_w0*mu_floor;
+    const wmr_real_t _t1 = load_w1*mu_floor;
+    const wmr_real_t _t2 = force_y0*share_w0;
+    const wmr_real_t _t3 = force_y0*share_w1;
     if (!(mu_floor > WMR_LIT(0.0))) { /* mu > 0 */
         return WMR_ERR_BAD_TRACTION;
     }
@@ -695,8 +698,24 @@ wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real
     if (!(load_w1 > WMR_LIT(0.0))) { /* loads[1] > 0 */
         return WMR_ERR_BAD_TRACTION;
     }
-    const wmr_real_t r_0 = load_w0*mu_floor - WMR_SQRT(_t0*share_w0*share_w0 + force_x0*force_x0);
-    const wmr_real_t r_1 = load_w1*mu_floor - WMR_SQRT(_t0*share_w1*share_w1 + force_x1*force_x1);
+    if (!((((_t0 >= WMR_LIT(1e-30)) && (_t0 <= WMR_LIT(1e+30))) ? WMR_LIT(1.0) : WMR_LIT(0.0))
+            > WMR_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return WMR_ERR_BAD_TRACTION;
+    }
+    if (!((((_t1 >= WMR_LIT(1e-30)) && (_t1 <= WMR_LIT(1e+30))) ? WMR_LIT(1.0) : WMR_LIT(0.0))
+            > WMR_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return WMR_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= WMR_LIT(1.0)) && (share_w0 >= WMR_LIT(0.0))) ? WMR_LIT(1.0) : WMR_LIT(0.0))
+            > WMR_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return WMR_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= WMR_LIT(1.0)) && (share_w1 >= WMR_LIT(0.0))) ? WMR_LIT(1.0) : WMR_LIT(0.0))
+            > WMR_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return WMR_ERR_BAD_TRACTION;
+    }
+    const wmr_real_t r_0 = _t0 - wmr_norm2(_t2, force_x0);
+    const wmr_real_t r_1 = _t1 - wmr_norm2(_t3, force_x1);
     if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }
@@ -706,7 +725,7 @@ wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real
 }
 
 /* wmr_traction_check: documented in wmr_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 wmr_status_t wmr_traction_check(const wmr_real_t *longitudinal, const wmr_real_t *lateral,
     const wmr_real_t *mu, const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins)
 {
@@ -723,9 +742,12 @@ wmr_status_t wmr_traction_check(const wmr_real_t *longitudinal, const wmr_real_t
             | wmr_exp_carry(share_w0) | wmr_exp_carry(share_w1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
-    const wmr_real_t _t0 = force_y0*force_y0;
-    const wmr_real_t _t1 = load_w0*mu_floor - WMR_SQRT(_t0*share_w0*share_w0 + force_x0*force_x0);
-    const wmr_real_t _t2 = load_w1*mu_floor - WMR_SQRT(_t0*share_w1*share_w1 + force_x1*force_x1);
+    const wmr_real_t _t0 = load_w0*mu_floor;
+    const wmr_real_t _t1 = force_y0*share_w0;
+    const wmr_real_t _t2 = _t0 - wmr_norm2(_t1, force_x0);
+    const wmr_real_t _t3 = load_w1*mu_floor;
+    const wmr_real_t _t4 = force_y0*share_w1;
+    const wmr_real_t _t5 = _t3 - wmr_norm2(_t4, force_x1);
     if (!(mu_floor > WMR_LIT(0.0))) { /* mu > 0 */
         return WMR_ERR_BAD_TRACTION;
     }
@@ -735,14 +757,30 @@ wmr_status_t wmr_traction_check(const wmr_real_t *longitudinal, const wmr_real_t
     if (!(load_w1 > WMR_LIT(0.0))) { /* loads[1] > 0 */
         return WMR_ERR_BAD_TRACTION;
     }
-    if (!(_t1 > WMR_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+    if (!((((_t0 >= WMR_LIT(1e-30)) && (_t0 <= WMR_LIT(1e+30))) ? WMR_LIT(1.0) : WMR_LIT(0.0))
+            > WMR_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return WMR_ERR_BAD_TRACTION;
+    }
+    if (!((((_t3 >= WMR_LIT(1e-30)) && (_t3 <= WMR_LIT(1e+30))) ? WMR_LIT(1.0) : WMR_LIT(0.0))
+            > WMR_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return WMR_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= WMR_LIT(1.0)) && (share_w0 >= WMR_LIT(0.0))) ? WMR_LIT(1.0) : WMR_LIT(0.0))
+            > WMR_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return WMR_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= WMR_LIT(1.0)) && (share_w1 >= WMR_LIT(0.0))) ? WMR_LIT(1.0) : WMR_LIT(0.0))
+            > WMR_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return WMR_ERR_BAD_TRACTION;
+    }
+    if (!(_t2 > WMR_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
         return WMR_WARN_TRACTION;
     }
-    if (!(_t2 > WMR_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+    if (!(_t5 > WMR_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
         return WMR_WARN_TRACTION;
     }
-    const wmr_real_t r_0 = _t1;
-    const wmr_real_t r_1 = _t2;
+    const wmr_real_t r_0 = _t2;
+    const wmr_real_t r_1 = _t5;
     if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_OUTPUT;
     }

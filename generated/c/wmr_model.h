@@ -39,10 +39,6 @@ typedef struct {
  * @param[out] M [5x5] row-major (WMR_MASS_MATRIX_M_SIZE) -- 5x5 row-major
  *
  * operations after CSE: 9 add, 17 mul, 1 div, 2 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * M 1.7e-06 (largest entry).
  */
 void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M);
 
@@ -64,10 +60,6 @@ void wmr_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M);
  * @param[out] H [5] row-major (WMR_BIAS_FORCES_H_SIZE)
  *
  * operations after CSE: 9 add, 38 mul, 1 div, 2 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * H 0.0025 (largest entry).
  */
 void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     wmr_real_t *H);
@@ -107,10 +99,6 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  * per call give the same results, bit for bit.
  *
  * operations after CSE: 20 add, 44 mul, 2 div, 2 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * qddot 0.0031 (largest entry).
  */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);
@@ -180,10 +168,6 @@ wmr_status_t wmr_forward_dynamics_prepared(const wmr_model_prepared_t *prepared,
  * @param[out] pose_rates [3] row-major (WMR_KINEMATICS_POSE_RATES_SIZE)
  *
  * operations after CSE: 7 add, 14 mul, 1 div, 2 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * pose_rates 4.1e-06 (largest entry).
  */
 void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
     wmr_real_t *pose_rates);
@@ -204,10 +188,6 @@ void wmr_kinematics(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t
  * @param[out] M [2x2] row-major (WMR_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
  * operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * M 3.1e-07 (largest entry).
  */
 void wmr_minimal_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_real_t *M);
 
@@ -228,10 +208,6 @@ void wmr_minimal_mass_matrix(const wmr_params_t *p, const wmr_real_t *q, wmr_rea
  * @param[out] H [2] row-major (WMR_MINIMAL_BIAS_FORCES_H_SIZE)
  *
  * operations after CSE: 6 add, 23 mul, 1 div, 0 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * H 5.7e-05 (largest entry).
  */
 void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, wmr_real_t *H);
@@ -264,10 +240,6 @@ void wmr_minimal_bias_forces(const wmr_params_t *p, const wmr_real_t *q,
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
  * operations after CSE: 12 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * wheel_accels 0.0024 (largest entry).
  */
 wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *wheel_accels);
@@ -299,10 +271,6 @@ wmr_status_t wmr_minimal_forward_dynamics(const wmr_params_t *p, const wmr_real_
  * @param[out] B [7x2] row-major (WMR_LINEARIZATION_B_SIZE) -- 7x2 row-major
  *
  * operations after CSE: 20 add, 46 mul, 2 div, 2 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * A 0.00028, B 6.9e-05 (largest entry).
  */
 void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *wheel_rates,
     const wmr_real_t *tau, wmr_real_t *A, wmr_real_t *B);
@@ -347,10 +315,6 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
  * operations after CSE: 61 add, 96 mul, 2 div, 2 sin/cos, 0 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * NOT proved over its declared box (node 134 (div): divisor may be 0); |float32 - exact|
- * <= longitudinal 0, lateral 0 (largest entry).
  */
 wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,
@@ -367,7 +331,9 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
  * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
  * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
- * needs more traction than the floor gives and slips.
+ * needs more traction than the floor gives and slips. The root is a scaled 2-norm:
+ * a margin is finite whenever the true one is, with its sign, for every finite
+ * force (mu N_k in [1e-30, 1e+30] N, shares in [0, 1]: else ERR_BAD_TRACTION).
  *
  * Paper equations: (9), (10)-(12).
  *
@@ -388,13 +354,13 @@ wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q
  *         WMR_ERR_BAD_TRACTION if not (mu > 0),
  *         WMR_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         WMR_ERR_BAD_TRACTION if not (loads[1] > 0),
+ *         WMR_ERR_BAD_TRACTION if not (mu loads[0] in [1e-30, 1e+30] N),
+ *         WMR_ERR_BAD_TRACTION if not (mu loads[1] in [1e-30, 1e+30] N),
+ *         WMR_ERR_BAD_TRACTION if not (shares[0] in [0, 1]),
+ *         WMR_ERR_BAD_TRACTION if not (shares[1] in [0, 1]),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * margins 0.3 (largest entry).
+ * operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp
  */
 wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real_t *lateral,
     const wmr_real_t *mu, const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins);
@@ -410,7 +376,9 @@ wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
  * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
  * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
- * needs more traction than the floor gives and slips.
+ * needs more traction than the floor gives and slips. The root is a scaled 2-norm:
+ * a margin is finite whenever the true one is, with its sign, for every finite
+ * force (mu N_k in [1e-30, 1e+30] N, shares in [0, 1]: else ERR_BAD_TRACTION).
  * A check for firmware after the controller step: returns WMR_WARN_TRACTION (> 0, not
  * an error) when a margin is <= 0, then, as on any status but OK, writes nothing
  * (traction_margins gives the margins whatever their sign).
@@ -434,15 +402,15 @@ wmr_status_t wmr_traction_margins(const wmr_real_t *longitudinal, const wmr_real
  *         WMR_ERR_BAD_TRACTION if not (mu > 0),
  *         WMR_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         WMR_ERR_BAD_TRACTION if not (loads[1] > 0),
+ *         WMR_ERR_BAD_TRACTION if not (mu loads[0] in [1e-30, 1e+30] N),
+ *         WMR_ERR_BAD_TRACTION if not (mu loads[1] in [1e-30, 1e+30] N),
+ *         WMR_ERR_BAD_TRACTION if not (shares[0] in [0, 1]),
+ *         WMR_ERR_BAD_TRACTION if not (shares[1] in [0, 1]),
  *         WMR_WARN_TRACTION if not (wheel 'right' keeps grip: margin > 0),
  *         WMR_WARN_TRACTION if not (wheel 'left' keeps grip: margin > 0),
  *         WMR_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
- *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * margins 0.3 (largest entry) when it returns OK (it may return WMR_WARN_TRACTION there).
+ * operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp
  */
 wmr_status_t wmr_traction_check(const wmr_real_t *longitudinal, const wmr_real_t *lateral,
     const wmr_real_t *mu, const wmr_real_t *loads, const wmr_real_t *shares, wmr_real_t *margins);

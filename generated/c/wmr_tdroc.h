@@ -61,7 +61,9 @@ typedef struct {
     wmr_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
                                _init) */
     wmr_real_t trig_prev[2]; /* sin, cos of q(t-h)'s angles Mhat depends on, for (17) */
-    int omega_count;        /* Omega's seen, at most WMR_MAX_WINDOW + 1 (Omega(1) is H1hat) */
+    /* a step refuses a state with omega_count or omega_head out of its range
+       (WMR_ERR_NOT_INITIALISED) */
+    int omega_count;        /* Omega's seen, 0..WMR_MAX_WINDOW + 1 (Omega(1) is H1hat) */
     int omega_head;         /* 0..WMR_MAX_WINDOW - 1: where omega_ring holds the newest norm */
     /* ||Omega(i) - Omega(i+1)||, all (25) needs, each written at k and k + WMR_MAX_WINDOW:
        the window, newest first, is omega_ring[omega_head ...], contiguous (no shift, no %) */

@@ -20,7 +20,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0x06751568u
+#define WMR_CODE_ID 0x9c934277u
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
@@ -308,15 +308,19 @@ WMR_TRIG_INLINE wmr_real_t wmr_cos_bounded(wmr_real_t x)
 
 #ifdef WMR_FLOAT32
 #define WMR_REAL_MAX FLT_MAX
+#define WMR_REAL_MIN FLT_MIN
 #else
 #define WMR_REAL_MAX DBL_MAX
+#define WMR_REAL_MIN DBL_MIN
 #endif
 
-/* 2-norms that cannot overflow while the norm is finite. wmr_norm<n>(x0, ..., x<n-1>) is
-   sqrt(x0*x0 + ... + x<n-1>*x<n-1>), summed as written, bit for bit, while that sum is
-   finite; beyond it (an entry above about 1.8e19 in float32, 1.3e154 in double) the entries
-   are scaled by the largest magnitude first (wmr_norm_scaled), so a finite vector never
-   gets an infinite norm. A NaN entry gives NaN. */
+/* 2-norms that neither overflow nor underflow while the norm is finite.
+   wmr_norm<n>(x0, ..., x<n-1>) is sqrt(x0*x0 + ... + x<n-1>*x<n-1>), summed as written,
+   bit for bit, while that sum is a normal number; beyond it (an entry above about 1.8e19 in
+   float32, 1.3e154 in double) or below it (every entry below about 1e-19 in float32, 1.5e-154
+   in double, where the squares lose their digits or vanish) the entries are scaled by the
+   largest magnitude first (wmr_norm_scaled), so a finite vector never gets an infinite
+   norm, nor a zero or digit-less one. A NaN entry gives NaN. */
 static inline wmr_real_t wmr_norm_scaled(const wmr_real_t *x, int n)
 {
     wmr_real_t top = WMR_LIT(0.0);
@@ -339,7 +343,7 @@ static inline wmr_real_t wmr_norm_scaled(const wmr_real_t *x, int n)
 static inline wmr_real_t wmr_norm2(wmr_real_t x0, wmr_real_t x1)
 {
     const wmr_real_t sum = x0 * x0 + x1 * x1;
-    if (sum <= WMR_REAL_MAX) {
+    if ((sum >= WMR_REAL_MIN) && (sum <= WMR_REAL_MAX)) {
         return WMR_SQRT(sum);
     }
     {
@@ -351,7 +355,7 @@ static inline wmr_real_t wmr_norm2(wmr_real_t x0, wmr_real_t x1)
 static inline wmr_real_t wmr_norm3(wmr_real_t x0, wmr_real_t x1, wmr_real_t x2)
 {
     const wmr_real_t sum = x0 * x0 + x1 * x1 + x2 * x2;
-    if (sum <= WMR_REAL_MAX) {
+    if ((sum >= WMR_REAL_MIN) && (sum <= WMR_REAL_MAX)) {
         return WMR_SQRT(sum);
     }
     {
@@ -364,7 +368,7 @@ static inline wmr_real_t wmr_norm5(wmr_real_t x0, wmr_real_t x1, wmr_real_t x2, 
     wmr_real_t x4)
 {
     const wmr_real_t sum = x0 * x0 + x1 * x1 + x2 * x2 + x3 * x3 + x4 * x4;
-    if (sum <= WMR_REAL_MAX) {
+    if ((sum >= WMR_REAL_MIN) && (sum <= WMR_REAL_MAX)) {
         return WMR_SQRT(sum);
     }
     {
@@ -397,14 +401,16 @@ typedef enum {
     WMR_ERR_BAD_NOMINAL = -12, /* nominal parameters give a singular M-hat */
     WMR_ERR_BAD_TORQUE_LIMIT = -13, /* torque limit <= 0 or NaN */
     WMR_ERR_BAD_FORMULATION = -14, /* formulation is not PAPER or MINIMAL */
-    WMR_ERR_NOT_INITIALISED = -15, /* state not initialised by _init */
+    WMR_ERR_NOT_INITIALISED = -15, /* state not initialised by _init, or corrupted (an index it
+                                      holds out of range) */
     WMR_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
     WMR_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                     rate_window is outside [0, h] */
     WMR_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
     WMR_ERR_CONFIG_CHANGED = -19, /* the configuration differs from the one given to _init (any bit
                                      of any value) */
-    WMR_ERR_BAD_TRACTION = -20 /* traction check: friction coefficient or a wheel load <= 0 */
+    WMR_ERR_BAD_TRACTION = -20 /* traction check: friction coefficient or a wheel load <= 0, mu N
+                                  outside [1e-30, 1e30] N or a share outside [0, 1] */
 } wmr_status_t;
 
 #define WMR_FORMULATION_PAPER 0 /* the five coordinates of (14), tau = B^T u */

@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from runtime.bindings import cbuild
-from runtime.tooling.bad_input.cases import DRISHTI
+from runtime.tooling.bad_input.cases import DRISHTI, max_window
 from runtime.tooling.bad_input.runner import base_config, status_names
 
 EXAMPLES = 300
@@ -246,5 +246,63 @@ def test_forward_dynamics_with_extreme_floats(lib: cbuild.CLibrary, function: st
             assert all(math.isfinite(x) for x in out)
         else:
             assert list(out) == [42.0] * n_out
+
+    prop()
+
+
+@pytest.mark.parametrize("name", ["tdc", "tdroc", "roc", "asmc"])
+def test_controller_step_with_a_corrupted_state(lib: cbuild.CLibrary, name: str) -> None:
+    """A state corrupted after a few valid steps, ``magic`` intact (issue 52): one to three
+    flipped bits anywhere else, or (TDROC) its ring's head or count set to any int. The step
+    returns a documented status; refused, it writes neither the state nor tau; accepted, tau
+    is finite and within ±tau_max. A TDROC head or count out of its range is refused with
+    ``WMR_ERR_NOT_INITIALISED`` (or ``WMR_ERR_CONFIG_CHANGED`` when a bit of the kept
+    configuration flipped too; without the bound, the step wrote outside ``omega_ring``)."""
+    ffi, clib = lib.ffi, lib.lib
+    codes = set(status_names(lib))
+    not_init = status_by_name(lib, "WMR_ERR_NOT_INITIALISED")
+    changed = status_by_name(lib, "WMR_ERR_CONFIG_CHANGED")
+    init = getattr(clib, f"wmr_{name}_init")
+    step = getattr(clib, f"wmr_{name}_step")
+    ctype = f"wmr_{name}_state_t"
+    size = ffi.sizeof(ctype)
+    magic = range(ffi.offsetof(ctype, "magic"), ffi.offsetof(ctype, "magic") + ffi.sizeof("long"))
+    flippable = [i for i in range(size) if i not in magic]
+    window = max_window(lib)
+    motion = [[0.1 * (i + 1), 0.2, 0.1 * i, 0.2, 0.0] for i in range(5)]
+
+    @FUZZ
+    @given(data=st.data())
+    def prop(data: st.DataObject) -> None:
+        form = data.draw(st.sampled_from(["paper", "minimal"]), label="formulation")
+        cfg = base_config(lib, name, form)
+        state = ffi.new(f"{ctype} *")
+        assert int(init(state, cfg)) == 0
+        tau = ffi.new("wmr_real_t[2]")
+        arrays = [ffi.new("wmr_real_t[5]", v) for v in motion]
+        for _ in range(data.draw(st.integers(0, 12), label="valid steps")):
+            assert int(step(state, cfg, *arrays, tau)) >= 0
+        raw = ffi.cast("unsigned char *", state)
+        if name == "tdroc" and data.draw(st.booleans(), label="set an index"):
+            which = data.draw(st.sampled_from(["omega_head", "omega_count"]), label="index")
+            setattr(state, which, data.draw(st.integers(-(2**31), 2**31 - 1), label="to"))
+        else:
+            for at in data.draw(st.lists(st.sampled_from(flippable), min_size=1, max_size=3),
+                                label="bytes"):
+                raw[at] ^= 1 << data.draw(st.integers(0, 7), label="bit")
+        out_of_range = name == "tdroc" and not (
+            0 <= state.omega_head < window and 0 <= state.omega_count <= window + 1)
+        event("index out of range" if out_of_range else "in range")
+        before = bytes(ffi.buffer(state))
+        tau[0], tau[1] = 7.0, -7.0
+        status = int(step(state, cfg, *arrays, tau))
+        assert status in codes
+        if out_of_range:  # refused (CONFIG_CHANGED first if a kept configuration bit flipped)
+            assert status in (not_init, changed)
+        if status < 0:
+            assert bytes(ffi.buffer(state)) == before
+            assert list(tau) == [7.0, -7.0]
+        else:
+            assert all(math.isfinite(x) and abs(x) <= cfg.tau_max for x in tau)
 
     prop()

@@ -3,7 +3,8 @@
 ``runtime/tooling/witness/csrc/fuzz_driver.c`` (a seeded xorshift inside C) runs every
 controller in both formulations for ``STEPS`` randomised steps (random valid
 configurations, re-initialised every 20..400 steps, and now and then invalid
-configurations, NaN/Inf/huge/subnormal inputs, NULL arguments, a wrong magic) and
+configurations, NaN/Inf/huge/subnormal inputs, NULL arguments, a wrong magic, a corrupted
+state with its magic intact: flipped bits, TDROC's ring head or count set to any int) and
 ``FD_CALLS`` calls to each of ``wmr_forward_dynamics`` and ``wmr_minimal_forward_dynamics``
 with random, sometimes extreme, parameters and arguments. The driver checks that every
 successful call's outputs (tau within ±tau_max, every real in the state, every
@@ -146,8 +147,11 @@ def test_fuzz_driver_under_sanitizers(
             assert s["ok"] + s["errors"] == s["steps"]
             # The mix really happened: successes, saturation, every kind of bad call.
             assert s["ok"] > 0.8 * s["steps"] and s["saturated"] > 0
-            for kind in ("bad_config", "bad_input", "wild_input", "null_calls", "magic_calls"):
+            for kind in ("bad_config", "bad_input", "wild_input", "null_calls", "magic_calls",
+                         "corrupt_calls"):
                 assert s[kind] > 100, (name, form, kind, s)
+            if name == "tdroc":  # its ring's head or count out of range, refused
+                assert s["corrupt_refused"] > 100, (name, form, s)
             assert s["bad_inits"] > 0 and s["reinits"] > 100 and s["stretched"] > 0
     for fn in ("forward_dynamics", "minimal_forward_dynamics"):
         s = stats[(fn, "model")]

@@ -1479,7 +1479,7 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
 }
 
 /* trailer_traction_margins: documented in trailer_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
     const trailer_real_t *lateral, const trailer_real_t *mu, const trailer_real_t *loads,
     const trailer_real_t *shares, trailer_real_t *margins)
@@ -1498,7 +1498,10 @@ trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
             != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = force_y0*force_y0;
+    const trailer_real_t _t0 = load_w0*mu_floor;
+    const trailer_real_t _t1 = load_w1*mu_floor;
+    const trailer_real_t _t2 = force_y0*share_w0;
+    const trailer_real_t _t3 = force_y0*share_w1;
     if (!(mu_floor > TRAILER_LIT(0.0))) { /* mu > 0 */
         return TRAILER_ERR_BAD_TRACTION;
     }
@@ -1508,10 +1511,24 @@ trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
     if (!(load_w1 > TRAILER_LIT(0.0))) { /* loads[1] > 0 */
         return TRAILER_ERR_BAD_TRACTION;
     }
-    const trailer_real_t r_0 = load_w0*mu_floor - TRAILER_SQRT(_t0*share_w0*share_w0
-            + force_x0*force_x0);
-    const trailer_real_t r_1 = load_w1*mu_floor - TRAILER_SQRT(_t0*share_w1*share_w1
-            + force_x1*force_x1);
+    if (!((((_t0 >= TRAILER_LIT(1e-30)) && (_t0 <= TRAILER_LIT(1e+30))) ? TRAILER_LIT(1.0)
+            : TRAILER_LIT(0.0)) > TRAILER_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return TRAILER_ERR_BAD_TRACTION;
+    }
+    if (!((((_t1 >= TRAILER_LIT(1e-30)) && (_t1 <= TRAILER_LIT(1e+30))) ? TRAILER_LIT(1.0)
+            : TRAILER_LIT(0.0)) > TRAILER_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return TRAILER_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= TRAILER_LIT(1.0)) && (share_w0 >= TRAILER_LIT(0.0))) ? TRAILER_LIT(1.0)
+            : TRAILER_LIT(0.0)) > TRAILER_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return TRAILER_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= TRAILER_LIT(1.0)) && (share_w1 >= TRAILER_LIT(0.0))) ? TRAILER_LIT(1.0)
+            : TRAILER_LIT(0.0)) > TRAILER_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return TRAILER_ERR_BAD_TRACTION;
+    }
+    const trailer_real_t r_0 = _t0 - trailer_norm2(_t2, force_x0);
+    const trailer_real_t r_1 = _t1 - trailer_norm2(_t3, force_x1);
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
@@ -1521,7 +1538,7 @@ trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
 }
 
 /* trailer_traction_check: documented in trailer_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 trailer_status_t trailer_traction_check(const trailer_real_t *longitudinal,
     const trailer_real_t *lateral, const trailer_real_t *mu, const trailer_real_t *loads,
     const trailer_real_t *shares, trailer_real_t *margins)
@@ -1540,11 +1557,12 @@ trailer_status_t trailer_traction_check(const trailer_real_t *longitudinal,
             != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = force_y0*force_y0;
-    const trailer_real_t _t1 = load_w0*mu_floor - TRAILER_SQRT(_t0*share_w0*share_w0
-            + force_x0*force_x0);
-    const trailer_real_t _t2 = load_w1*mu_floor - TRAILER_SQRT(_t0*share_w1*share_w1
-            + force_x1*force_x1);
+    const trailer_real_t _t0 = load_w0*mu_floor;
+    const trailer_real_t _t1 = force_y0*share_w0;
+    const trailer_real_t _t2 = _t0 - trailer_norm2(_t1, force_x0);
+    const trailer_real_t _t3 = load_w1*mu_floor;
+    const trailer_real_t _t4 = force_y0*share_w1;
+    const trailer_real_t _t5 = _t3 - trailer_norm2(_t4, force_x1);
     if (!(mu_floor > TRAILER_LIT(0.0))) { /* mu > 0 */
         return TRAILER_ERR_BAD_TRACTION;
     }
@@ -1554,14 +1572,30 @@ trailer_status_t trailer_traction_check(const trailer_real_t *longitudinal,
     if (!(load_w1 > TRAILER_LIT(0.0))) { /* loads[1] > 0 */
         return TRAILER_ERR_BAD_TRACTION;
     }
-    if (!(_t1 > TRAILER_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+    if (!((((_t0 >= TRAILER_LIT(1e-30)) && (_t0 <= TRAILER_LIT(1e+30))) ? TRAILER_LIT(1.0)
+            : TRAILER_LIT(0.0)) > TRAILER_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return TRAILER_ERR_BAD_TRACTION;
+    }
+    if (!((((_t3 >= TRAILER_LIT(1e-30)) && (_t3 <= TRAILER_LIT(1e+30))) ? TRAILER_LIT(1.0)
+            : TRAILER_LIT(0.0)) > TRAILER_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return TRAILER_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= TRAILER_LIT(1.0)) && (share_w0 >= TRAILER_LIT(0.0))) ? TRAILER_LIT(1.0)
+            : TRAILER_LIT(0.0)) > TRAILER_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return TRAILER_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= TRAILER_LIT(1.0)) && (share_w1 >= TRAILER_LIT(0.0))) ? TRAILER_LIT(1.0)
+            : TRAILER_LIT(0.0)) > TRAILER_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return TRAILER_ERR_BAD_TRACTION;
+    }
+    if (!(_t2 > TRAILER_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
         return TRAILER_WARN_TRACTION;
     }
-    if (!(_t2 > TRAILER_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+    if (!(_t5 > TRAILER_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
         return TRAILER_WARN_TRACTION;
     }
-    const trailer_real_t r_0 = _t1;
-    const trailer_real_t r_1 = _t2;
+    const trailer_real_t r_0 = _t2;
+    const trailer_real_t r_1 = _t5;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }

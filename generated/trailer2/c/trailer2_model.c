@@ -2867,7 +2867,7 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
 }
 
 /* trailer2_traction_margins: documented in trailer2_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 trailer2_status_t trailer2_traction_margins(const trailer2_real_t *longitudinal,
     const trailer2_real_t *lateral, const trailer2_real_t *mu, const trailer2_real_t *loads,
     const trailer2_real_t *shares, trailer2_real_t *margins)
@@ -2886,7 +2886,10 @@ trailer2_status_t trailer2_traction_margins(const trailer2_real_t *longitudinal,
             | trailer2_exp_carry(share_w1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = force_y0*force_y0;
+    const trailer2_real_t _t0 = load_w0*mu_floor;
+    const trailer2_real_t _t1 = load_w1*mu_floor;
+    const trailer2_real_t _t2 = force_y0*share_w0;
+    const trailer2_real_t _t3 = force_y0*share_w1;
     if (!(mu_floor > TRAILER2_LIT(0.0))) { /* mu > 0 */
         return TRAILER2_ERR_BAD_TRACTION;
     }
@@ -2896,10 +2899,24 @@ trailer2_status_t trailer2_traction_margins(const trailer2_real_t *longitudinal,
     if (!(load_w1 > TRAILER2_LIT(0.0))) { /* loads[1] > 0 */
         return TRAILER2_ERR_BAD_TRACTION;
     }
-    const trailer2_real_t r_0 = load_w0*mu_floor - TRAILER2_SQRT(_t0*share_w0*share_w0
-            + force_x0*force_x0);
-    const trailer2_real_t r_1 = load_w1*mu_floor - TRAILER2_SQRT(_t0*share_w1*share_w1
-            + force_x1*force_x1);
+    if (!((((_t0 >= TRAILER2_LIT(1e-30)) && (_t0 <= TRAILER2_LIT(1e+30))) ? TRAILER2_LIT(1.0)
+            : TRAILER2_LIT(0.0)) > TRAILER2_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!((((_t1 >= TRAILER2_LIT(1e-30)) && (_t1 <= TRAILER2_LIT(1e+30))) ? TRAILER2_LIT(1.0)
+            : TRAILER2_LIT(0.0)) > TRAILER2_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= TRAILER2_LIT(1.0)) && (share_w0 >= TRAILER2_LIT(0.0))) ? TRAILER2_LIT(1.0)
+            : TRAILER2_LIT(0.0)) > TRAILER2_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= TRAILER2_LIT(1.0)) && (share_w1 >= TRAILER2_LIT(0.0))) ? TRAILER2_LIT(1.0)
+            : TRAILER2_LIT(0.0)) > TRAILER2_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    const trailer2_real_t r_0 = _t0 - trailer2_norm2(_t2, force_x0);
+    const trailer2_real_t r_1 = _t1 - trailer2_norm2(_t3, force_x1);
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
@@ -2909,7 +2926,7 @@ trailer2_status_t trailer2_traction_margins(const trailer2_real_t *longitudinal,
 }
 
 /* trailer2_traction_check: documented in trailer2_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 trailer2_status_t trailer2_traction_check(const trailer2_real_t *longitudinal,
     const trailer2_real_t *lateral, const trailer2_real_t *mu, const trailer2_real_t *loads,
     const trailer2_real_t *shares, trailer2_real_t *margins)
@@ -2928,11 +2945,12 @@ trailer2_status_t trailer2_traction_check(const trailer2_real_t *longitudinal,
             | trailer2_exp_carry(share_w1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = force_y0*force_y0;
-    const trailer2_real_t _t1 = load_w0*mu_floor - TRAILER2_SQRT(_t0*share_w0*share_w0
-            + force_x0*force_x0);
-    const trailer2_real_t _t2 = load_w1*mu_floor - TRAILER2_SQRT(_t0*share_w1*share_w1
-            + force_x1*force_x1);
+    const trailer2_real_t _t0 = load_w0*mu_floor;
+    const trailer2_real_t _t1 = force_y0*share_w0;
+    const trailer2_real_t _t2 = _t0 - trailer2_norm2(_t1, force_x0);
+    const trailer2_real_t _t3 = load_w1*mu_floor;
+    const trailer2_real_t _t4 = force_y0*share_w1;
+    const trailer2_real_t _t5 = _t3 - trailer2_norm2(_t4, force_x1);
     if (!(mu_floor > TRAILER2_LIT(0.0))) { /* mu > 0 */
         return TRAILER2_ERR_BAD_TRACTION;
     }
@@ -2942,14 +2960,30 @@ trailer2_status_t trailer2_traction_check(const trailer2_real_t *longitudinal,
     if (!(load_w1 > TRAILER2_LIT(0.0))) { /* loads[1] > 0 */
         return TRAILER2_ERR_BAD_TRACTION;
     }
-    if (!(_t1 > TRAILER2_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+    if (!((((_t0 >= TRAILER2_LIT(1e-30)) && (_t0 <= TRAILER2_LIT(1e+30))) ? TRAILER2_LIT(1.0)
+            : TRAILER2_LIT(0.0)) > TRAILER2_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!((((_t3 >= TRAILER2_LIT(1e-30)) && (_t3 <= TRAILER2_LIT(1e+30))) ? TRAILER2_LIT(1.0)
+            : TRAILER2_LIT(0.0)) > TRAILER2_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= TRAILER2_LIT(1.0)) && (share_w0 >= TRAILER2_LIT(0.0))) ? TRAILER2_LIT(1.0)
+            : TRAILER2_LIT(0.0)) > TRAILER2_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= TRAILER2_LIT(1.0)) && (share_w1 >= TRAILER2_LIT(0.0))) ? TRAILER2_LIT(1.0)
+            : TRAILER2_LIT(0.0)) > TRAILER2_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return TRAILER2_ERR_BAD_TRACTION;
+    }
+    if (!(_t2 > TRAILER2_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
         return TRAILER2_WARN_TRACTION;
     }
-    if (!(_t2 > TRAILER2_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+    if (!(_t5 > TRAILER2_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
         return TRAILER2_WARN_TRACTION;
     }
-    const trailer2_real_t r_0 = _t1;
-    const trailer2_real_t r_1 = _t2;
+    const trailer2_real_t r_0 = _t2;
+    const trailer2_real_t r_1 = _t5;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }

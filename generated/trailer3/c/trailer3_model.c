@@ -4526,7 +4526,7 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
 }
 
 /* trailer3_traction_margins: documented in trailer3_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 trailer3_status_t trailer3_traction_margins(const trailer3_real_t *longitudinal,
     const trailer3_real_t *lateral, const trailer3_real_t *mu, const trailer3_real_t *loads,
     const trailer3_real_t *shares, trailer3_real_t *margins)
@@ -4545,7 +4545,10 @@ trailer3_status_t trailer3_traction_margins(const trailer3_real_t *longitudinal,
             | trailer3_exp_carry(share_w1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = force_y0*force_y0;
+    const trailer3_real_t _t0 = load_w0*mu_floor;
+    const trailer3_real_t _t1 = load_w1*mu_floor;
+    const trailer3_real_t _t2 = force_y0*share_w0;
+    const trailer3_real_t _t3 = force_y0*share_w1;
     if (!(mu_floor > TRAILER3_LIT(0.0))) { /* mu > 0 */
         return TRAILER3_ERR_BAD_TRACTION;
     }
@@ -4555,10 +4558,24 @@ trailer3_status_t trailer3_traction_margins(const trailer3_real_t *longitudinal,
     if (!(load_w1 > TRAILER3_LIT(0.0))) { /* loads[1] > 0 */
         return TRAILER3_ERR_BAD_TRACTION;
     }
-    const trailer3_real_t r_0 = load_w0*mu_floor - TRAILER3_SQRT(_t0*share_w0*share_w0
-            + force_x0*force_x0);
-    const trailer3_real_t r_1 = load_w1*mu_floor - TRAILER3_SQRT(_t0*share_w1*share_w1
-            + force_x1*force_x1);
+    if (!((((_t0 >= TRAILER3_LIT(1e-30)) && (_t0 <= TRAILER3_LIT(1e+30))) ? TRAILER3_LIT(1.0)
+            : TRAILER3_LIT(0.0)) > TRAILER3_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!((((_t1 >= TRAILER3_LIT(1e-30)) && (_t1 <= TRAILER3_LIT(1e+30))) ? TRAILER3_LIT(1.0)
+            : TRAILER3_LIT(0.0)) > TRAILER3_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= TRAILER3_LIT(1.0)) && (share_w0 >= TRAILER3_LIT(0.0))) ? TRAILER3_LIT(1.0)
+            : TRAILER3_LIT(0.0)) > TRAILER3_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= TRAILER3_LIT(1.0)) && (share_w1 >= TRAILER3_LIT(0.0))) ? TRAILER3_LIT(1.0)
+            : TRAILER3_LIT(0.0)) > TRAILER3_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    const trailer3_real_t r_0 = _t0 - trailer3_norm2(_t2, force_x0);
+    const trailer3_real_t r_1 = _t1 - trailer3_norm2(_t3, force_x1);
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
@@ -4568,7 +4585,7 @@ trailer3_status_t trailer3_traction_margins(const trailer3_real_t *longitudinal,
 }
 
 /* trailer3_traction_check: documented in trailer3_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 trailer3_status_t trailer3_traction_check(const trailer3_real_t *longitudinal,
     const trailer3_real_t *lateral, const trailer3_real_t *mu, const trailer3_real_t *loads,
     const trailer3_real_t *shares, trailer3_real_t *margins)
@@ -4587,11 +4604,12 @@ trailer3_status_t trailer3_traction_check(const trailer3_real_t *longitudinal,
             | trailer3_exp_carry(share_w1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = force_y0*force_y0;
-    const trailer3_real_t _t1 = load_w0*mu_floor - TRAILER3_SQRT(_t0*share_w0*share_w0
-            + force_x0*force_x0);
-    const trailer3_real_t _t2 = load_w1*mu_floor - TRAILER3_SQRT(_t0*share_w1*share_w1
-            + force_x1*force_x1);
+    const trailer3_real_t _t0 = load_w0*mu_floor;
+    const trailer3_real_t _t1 = force_y0*share_w0;
+    const trailer3_real_t _t2 = _t0 - trailer3_norm2(_t1, force_x0);
+    const trailer3_real_t _t3 = load_w1*mu_floor;
+    const trailer3_real_t _t4 = force_y0*share_w1;
+    const trailer3_real_t _t5 = _t3 - trailer3_norm2(_t4, force_x1);
     if (!(mu_floor > TRAILER3_LIT(0.0))) { /* mu > 0 */
         return TRAILER3_ERR_BAD_TRACTION;
     }
@@ -4601,14 +4619,30 @@ trailer3_status_t trailer3_traction_check(const trailer3_real_t *longitudinal,
     if (!(load_w1 > TRAILER3_LIT(0.0))) { /* loads[1] > 0 */
         return TRAILER3_ERR_BAD_TRACTION;
     }
-    if (!(_t1 > TRAILER3_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+    if (!((((_t0 >= TRAILER3_LIT(1e-30)) && (_t0 <= TRAILER3_LIT(1e+30))) ? TRAILER3_LIT(1.0)
+            : TRAILER3_LIT(0.0)) > TRAILER3_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!((((_t3 >= TRAILER3_LIT(1e-30)) && (_t3 <= TRAILER3_LIT(1e+30))) ? TRAILER3_LIT(1.0)
+            : TRAILER3_LIT(0.0)) > TRAILER3_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= TRAILER3_LIT(1.0)) && (share_w0 >= TRAILER3_LIT(0.0))) ? TRAILER3_LIT(1.0)
+            : TRAILER3_LIT(0.0)) > TRAILER3_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= TRAILER3_LIT(1.0)) && (share_w1 >= TRAILER3_LIT(0.0))) ? TRAILER3_LIT(1.0)
+            : TRAILER3_LIT(0.0)) > TRAILER3_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return TRAILER3_ERR_BAD_TRACTION;
+    }
+    if (!(_t2 > TRAILER3_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
         return TRAILER3_WARN_TRACTION;
     }
-    if (!(_t2 > TRAILER3_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+    if (!(_t5 > TRAILER3_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
         return TRAILER3_WARN_TRACTION;
     }
-    const trailer3_real_t r_0 = _t1;
-    const trailer3_real_t r_1 = _t2;
+    const trailer3_real_t r_0 = _t2;
+    const trailer3_real_t r_1 = _t5;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }

@@ -380,8 +380,15 @@ trailer3_status_t trailer3_tdroc_step_detail(trailer3_tdroc_state_t *state,
        which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
        the state is written at the commit only (two values and the head). */
     pushed = state->steps >= 2u;
-    omega_count = state->omega_count;
+    /* The ring's head and count, read once and bounded at their use: from a corrupted state
+       (a flipped bit, magic intact) the step fails, nothing written, instead of reading or
+       writing outside omega_ring. One unsigned compare each (a negative int is large). */
     omega_head = state->omega_head;
+    omega_count = state->omega_count;
+    if (((unsigned int)omega_head >= (unsigned int)TRAILER3_MAX_WINDOW)
+        || ((unsigned int)omega_count > ((unsigned int)TRAILER3_MAX_WINDOW + 1u))) {
+        return trailer3_fail(detail, TRAILER3_ERR_NOT_INITIALISED, TRAILER3_FIELD_STATE, -1);
+    }
     if (pushed) {
         trailer3_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
         omega_head = omega_head == 0 ? TRAILER3_MAX_WINDOW - 1 : omega_head - 1;

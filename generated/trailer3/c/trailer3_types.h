@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER3_CODE_ID 0xb311fe72u
+#define TRAILER3_CODE_ID 0x8e64ec99u
 
 #ifdef TRAILER3_FLOAT32
 typedef float trailer3_real_t;
@@ -310,15 +310,19 @@ TRAILER3_TRIG_INLINE trailer3_real_t trailer3_cos_bounded(trailer3_real_t x)
 
 #ifdef TRAILER3_FLOAT32
 #define TRAILER3_REAL_MAX FLT_MAX
+#define TRAILER3_REAL_MIN FLT_MIN
 #else
 #define TRAILER3_REAL_MAX DBL_MAX
+#define TRAILER3_REAL_MIN DBL_MIN
 #endif
 
-/* 2-norms that cannot overflow while the norm is finite. trailer3_norm<n>(x0, ..., x<n-1>) is
-   sqrt(x0*x0 + ... + x<n-1>*x<n-1>), summed as written, bit for bit, while that sum is
-   finite; beyond it (an entry above about 1.8e19 in float32, 1.3e154 in double) the entries
-   are scaled by the largest magnitude first (trailer3_norm_scaled), so a finite vector never
-   gets an infinite norm. A NaN entry gives NaN. */
+/* 2-norms that neither overflow nor underflow while the norm is finite.
+   trailer3_norm<n>(x0, ..., x<n-1>) is sqrt(x0*x0 + ... + x<n-1>*x<n-1>), summed as written,
+   bit for bit, while that sum is a normal number; beyond it (an entry above about 1.8e19 in
+   float32, 1.3e154 in double) or below it (every entry below about 1e-19 in float32, 1.5e-154
+   in double, where the squares lose their digits or vanish) the entries are scaled by the
+   largest magnitude first (trailer3_norm_scaled), so a finite vector never gets an infinite
+   norm, nor a zero or digit-less one. A NaN entry gives NaN. */
 static inline trailer3_real_t trailer3_norm_scaled(const trailer3_real_t *x, int n)
 {
     trailer3_real_t top = TRAILER3_LIT(0.0);
@@ -341,7 +345,7 @@ static inline trailer3_real_t trailer3_norm_scaled(const trailer3_real_t *x, int
 static inline trailer3_real_t trailer3_norm2(trailer3_real_t x0, trailer3_real_t x1)
 {
     const trailer3_real_t sum = x0 * x0 + x1 * x1;
-    if (sum <= TRAILER3_REAL_MAX) {
+    if ((sum >= TRAILER3_REAL_MIN) && (sum <= TRAILER3_REAL_MAX)) {
         return TRAILER3_SQRT(sum);
     }
     {
@@ -376,14 +380,16 @@ typedef enum {
     TRAILER3_ERR_BAD_NOMINAL = -12, /* nominal parameters give a singular M-hat */
     TRAILER3_ERR_BAD_TORQUE_LIMIT = -13, /* torque limit <= 0 or NaN */
     TRAILER3_ERR_BAD_FORMULATION = -14, /* formulation is not MINIMAL (the only one generated) */
-    TRAILER3_ERR_NOT_INITIALISED = -15, /* state not initialised by _init */
+    TRAILER3_ERR_NOT_INITIALISED = -15, /* state not initialised by _init, or corrupted (an index it
+                                           holds out of range) */
     TRAILER3_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
     TRAILER3_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                          rate_window is outside [0, h] */
     TRAILER3_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
     TRAILER3_ERR_CONFIG_CHANGED = -19, /* the configuration differs from the one given to _init (any
                                           bit of any value) */
-    TRAILER3_ERR_BAD_TRACTION = -20 /* traction check: friction coefficient or a wheel load <= 0 */
+    TRAILER3_ERR_BAD_TRACTION = -20 /* traction check: friction coefficient or a wheel load <= 0, mu
+                                       N outside [1e-30, 1e30] N or a share outside [0, 1] */
 } trailer3_status_t;
 
 /* the 14 coordinates of (14), tau = B^T u: not generated for this robot

@@ -65,13 +65,15 @@ class Case:
     """One bad input. ``row`` groups cases into one line of the table."""
 
     row: str
-    kind: str  # input | config | changed | state | null | init-null | reset | saturate | zero-error
+    # input | config | changed | state | corrupt | null | init-null | reset | saturate | zero-error
+    kind: str
     expected: str
     applies: tuple[str, ...] = CONTROLLERS
     inputs: tuple[int, int, float] | None = None  # (which input, index, value)
     mutate: Mutation | None = None  # changes a copy of the configuration
     fill: bytes | None = None  # state cases: bytes the state is filled with (None: magic only)
     null_arg: int | None = None  # null cases: which argument of step is NULL
+    flip: tuple[tuple[str, ...], int] | None = None  # corrupt cases: (state field path, bit)
     id: str = ""
 
 
@@ -260,6 +262,23 @@ def cases(max_win: int) -> list[Case]:
         ("initialised state with `magic` overwritten", None),
     ):
         out.append(Case(row, "state", "WMR_ERR_NOT_INITIALISED", fill=fill, id=row))
+    # A corrupted state, magic intact (one flipped bit, issue 52): an index it holds out of
+    # range is refused, as is its kept configuration, which no longer equals the caller's.
+    for row, path, bit, status, applies in (
+        ("TDROC `omega_head` bit 3 flipped (head 8..15; magic intact)", ("omega_head",), 3,
+         "WMR_ERR_NOT_INITIALISED", ("tdroc",)),
+        ("TDROC `omega_head` bit 31 flipped (head < 0; magic intact)", ("omega_head",), 31,
+         "WMR_ERR_NOT_INITIALISED", ("tdroc",)),
+        ("TDROC `omega_count` bit 4 flipped (count > WMR_MAX_WINDOW + 1; magic intact)",
+         ("omega_count",), 4, "WMR_ERR_NOT_INITIALISED", ("tdroc",)),
+        ("TDROC `omega_count` bit 31 flipped (count < 0; magic intact)", ("omega_count",), 31,
+         "WMR_ERR_NOT_INITIALISED", ("tdroc",)),
+        ("kept configuration: `tau_max`'s lowest bit flipped in the state (magic intact)",
+         ("config", "tau_max"), 0, "WMR_ERR_CONFIG_CHANGED", CONTROLLERS),
+        ("kept configuration: `formulation`'s bit 0 flipped in the state (magic intact)",
+         ("config", "formulation"), 0, "WMR_ERR_CONFIG_CHANGED", CONTROLLERS),
+    ):
+        out.append(Case(row, "corrupt", status, applies, flip=(path, bit), id=row))
     step_args = ("state", "config", *INPUT_NAMES, "tau")
     for index, arg in enumerate(step_args):
         out.append(

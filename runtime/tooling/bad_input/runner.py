@@ -240,6 +240,22 @@ def run_case(lib: cbuild.CLibrary, name: str, formulation: str, case: Case) -> O
             detail=detail_of(status),
         )
 
+    if case.kind == "corrupt":
+        assert case.flip is not None
+        path, bit = case.flip
+        at = ffi.offsetof(f"wmr_{name}_state_t", *path) + bit // 8  # a little-endian host
+        raw = ffi.cast("unsigned char *", bad.state)
+        raw[at] ^= 1 << (bit % 8)
+        before = bad.raw()
+        tau = ffi.new("wmr_real_t[2]", list(SENTINEL))
+        status, tau_after = bad.step(good, tau=tau, detail=detail)
+        unchanged = bad.raw() == before
+        raw[at] ^= 1 << (bit % 8)  # restored: the refused step must have written nothing
+        return outcome(
+            status, state_unchanged=unchanged, tau_unchanged=tau_after == list(SENTINEL),
+            twin_equal=_twin_equal(bad, twin, good), detail=detail_of(status),
+        )
+
     step_cfg = cfg
     init_status = init_untouched = check_status = None
     step_inputs = [list(v) for v in good]
@@ -350,7 +366,8 @@ def failures(outcomes: list[Outcome], lib: cbuild.CLibrary) -> list[str]:
             if not o.extra.get("reset_equals_init") or not o.twin_equal:
                 bad.append(f"{where}: _reset is not the state _init leaves")
             continue
-        if c.kind in ("input", "config", "changed", "state", "null") and o.detail is None:
+        if c.kind in ("input", "config", "changed", "state", "corrupt", "null") \
+                and o.detail is None:
             bad.append(f"{where}: _step_detail did not report the status it returned")
         if c.kind == "input" and c.inputs is not None and o.detail is not None \
                 and o.detail[1] != c.inputs[1]:

@@ -406,6 +406,12 @@ static inline wmr_status_t step_body(hand_tdroc_state_t *state, const wmr_tdroc_
     if ((meas | ref) != 0u) {
         return meas != 0u ? WMR_ERR_BAD_MEASUREMENT : WMR_ERR_BAD_REFERENCE;
     }
+    /* the generated step's bound on the ring's head and count (issue 52): a corrupted
+       state is refused before the ring is read or written */
+    if (((unsigned)head >= (unsigned)WMR_MAX_WINDOW)
+        || ((unsigned)count > (unsigned)WMR_MAX_WINDOW + 1u)) {
+        return WMR_ERR_NOT_INITIALISED;
+    }
     kept(state, cfg, &k);
     paper = k.paper;
     nc = paper ? 5 : 2;

@@ -445,6 +445,12 @@ HAND_INLINE trailer_status_t step_body(hand_tdroc_state_t *state,
     if (((meas | ref) & TOP_BIT) != 0u) {
         return (meas & TOP_BIT) != 0u ? TRAILER_ERR_BAD_MEASUREMENT : TRAILER_ERR_BAD_REFERENCE;
     }
+    /* the generated step's bound on the ring's head and count (issue 52): a corrupted
+       state is refused before the ring is read or written */
+    if (((unsigned)head >= (unsigned)TRAILER_MAX_WINDOW)
+        || ((unsigned)count > (unsigned)TRAILER_MAX_WINDOW + 1u)) {
+        return TRAILER_ERR_NOT_INITIALISED;
+    }
     kept(state, cfg, &k);
     /* Mhat(q) from the one sin/cos pair of 2 psi (exact doubling; |2 psi| <= 4e6). */
     {

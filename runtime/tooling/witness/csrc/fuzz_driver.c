@@ -11,7 +11,9 @@
  * xorshift64 generator: random valid configurations (re-initialised every 20..400 steps),
  * a random-walk motion with references near it, and now and then huge-but-valid,
  * subnormal, NaN, infinite or absurd inputs, a corrupted configuration for one step, a
- * NULL argument or a state whose magic is wrong.
+ * NULL argument, a state whose magic is wrong, or a corrupted state with its magic intact
+ * (one to three flipped bits anywhere else; TDROC: also its ring's head or count set to
+ * any int), after which the state is initialised again.
  *
  * Checked on every call (a violation is printed and makes the exit status 1):
  *   - status >= 0: tau finite and within +-tau_max, state->tau == tau, every real in the
@@ -25,7 +27,9 @@
  * Output: one "RESULT ..." line per controller/formulation and per model function.
  */
 #include <float.h>
+#include <limits.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -257,6 +261,54 @@ static int state_finite_tdroc(const wmr_tdroc_state_t *s)
         && isfinite(s->minv_norm);
 }
 
+/* A corrupted state, magic intact: 1..3 random bits flipped outside magic. corrupt_state_X
+   returns the status the step must give (0: any documented one). */
+static void flip_bits(unsigned char *bytes, size_t size, size_t magic_at)
+{
+    int k, flips = 1 + rint_below(3);
+    for (k = 0; k < flips; ++k) {
+        size_t at;
+        do {
+            at = (size_t)rint_below((int)size);
+        } while (at >= magic_at && at < magic_at + sizeof(long));
+        bytes[at] ^= (unsigned char)(1u << rint_below(8));
+    }
+}
+#define DEFINE_CORRUPT_STATE(X)                                                                 \
+    static int corrupt_state_##X(wmr_##X##_state_t *s)                                          \
+    {                                                                                           \
+        flip_bits((unsigned char *)s, sizeof(*s), offsetof(wmr_##X##_state_t, magic));         \
+        return 0;                                                                               \
+    }
+DEFINE_CORRUPT_STATE(tdc)
+DEFINE_CORRUPT_STATE(roc)
+DEFINE_CORRUPT_STATE(asmc)
+static int random_int(void)
+{
+    switch (rint_below(4)) {
+    case 0: return rint_below(2 * WMR_MAX_WINDOW + 4) - 2;  /* near the range */
+    case 1: return rint_below(2) ? INT_MAX : INT_MIN;
+    default: return (int)(uint32_t)next_u64();
+    }
+}
+static int corrupt_state_tdroc(wmr_tdroc_state_t *s)
+{
+    if (rint_below(2)) {
+        flip_bits((unsigned char *)s, sizeof(*s), offsetof(wmr_tdroc_state_t, magic));
+    } else if (rint_below(2)) {
+        s->omega_head = random_int();
+    } else {
+        s->omega_count = random_int();
+    }
+    /* an index out of its range: the step must refuse the state (with this status, or
+       CONFIG_CHANGED if a flipped bit is also in the kept configuration, compared first) */
+    if (s->omega_head < 0 || s->omega_head >= WMR_MAX_WINDOW || s->omega_count < 0
+        || s->omega_count > WMR_MAX_WINDOW + 1) {
+        return WMR_ERR_NOT_INITIALISED;
+    }
+    return 0;
+}
+
 /* The motion the controller sees: a random walk with references near it. */
 typedef struct {
     wmr_real_t *q, *qdot, *q_des, *qdot_des, *qddot_des; /* malloc'ed, 5 each */
@@ -304,7 +356,8 @@ static void walk(inputs_t *in, double h)
 
 typedef struct {
     long steps, ok, saturated, errors, nonfinite_output, reinits, bad_inits, bad_config, bad_input,
-        wild_input, null_calls, magic_calls, stretched, stretched_rejected;
+        wild_input, null_calls, magic_calls, stretched, stretched_rejected, corrupt_calls,
+        corrupt_refused;
 } stats_t;
 
 /* One runner per controller; X is the name, e.g. tdroc. */
@@ -329,7 +382,7 @@ typedef struct {
         }                                                                                       \
         memset(state, 0x5a, sizeof(*state));                                                    \
         for (k = 0; k < steps; ++k) {                                                           \
-            int status, expected = 1, mode;                                                     \
+            int status, expected = 1, mode, corrupted = 0;                                      \
             const wmr_##X##_config_t *use = cfg;                                                \
             const wmr_real_t *args[5];                                                          \
             wmr_##X##_state_t *target = state;                                                  \
@@ -422,6 +475,11 @@ typedef struct {
                 state->magic ^= 0x10;                                                           \
                 expected = WMR_ERR_NOT_INITIALISED;                                             \
                 st->magic_calls += 1;                                                           \
+            } else if (mode < 95) { /* a corrupted state, magic intact; then a new _init */   \
+                corrupted = 1;                                                                  \
+                expected = corrupt_state_##X(state);                                            \
+                st->corrupt_calls += 1;                                                         \
+                until_reinit = 0;                                                               \
             }                                                                                   \
             memcpy(before, state, sizeof(*state));                                              \
             tau[0] = (wmr_real_t)1234.5;                                                        \
@@ -442,9 +500,20 @@ typedef struct {
                 if (tau[0] != (wmr_real_t)1234.5 || tau[1] != (wmr_real_t)-678.25) {            \
                     violation("error status but tau changed", #X, form, k, status);             \
                 }                                                                               \
-                if (expected < 0 && status != expected) {                                       \
+                /* a corrupted state must fail; its kept configuration is compared first */ \
+                if (expected < 0 && status != expected && !corrupted) {                         \
                     violation("wrong error code", #X, form, k, status);                         \
                 }                                                                               \
+                st->corrupt_refused += corrupted && status == WMR_ERR_NOT_INITIALISED;          \
+            } else if (corrupted) {                                                             \
+                /* whatever the corrupted reals made of it: documented, finite, clipped */      \
+                if (expected < 0 || (status != WMR_OK && status != WMR_WARN_SATURATED)          \
+                    || !isfinite(tau[0]) || !isfinite(tau[1])                                   \
+                    || fabs((double)tau[0]) > (double)cfg->tau_max                              \
+                    || fabs((double)tau[1]) > (double)cfg->tau_max) {                           \
+                    violation("corrupted state: bad success", #X, form, k, status);             \
+                }                                                                               \
+                st->ok += 1;                                                                    \
             } else {                                                                            \
                 if (expected <= 0) {                                                            \
                     violation("bad input accepted", #X, form, k, status);                       \
@@ -592,10 +661,12 @@ int main(int argc, char **argv)
             run_##X(form, steps, &st);                                                          \
             printf("RESULT %s %s steps=%ld ok=%ld saturated=%ld errors=%ld nonfinite_output=%ld " \
                    "reinits=%ld bad_inits=%ld bad_config=%ld bad_input=%ld wild_input=%ld "     \
-                   "null_calls=%ld magic_calls=%ld stretched=%ld stretched_rejected=%ld\n",     \
+                   "null_calls=%ld magic_calls=%ld stretched=%ld stretched_rejected=%ld "      \
+                   "corrupt_calls=%ld corrupt_refused=%ld\n",                                   \
                    #X, fname, st.steps, st.ok, st.saturated, st.errors, st.nonfinite_output,   \
                    st.reinits, st.bad_inits, st.bad_config, st.bad_input, st.wild_input,       \
-                   st.null_calls, st.magic_calls, st.stretched, st.stretched_rejected);        \
+                   st.null_calls, st.magic_calls, st.stretched, st.stretched_rejected,         \
+                   st.corrupt_calls, st.corrupt_refused);                                      \
         } while (0)
         RUN(tdc);
         RUN(tdroc);
