@@ -76,6 +76,11 @@ typedef struct {
  * per call give the same results, bit for bit.
  *
  * operations after CSE: 72 add, 119 mul, 5 div, 4 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * NOT proved over its declared box (node 221 (div): divisor may be 0); |float32 - exact|
+ * <= qddot inf (largest entry) when it returns OK (it may return TRAILER_ERR_BAD_PARAMS
+ * there).
  */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot);
@@ -163,6 +168,10 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
  * @param[out] pose_rates [6] row-major (TRAILER_KINEMATICS_POSE_RATES_SIZE)
  *
  * operations after CSE: 10 add, 26 mul, 2 div, 4 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * pose_rates 0.00023 (largest entry).
  */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates);
@@ -185,6 +194,10 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] M [2x2] row-major (TRAILER_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
  * operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * M 2.7e-06 (largest entry).
  */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M);
@@ -208,6 +221,10 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
  * @param[out] H [2] row-major (TRAILER_MINIMAL_BIAS_FORCES_H_SIZE)
  *
  * operations after CSE: 37 add, 72 mul, 2 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * H 0.0034 (largest entry).
  */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H);
@@ -251,6 +268,11 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
  * operations after CSE: 64 add, 112 mul, 5 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * NOT proved over its declared box (node 223 (div): divisor may be 0); |float32 - exact|
+ * <= wheel_accels inf (largest entry) when it returns OK (it may return
+ * TRAILER_ERR_BAD_PARAMS there).
  */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
@@ -286,6 +308,10 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
  * @param[out] B [10x2] row-major (TRAILER_LINEARIZATION_B_SIZE) -- 10x2 row-major
  *
  * operations after CSE: 201 add, 335 mul, 5 div, 4 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * NOT proved over its declared box (node 196 (div): divisor may be 0); |float32 - exact|
+ * <= A inf, B inf (largest entry).
  */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
@@ -342,6 +368,11 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
  * operations after CSE: 134 add, 207 mul, 5 div, 2 sin/cos, 0 sqrt
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * NOT proved over its declared box (node 252 (div): divisor may be 0); |float32 - exact|
+ * <= longitudinal 0, lateral 0 (largest entry) when it returns OK (it may return
+ * TRAILER_ERR_BAD_PARAMS there).
  */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,
@@ -389,6 +420,10 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
  * operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
+ * certificate (the printed code changed since the
+ * last run: run it again).
  */
 trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
     const trailer_real_t *lateral, const trailer_real_t *mu, const trailer_real_t *loads,
@@ -441,6 +476,10 @@ trailer_status_t trailer_traction_margins(const trailer_real_t *longitudinal,
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
  * operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp
+ *
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
+ * certificate (the printed code changed since the
+ * last run: run it again).
  */
 trailer_status_t trailer_traction_check(const trailer_real_t *longitudinal,
     const trailer_real_t *lateral, const trailer_real_t *mu, const trailer_real_t *loads,

@@ -9033,7 +9033,7 @@ train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const trai
 }
 
 /* train5_traction_margins: documented in train5_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 train5_status_t train5_traction_margins(const train5_real_t *longitudinal,
     const train5_real_t *lateral, const train5_real_t *mu, const train5_real_t *loads,
     const train5_real_t *shares, train5_real_t *margins)
@@ -9052,7 +9052,10 @@ train5_status_t train5_traction_margins(const train5_real_t *longitudinal,
             != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
-    const train5_real_t _t0 = force_y0*force_y0;
+    const train5_real_t _t0 = load_w0*mu_floor;
+    const train5_real_t _t1 = load_w1*mu_floor;
+    const train5_real_t _t2 = force_y0*share_w0;
+    const train5_real_t _t3 = force_y0*share_w1;
     if (!(mu_floor > TRAIN5_LIT(0.0))) { /* mu > 0 */
         return TRAIN5_ERR_BAD_TRACTION;
     }
@@ -9062,10 +9065,24 @@ train5_status_t train5_traction_margins(const train5_real_t *longitudinal,
     if (!(load_w1 > TRAIN5_LIT(0.0))) { /* loads[1] > 0 */
         return TRAIN5_ERR_BAD_TRACTION;
     }
-    const train5_real_t r_0 = load_w0*mu_floor - TRAIN5_SQRT(_t0*share_w0*share_w0
-            + force_x0*force_x0);
-    const train5_real_t r_1 = load_w1*mu_floor - TRAIN5_SQRT(_t0*share_w1*share_w1
-            + force_x1*force_x1);
+    if (!((((_t0 >= TRAIN5_LIT(1e-30)) && (_t0 <= TRAIN5_LIT(1e+30))) ? TRAIN5_LIT(1.0)
+            : TRAIN5_LIT(0.0)) > TRAIN5_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return TRAIN5_ERR_BAD_TRACTION;
+    }
+    if (!((((_t1 >= TRAIN5_LIT(1e-30)) && (_t1 <= TRAIN5_LIT(1e+30))) ? TRAIN5_LIT(1.0)
+            : TRAIN5_LIT(0.0)) > TRAIN5_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return TRAIN5_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= TRAIN5_LIT(1.0)) && (share_w0 >= TRAIN5_LIT(0.0))) ? TRAIN5_LIT(1.0)
+            : TRAIN5_LIT(0.0)) > TRAIN5_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return TRAIN5_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= TRAIN5_LIT(1.0)) && (share_w1 >= TRAIN5_LIT(0.0))) ? TRAIN5_LIT(1.0)
+            : TRAIN5_LIT(0.0)) > TRAIN5_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return TRAIN5_ERR_BAD_TRACTION;
+    }
+    const train5_real_t r_0 = _t0 - train5_norm2(_t2, force_x0);
+    const train5_real_t r_1 = _t1 - train5_norm2(_t3, force_x1);
     if (((train5_exp_carry(r_0) | train5_exp_carry(r_1)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_OUTPUT;
     }
@@ -9075,7 +9092,7 @@ train5_status_t train5_traction_margins(const train5_real_t *longitudinal,
 }
 
 /* train5_traction_check: documented in train5_model.h.
-   operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt */
+   operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp */
 train5_status_t train5_traction_check(const train5_real_t *longitudinal,
     const train5_real_t *lateral, const train5_real_t *mu, const train5_real_t *loads,
     const train5_real_t *shares, train5_real_t *margins)
@@ -9094,11 +9111,12 @@ train5_status_t train5_traction_check(const train5_real_t *longitudinal,
             != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
-    const train5_real_t _t0 = force_y0*force_y0;
-    const train5_real_t _t1 = load_w0*mu_floor - TRAIN5_SQRT(_t0*share_w0*share_w0
-            + force_x0*force_x0);
-    const train5_real_t _t2 = load_w1*mu_floor - TRAIN5_SQRT(_t0*share_w1*share_w1
-            + force_x1*force_x1);
+    const train5_real_t _t0 = load_w0*mu_floor;
+    const train5_real_t _t1 = force_y0*share_w0;
+    const train5_real_t _t2 = _t0 - train5_norm2(_t1, force_x0);
+    const train5_real_t _t3 = load_w1*mu_floor;
+    const train5_real_t _t4 = force_y0*share_w1;
+    const train5_real_t _t5 = _t3 - train5_norm2(_t4, force_x1);
     if (!(mu_floor > TRAIN5_LIT(0.0))) { /* mu > 0 */
         return TRAIN5_ERR_BAD_TRACTION;
     }
@@ -9108,14 +9126,30 @@ train5_status_t train5_traction_check(const train5_real_t *longitudinal,
     if (!(load_w1 > TRAIN5_LIT(0.0))) { /* loads[1] > 0 */
         return TRAIN5_ERR_BAD_TRACTION;
     }
-    if (!(_t1 > TRAIN5_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
+    if (!((((_t0 >= TRAIN5_LIT(1e-30)) && (_t0 <= TRAIN5_LIT(1e+30))) ? TRAIN5_LIT(1.0)
+            : TRAIN5_LIT(0.0)) > TRAIN5_LIT(0.0))) { /* mu loads[0] in [1e-30, 1e+30] N */
+        return TRAIN5_ERR_BAD_TRACTION;
+    }
+    if (!((((_t3 >= TRAIN5_LIT(1e-30)) && (_t3 <= TRAIN5_LIT(1e+30))) ? TRAIN5_LIT(1.0)
+            : TRAIN5_LIT(0.0)) > TRAIN5_LIT(0.0))) { /* mu loads[1] in [1e-30, 1e+30] N */
+        return TRAIN5_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w0 <= TRAIN5_LIT(1.0)) && (share_w0 >= TRAIN5_LIT(0.0))) ? TRAIN5_LIT(1.0)
+            : TRAIN5_LIT(0.0)) > TRAIN5_LIT(0.0))) { /* shares[0] in [0, 1] */
+        return TRAIN5_ERR_BAD_TRACTION;
+    }
+    if (!((((share_w1 <= TRAIN5_LIT(1.0)) && (share_w1 >= TRAIN5_LIT(0.0))) ? TRAIN5_LIT(1.0)
+            : TRAIN5_LIT(0.0)) > TRAIN5_LIT(0.0))) { /* shares[1] in [0, 1] */
+        return TRAIN5_ERR_BAD_TRACTION;
+    }
+    if (!(_t2 > TRAIN5_LIT(0.0))) { /* wheel 'right' keeps grip: margin > 0 */
         return TRAIN5_WARN_TRACTION;
     }
-    if (!(_t2 > TRAIN5_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
+    if (!(_t5 > TRAIN5_LIT(0.0))) { /* wheel 'left' keeps grip: margin > 0 */
         return TRAIN5_WARN_TRACTION;
     }
-    const train5_real_t r_0 = _t1;
-    const train5_real_t r_1 = _t2;
+    const train5_real_t r_0 = _t2;
+    const train5_real_t r_1 = _t5;
     if (((train5_exp_carry(r_0) | train5_exp_carry(r_1)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_OUTPUT;
     }

@@ -492,7 +492,9 @@ train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const trai
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
  * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
  * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
- * needs more traction than the floor gives and slips.
+ * needs more traction than the floor gives and slips. The root is a scaled 2-norm:
+ * a margin is finite whenever the true one is, with its sign, for every finite
+ * force (mu N_k in [1e-30, 1e+30] N, shares in [0, 1]: else ERR_BAD_TRACTION).
  *
  * Paper equations: (9), (10)-(12).
  *
@@ -515,9 +517,13 @@ train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const trai
  *         TRAIN5_ERR_BAD_TRACTION if not (mu > 0),
  *         TRAIN5_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         TRAIN5_ERR_BAD_TRACTION if not (loads[1] > 0),
+ *         TRAIN5_ERR_BAD_TRACTION if not (mu loads[0] in [1e-30, 1e+30] N),
+ *         TRAIN5_ERR_BAD_TRACTION if not (mu loads[1] in [1e-30, 1e+30] N),
+ *         TRAIN5_ERR_BAD_TRACTION if not (shares[0] in [0, 1]),
+ *         TRAIN5_ERR_BAD_TRACTION if not (shares[1] in [0, 1]),
  *         TRAIN5_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp
  */
 train5_status_t train5_traction_margins(const train5_real_t *longitudinal,
     const train5_real_t *lateral, const train5_real_t *mu, const train5_real_t *loads,
@@ -534,7 +540,9 @@ train5_status_t train5_traction_margins(const train5_real_t *longitudinal,
  * Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
  * (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
  * forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
- * needs more traction than the floor gives and slips.
+ * needs more traction than the floor gives and slips. The root is a scaled 2-norm:
+ * a margin is finite whenever the true one is, with its sign, for every finite
+ * force (mu N_k in [1e-30, 1e+30] N, shares in [0, 1]: else ERR_BAD_TRACTION).
  * A check for firmware after the controller step: returns TRAIN5_WARN_TRACTION (> 0, not
  * an error) when a margin is <= 0, then, as on any status but OK, writes nothing
  * (traction_margins gives the margins whatever their sign).
@@ -560,11 +568,15 @@ train5_status_t train5_traction_margins(const train5_real_t *longitudinal,
  *         TRAIN5_ERR_BAD_TRACTION if not (mu > 0),
  *         TRAIN5_ERR_BAD_TRACTION if not (loads[0] > 0),
  *         TRAIN5_ERR_BAD_TRACTION if not (loads[1] > 0),
+ *         TRAIN5_ERR_BAD_TRACTION if not (mu loads[0] in [1e-30, 1e+30] N),
+ *         TRAIN5_ERR_BAD_TRACTION if not (mu loads[1] in [1e-30, 1e+30] N),
+ *         TRAIN5_ERR_BAD_TRACTION if not (shares[0] in [0, 1]),
+ *         TRAIN5_ERR_BAD_TRACTION if not (shares[1] in [0, 1]),
  *         TRAIN5_WARN_TRACTION if not (wheel 'right' keeps grip: margin > 0),
  *         TRAIN5_WARN_TRACTION if not (wheel 'left' keeps grip: margin > 0),
  *         TRAIN5_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
+ * operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp
  */
 train5_status_t train5_traction_check(const train5_real_t *longitudinal,
     const train5_real_t *lateral, const train5_real_t *mu, const train5_real_t *loads,

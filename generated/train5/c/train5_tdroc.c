@@ -371,8 +371,15 @@ train5_status_t train5_tdroc_step_detail(train5_tdroc_state_t *state,
        which are the old window's first MAX_WINDOW - 1 (at the wrap, by the second copy);
        the state is written at the commit only (two values and the head). */
     pushed = state->steps >= 2u;
-    omega_count = state->omega_count;
+    /* The ring's head and count, read once and bounded at their use: from a corrupted state
+       (a flipped bit, magic intact) the step fails, nothing written, instead of reading or
+       writing outside omega_ring. One unsigned compare each (a negative int is large). */
     omega_head = state->omega_head;
+    omega_count = state->omega_count;
+    if (((unsigned int)omega_head >= (unsigned int)TRAIN5_MAX_WINDOW)
+        || ((unsigned int)omega_count > ((unsigned int)TRAIN5_MAX_WINDOW + 1u))) {
+        return train5_fail(detail, TRAIN5_ERR_NOT_INITIALISED, TRAIN5_FIELD_STATE, -1);
+    }
     if (pushed) {
         train5_k_minimal_omega_difference(H1hat, state->H1hat, &dn_new);
         omega_head = omega_head == 0 ? TRAIN5_MAX_WINDOW - 1 : omega_head - 1;

@@ -62,7 +62,9 @@ typedef struct {
     train5_real_t tde_c2;      /* weight of u(t-2h) in (17): rate_window/(2h) matched, else 0 (at
                                   _init) */
     train5_real_t mhat_prev[4]; /* Mhat(q(t-h)), row-major, for (17) */
-    int omega_count;        /* Omega's seen, at most TRAIN5_MAX_WINDOW + 1 (Omega(1) is H1hat) */
+    /* a step refuses a state with omega_count or omega_head out of its range
+       (TRAIN5_ERR_NOT_INITIALISED) */
+    int omega_count;        /* Omega's seen, 0..TRAIN5_MAX_WINDOW + 1 (Omega(1) is H1hat) */
     int omega_head;         /* 0..TRAIN5_MAX_WINDOW - 1: where omega_ring holds the newest norm */
     /* ||Omega(i) - Omega(i+1)||, all (25) needs, each written at k and k + TRAIN5_MAX_WINDOW:
        the window, newest first, is omega_ring[omega_head ...], contiguous (no shift, no %) */

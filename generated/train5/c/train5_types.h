@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAIN5_CODE_ID 0x3def1381u
+#define TRAIN5_CODE_ID 0xce2d53b3u
 
 #ifdef TRAIN5_FLOAT32
 typedef float train5_real_t;
@@ -309,15 +309,19 @@ TRAIN5_TRIG_INLINE train5_real_t train5_cos_bounded(train5_real_t x)
 
 #ifdef TRAIN5_FLOAT32
 #define TRAIN5_REAL_MAX FLT_MAX
+#define TRAIN5_REAL_MIN FLT_MIN
 #else
 #define TRAIN5_REAL_MAX DBL_MAX
+#define TRAIN5_REAL_MIN DBL_MIN
 #endif
 
-/* 2-norms that cannot overflow while the norm is finite. train5_norm<n>(x0, ..., x<n-1>) is
-   sqrt(x0*x0 + ... + x<n-1>*x<n-1>), summed as written, bit for bit, while that sum is
-   finite; beyond it (an entry above about 1.8e19 in float32, 1.3e154 in double) the entries
-   are scaled by the largest magnitude first (train5_norm_scaled), so a finite vector never
-   gets an infinite norm. A NaN entry gives NaN. */
+/* 2-norms that neither overflow nor underflow while the norm is finite.
+   train5_norm<n>(x0, ..., x<n-1>) is sqrt(x0*x0 + ... + x<n-1>*x<n-1>), summed as written,
+   bit for bit, while that sum is a normal number; beyond it (an entry above about 1.8e19 in
+   float32, 1.3e154 in double) or below it (every entry below about 1e-19 in float32, 1.5e-154
+   in double, where the squares lose their digits or vanish) the entries are scaled by the
+   largest magnitude first (train5_norm_scaled), so a finite vector never gets an infinite
+   norm, nor a zero or digit-less one. A NaN entry gives NaN. */
 static inline train5_real_t train5_norm_scaled(const train5_real_t *x, int n)
 {
     train5_real_t top = TRAIN5_LIT(0.0);
@@ -340,7 +344,7 @@ static inline train5_real_t train5_norm_scaled(const train5_real_t *x, int n)
 static inline train5_real_t train5_norm2(train5_real_t x0, train5_real_t x1)
 {
     const train5_real_t sum = x0 * x0 + x1 * x1;
-    if (sum <= TRAIN5_REAL_MAX) {
+    if ((sum >= TRAIN5_REAL_MIN) && (sum <= TRAIN5_REAL_MAX)) {
         return TRAIN5_SQRT(sum);
     }
     {
@@ -374,14 +378,16 @@ typedef enum {
     TRAIN5_ERR_BAD_NOMINAL = -12, /* nominal parameters give a singular M-hat */
     TRAIN5_ERR_BAD_TORQUE_LIMIT = -13, /* torque limit <= 0 or NaN */
     TRAIN5_ERR_BAD_FORMULATION = -14, /* formulation is not MINIMAL (the only one generated) */
-    TRAIN5_ERR_NOT_INITIALISED = -15, /* state not initialised by _init */
+    TRAIN5_ERR_NOT_INITIALISED = -15, /* state not initialised by _init, or corrupted (an index it
+                                         holds out of range) */
     TRAIN5_ERR_BAD_BOUNDS = -16, /* ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0 */
     TRAIN5_ERR_BAD_ESTIMATOR = -17, /* accel_estimator is not BACKWARD, CENTRAL or MATCHED, or
                                        rate_window is outside [0, h] */
     TRAIN5_ERR_BAD_HELD_GAIN = -18, /* TDROC hold_gain is not 0 or 1, or held_gain < 0 */
     TRAIN5_ERR_CONFIG_CHANGED = -19, /* the configuration differs from the one given to _init (any
                                         bit of any value) */
-    TRAIN5_ERR_BAD_TRACTION = -20 /* traction check: friction coefficient or a wheel load <= 0 */
+    TRAIN5_ERR_BAD_TRACTION = -20 /* traction check: friction coefficient or a wheel load <= 0, mu N
+                                     outside [1e-30, 1e30] N or a share outside [0, 1] */
 } train5_status_t;
 
 /* the 20 coordinates of (14), tau = B^T u: not generated for this robot

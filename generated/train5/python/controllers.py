@@ -47,12 +47,12 @@ STATUS: dict[str, int] = {
     "TRAIN5_ERR_BAD_NOMINAL": -12,  # nominal parameters give a singular M-hat
     "TRAIN5_ERR_BAD_TORQUE_LIMIT": -13,  # torque limit <= 0 or NaN
     "TRAIN5_ERR_BAD_FORMULATION": -14,  # formulation is not MINIMAL (the only one generated)
-    "TRAIN5_ERR_NOT_INITIALISED": -15,  # state not initialised by _init
+    "TRAIN5_ERR_NOT_INITIALISED": -15,  # state not initialised by _init, or corrupted (an index it holds out of range)
     "TRAIN5_ERR_BAD_BOUNDS": -16,  # ROC alpha outside [0, 1) or phi < 0; ASMC gamma/gain < 0
     "TRAIN5_ERR_BAD_ESTIMATOR": -17,  # accel_estimator is not BACKWARD, CENTRAL or MATCHED, or rate_window is outside [0, h]
     "TRAIN5_ERR_BAD_HELD_GAIN": -18,  # TDROC hold_gain is not 0 or 1, or held_gain < 0
     "TRAIN5_ERR_CONFIG_CHANGED": -19,  # the configuration differs from the one given to _init (any bit of any value)
-    "TRAIN5_ERR_BAD_TRACTION": -20,  # traction check: friction coefficient or a wheel load <= 0
+    "TRAIN5_ERR_BAD_TRACTION": -20,  # traction check: friction coefficient or a wheel load <= 0, mu N outside [1e-30, 1e30] N or a share outside [0, 1]
 }
 FORMULATION_PAPER = 0
 FORMULATION_MINIMAL = 1

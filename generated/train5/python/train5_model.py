@@ -6440,7 +6440,9 @@ def traction_margins(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike,
     """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
     (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
     forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
-    needs more traction than the floor gives and slips.
+    needs more traction than the floor gives and slips. The root is a scaled 2-norm:
+    a margin is finite whenever the true one is, with its sign, for every finite
+    force (mu N_k in [1e-30, 1e+30] N, shares in [0, 1]: else ERR_BAD_TRACTION).
 
     Paper equations: (9), (10)-(12).
 
@@ -6454,7 +6456,7 @@ def traction_margins(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike,
     Returns:
         margins: array of 2 (shape 2x1, row-major). N, per driven wheel
 
-    operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
+    operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp
     """
     force_x0, force_x1 = _flat(longitudinal, 2, "longitudinal")
     force_y0, _, _, _, _, _ = _flat(lateral, 6, "lateral")
@@ -6464,7 +6466,10 @@ def traction_margins(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike,
     if not all(map(math.isfinite, (force_x0, force_x1, force_y0, mu_floor, load_w0, load_w1, share_w0, share_w1,))):
         raise ValueError("TRAIN5_ERR_NONFINITE_INPUT: an input of traction_margins is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = force_y0*force_y0
+        _t0 = load_w0*mu_floor
+        _t1 = load_w1*mu_floor
+        _t2 = force_y0*share_w0
+        _t3 = force_y0*share_w1
     except ZeroDivisionError:
         raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_margins: division by zero (degenerate input)") from None
     if not (mu_floor > 0.0):
@@ -6473,10 +6478,15 @@ def traction_margins(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike,
         raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_margins requires loads[0] > 0")
     if not (load_w1 > 0.0):
         raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_margins requires loads[1] > 0")
-    margins = np.array([
-        load_w0*mu_floor - math.sqrt(_t0*share_w0*share_w0 + force_x0*force_x0),
-        load_w1*mu_floor - math.sqrt(_t0*share_w1*share_w1 + force_x1*force_x1),
-    ])
+    if not ((1.0 if ((_t0 >= 1e-30) and (_t0 <= 1e+30)) else 0.0) > 0.0):
+        raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_margins requires mu loads[0] in [1e-30, 1e+30] N")
+    if not ((1.0 if ((_t1 >= 1e-30) and (_t1 <= 1e+30)) else 0.0) > 0.0):
+        raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_margins requires mu loads[1] in [1e-30, 1e+30] N")
+    if not ((1.0 if ((share_w0 <= 1.0) and (share_w0 >= 0.0)) else 0.0) > 0.0):
+        raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_margins requires shares[0] in [0, 1]")
+    if not ((1.0 if ((share_w1 <= 1.0) and (share_w1 >= 0.0)) else 0.0) > 0.0):
+        raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_margins requires shares[1] in [0, 1]")
+    margins = np.array([_t0 - _norm(_t2, force_x0), _t1 - _norm(_t3, force_x1)])
     if not np.all(np.isfinite(margins)):
         raise ValueError("TRAIN5_ERR_NONFINITE_OUTPUT: a result of traction_margins is not finite")
     return margins
@@ -6486,7 +6496,9 @@ def traction_check(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, l
     """Traction margins on a friction circle: margins[k] = mu N_k - sqrt(Fx_k^2 +
     (share_k Fy_axle)^2) (N) of driven wheel 'right', 'left', Fx, Fy the contact
     forces wheel_contact_forces wrote (the multipliers of (9)). Negative: the wheel
-    needs more traction than the floor gives and slips.
+    needs more traction than the floor gives and slips. The root is a scaled 2-norm:
+    a margin is finite whenever the true one is, with its sign, for every finite
+    force (mu N_k in [1e-30, 1e+30] N, shares in [0, 1]: else ERR_BAD_TRACTION).
     A check for firmware after the controller step: returns TRAIN5_WARN_TRACTION (> 0, not
     an error) when a margin is <= 0, then, as on any status but OK, writes nothing
     (traction_margins gives the margins whatever their sign).
@@ -6503,7 +6515,7 @@ def traction_check(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, l
     Returns:
         margins: array of 2 (shape 2x1, row-major). N, per driven wheel
 
-    operations after CSE: 4 add, 9 mul, 0 div, 0 sin/cos, 2 sqrt
+    operations after CSE: 4 add, 8 mul, 0 div, 0 sin/cos, 2 sqrt, 10 cmp
     """
     force_x0, force_x1 = _flat(longitudinal, 2, "longitudinal")
     force_y0, _, _, _, _, _ = _flat(lateral, 6, "lateral")
@@ -6513,9 +6525,12 @@ def traction_check(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, l
     if not all(map(math.isfinite, (force_x0, force_x1, force_y0, mu_floor, load_w0, load_w1, share_w0, share_w1,))):
         raise ValueError("TRAIN5_ERR_NONFINITE_INPUT: an input of traction_check is NaN or infinite")
     try:  # C divides by zero to inf and then fails a guard; Python raises: report the guard
-        _t0 = force_y0*force_y0
-        _t1 = load_w0*mu_floor - math.sqrt(_t0*share_w0*share_w0 + force_x0*force_x0)
-        _t2 = load_w1*mu_floor - math.sqrt(_t0*share_w1*share_w1 + force_x1*force_x1)
+        _t0 = load_w0*mu_floor
+        _t1 = force_y0*share_w0
+        _t2 = _t0 - _norm(_t1, force_x0)
+        _t3 = load_w1*mu_floor
+        _t4 = force_y0*share_w1
+        _t5 = _t3 - _norm(_t4, force_x1)
     except ZeroDivisionError:
         raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_check: division by zero (degenerate input)") from None
     if not (mu_floor > 0.0):
@@ -6524,11 +6539,19 @@ def traction_check(longitudinal: ArrayLike, lateral: ArrayLike, mu: ArrayLike, l
         raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_check requires loads[0] > 0")
     if not (load_w1 > 0.0):
         raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_check requires loads[1] > 0")
-    if not (_t1 > 0.0):
-        raise ValueError("TRAIN5_WARN_TRACTION: traction_check requires wheel 'right' keeps grip: margin > 0")
+    if not ((1.0 if ((_t0 >= 1e-30) and (_t0 <= 1e+30)) else 0.0) > 0.0):
+        raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_check requires mu loads[0] in [1e-30, 1e+30] N")
+    if not ((1.0 if ((_t3 >= 1e-30) and (_t3 <= 1e+30)) else 0.0) > 0.0):
+        raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_check requires mu loads[1] in [1e-30, 1e+30] N")
+    if not ((1.0 if ((share_w0 <= 1.0) and (share_w0 >= 0.0)) else 0.0) > 0.0):
+        raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_check requires shares[0] in [0, 1]")
+    if not ((1.0 if ((share_w1 <= 1.0) and (share_w1 >= 0.0)) else 0.0) > 0.0):
+        raise ValueError("TRAIN5_ERR_BAD_TRACTION: traction_check requires shares[1] in [0, 1]")
     if not (_t2 > 0.0):
+        raise ValueError("TRAIN5_WARN_TRACTION: traction_check requires wheel 'right' keeps grip: margin > 0")
+    if not (_t5 > 0.0):
         raise ValueError("TRAIN5_WARN_TRACTION: traction_check requires wheel 'left' keeps grip: margin > 0")
-    margins = np.array([_t1, _t2])
+    margins = np.array([_t2, _t5])
     if not np.all(np.isfinite(margins)):
         raise ValueError("TRAIN5_ERR_NONFINITE_OUTPUT: a result of traction_check is not finite")
     return margins
