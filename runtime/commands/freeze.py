@@ -47,7 +47,7 @@ from runtime.commands.options import GENERATED_HELP, ROBOT_HELP, loaded_setting
 from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import Experiment, ExperimentFileError, load_experiment
 from runtime.freeze.header import FreezeError, describe_error, freeze
-from runtime.stability.sampled_loop import analysed, covers
+from runtime.stability.sampled_loop import covers, refusal
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -177,7 +177,7 @@ def _config(lib: cbuild.CLibrary, code: RobotCode, args: argparse.Namespace,
 def _has_verdict(code: RobotCode, controller: str) -> bool:
     """Whether the sampled-data analysis covers this robot's code (any robot whose first
     coordinates are the root's pose) and this controller's law."""
-    return covers(code) and analysed(code.controller(controller))
+    return covers(code) and not refusal(code.controller(controller))
 
 
 def choose_formulation(

@@ -75,9 +75,10 @@ def main(argv: list[str] | None = None) -> int:
     exp, code, robot = setting_.experiment, setup.code, setup.nominal
     if (args.robot or exp.robot) is not None and not args.json:
         print(f"robot '{setup.name}' from {setup.source}:", *setting_.scaling, sep="\n  ")
+    refused: list[str] = []
     rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure,
                        path=args.path, delays=not args.no_delay,
-                       saturation=not args.no_saturation)
+                       saturation=not args.no_saturation, refused=refused)
     if args.json:
         print(json.dumps(as_json(rows, setup.name), indent=2))
     else:
@@ -85,7 +86,8 @@ def main(argv: list[str] | None = None) -> int:
             f"robot {setup.name}, h = {exp.controller.h} s, sensing {exp.sensing.velocity}, "
             f"plant {args.plant}, ε = {exp.controller.eps}"
         )
-        print(table(rows, code), *tde_notes(code, robot, exp), *not_analysed(code), sep="\n")
+        print(table(rows, code), *tde_notes(code, robot, exp), *not_analysed(code), *refused,
+              sep="\n")
     return 0
 
 
