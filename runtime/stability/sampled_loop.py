@@ -190,6 +190,7 @@ class LoopSetting:
     config: tuple[tuple[str, Any], ...]
     estimator: str = "model"  # for the report: the TDE's estimator, or "model"
     delay: float = 0.0  # s: command computed at t_k applied from t_k + delay
+    in_flight: int = 0  # at least this many commands in flight kept in the state (jitter)
 
 
 # How each declared kind of switching gain (``ControllerInfo.window``/``bounds``/``adaptive``,
@@ -328,12 +329,13 @@ def in_flight_count(delay: float, h: float) -> int:
 
 
 def steady_reference(code: RobotCode, params: dict[str, float], exp: Experiment,
-                     rates: tuple[float, ...], name: str) -> tuple[Reference, int]:
+                     rates: tuple[float, ...], name: str, tail: int = 20
+                     ) -> tuple[Reference, int]:
     """The motion under the driven-wheel rates ``rates`` (ramped up from rest, as the paths
     start) and the first sample from :data:`ANALYSIS_TIME` at which it is steady: every
     angle's rate constant over a sample (a trailer's hitch settled)."""
     h = exp.controller.h
-    duration = ANALYSIS_TIME + 20 * h
+    duration = ANALYSIS_TIME + tail * h
     start = np.zeros(code.nq)
     start[:2] = exp.paths.circle_radius, exp.paths.circle_radius
     tol = SETTLED * max(1.0, float(np.abs(rates).max()))
@@ -362,7 +364,7 @@ class ClosedLoop:
     (the robot's NumPy controllers, ``controllers.py``) with its whole state (history,
     window, adaptive gain, integral) as loop states."""
 
-    def __init__(self, s: LoopSetting) -> None:
+    def __init__(self, s: LoopSetting, tail: int = 20) -> None:
         self.s = s
         self.code = code = code_in(Path(s.code_folder))
         self.info = info = code.controller(s.controller)
@@ -374,6 +376,8 @@ class ClosedLoop:
         self.act = list(code.actuated)
         self.dep = list(code.dependent)
         self.lag, self.frac = delay_split(s.delay, s.h)
+        self.period = s.h  # the plant's sampling period (the law's h unless timed apart)
+        self.flights = max(in_flight_count(s.delay, s.h), s.in_flight)
         self.cls = code.controller_class(s.controller)
         self._controllers: dict[float, Any] = {}
         cont, self.held = law_state(self.controller(0.0), self.label)
@@ -383,7 +387,7 @@ class ClosedLoop:
         for name, shape in self.shapes.items():
             size = int(np.prod(shape)) if shape else 1
             blocks.append((name, size, "q" if shape and shape[-1] == nq else "fixed"))
-        blocks += [(f"in_flight{i}", nu, "wheel") for i in range(in_flight_count(s.delay, s.h))]
+        blocks += [(f"in_flight{i}", nu, "wheel") for i in range(self.flights)]
         self.layout = Layout(tuple(blocks), nq)
         self.sl = self.layout.slices
         self.dim = self.layout.dim
@@ -396,7 +400,7 @@ class ClosedLoop:
         self.tau = ffi.new(f"{pre}_real_t[{nu}]")
         exp = Experiment()
         exp = replace(exp, controller=replace(exp.controller, h=s.h))
-        self.ref, self.k = steady_reference(code, self.nom, exp, s.wheel_rates, "steady")
+        self.ref, self.k = steady_reference(code, self.nom, exp, s.wheel_rates, "steady", tail)
         self.points, self.held_at, self.how = self.operating_points()
 
     def controller(self, gain: float) -> Any:
@@ -479,7 +483,7 @@ class ClosedLoop:
         out[sl["odo_dependent"]] = q[self.dep]
         out[sl["odo_angles"]] = q[self.act]
         self.store(ctrl, out)
-        flight = [z[sl[f"in_flight{i}"]] for i in range(in_flight_count(s.delay, s.h))]
+        flight = [z[sl[f"in_flight{i}"]] for i in range(self.flights)]
         for i, cmd in enumerate([tau, *flight[:-1]] if flight else []):
             out[sl[f"in_flight{i}"]] = cmd
         x = self.x
@@ -492,7 +496,7 @@ class ClosedLoop:
         else:  # the command of `lag` samples ago from f h on, the one before it until then
             now = tau if self.lag == 0 else flight[self.lag - 1]
             before = flight[self.lag] if self.frac > 0 else now
-            self._advance_pieces([(0.0, before), (self.frac * s.h, now)], window, out)
+            self._advance_pieces([(0.0, before), (self.frac * self.period, now)], window, out)
         out[sl["plant_q"]] = [x[i] for i in range(nq)]
         out[sl["plant_eta"]] = [x[nq + i] for i in range(nu)]
         return out
@@ -500,7 +504,7 @@ class ClosedLoop:
     def _advance_held(self, tau: Vec, window: float, out: Vec) -> None:
         """The plant over h under τ held, reading the motor-encoder window's start."""
         s, x = self.s, self.x
-        dt = s.h / s.substeps
+        dt = self.period / s.substeps
         n_win = round(window / dt)
         self.tau[0:self.code.nu] = [float(v) for v in tau]
         adv = self.lib.lib.sim_plant_advance
@@ -516,15 +520,16 @@ class ClosedLoop:
         integrated in steps no longer than h / substeps, the window's start read on the
         way."""
         s, x = self.s, self.x
-        marks = sorted({0.0, s.h, *(t for t, _ in pieces if 0 < t < s.h),
-                        *([s.h - window] if window > 0 else [])})
+        h = self.period
+        marks = sorted({0.0, h, *(t for t, _ in pieces if 0 < t < h),
+                        *([h - window] if window > 0 else [])})
         adv = self.lib.lib.sim_plant_advance
         for a, b in itertools.pairwise(marks):
-            if window > 0 and abs(a - (s.h - window)) < 1e-12:
+            if window > 0 and abs(a - (h - window)) < 1e-12:
                 out[self.sl["window_start"]] = [x[i] for i in self.act]
             tau = [cmd for t, cmd in pieces if t <= a + 1e-12][-1]
             self.tau[0:self.code.nu] = [float(v) for v in tau]
-            n = max(1, math.ceil((b - a) / (s.h / s.substeps) - 1e-9))
+            n = max(1, math.ceil((b - a) / (h / s.substeps) - 1e-9))
             if adv(self.pp, self.friction, x, self.tau, (b - a) / n, n) != 0:
                 raise ArithmeticError("plant diverged during the linearisation")
 
@@ -625,6 +630,20 @@ class ClosedLoop:
     def jacobian(self, gain: float, i: int = 0) -> NDArray[np.float64]:
         """∂z_{k+i+1}/∂z_{k+i} (i = 0 or 1) at ``gain`` in the reference's heading frame."""
         return self.conjugate(self.raw_jacobian(gain, i)[0], i, self.planar)
+
+    def timed_jacobian(self, gain: float, period: float, delay: float) -> NDArray[np.float64]:
+        """∂z_{k+1}/∂z_k in the heading frame at the operating point of the setting's own
+        timing, for one sample whose plant period is ``period`` and whose command's latency
+        is ``delay`` (< period, one command in flight: :mod:`runtime.stability.jitter`)."""
+        if not (0.0 <= delay < period and self.flights >= 1):
+            raise ValueError(f"a timed sample needs 0 <= delay < period and a command in "
+                             f"flight, got delay {delay:g} s, period {period:g} s")
+        saved = self.period, self.lag, self.frac
+        self.period, self.lag, self.frac = period, 0, delay / period
+        try:
+            return self.conjugate(self.raw_jacobian(gain, 0)[0], 0, self.planar)
+        finally:
+            self.period, self.lag, self.frac = saved
 
     @cached_property
     def planar(self) -> frozenset[str]:
