@@ -64,3 +64,18 @@ def test_search_finds_a_divergent_sequence_beyond_the_boundary() -> None:
 def test_latency_beyond_the_period_is_refused() -> None:
     with pytest.raises(ValueError, match="latency below the period"):
         jt.verdict(loop(), 0.0, jt.Timing(0.1, 0.1, 0.0, 0.1))
+
+
+def test_wmr_stability_prints_the_jitter_verdicts() -> None:
+    """``wmr stability --jitter``'s lines: the experiment's [controller] jitter and the
+    measured timing (worst period, worst latency), each with its word."""
+    from runtime.commands.stability import jitter_lines
+    from runtime.experiment.settings import parse_experiment
+    from runtime.stability.analysis import analyse
+
+    exp = parse_experiment("[sensing]\nvelocity = 'sample-instant'\n[controller]\n"
+                           "jitter_time = 0.02\nperiod_worst = 0.1\nlatency_worst = 0.08\n")
+    row = analyse(CODE, "tdc", "minimal", dict(CODE.params), exp, measure=False)
+    lines = jitter_lines([row], CODE, dict(CODE.params), exp, "nominal", False)
+    assert any("[controller] jitter" in line and ": proved (" in line for line in lines), lines
+    assert any("measured timing" in line and ": unstable (" in line for line in lines), lines
