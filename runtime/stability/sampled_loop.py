@@ -572,12 +572,13 @@ class ClosedLoop:
                         z = self.step(z, j, 0.0, held={})
             except (ArithmeticError, ValueError):
                 continue
-            ok = all(np.all(np.isfinite(p)) for p in points) and float(np.abs(
-                points[0][self.sl["plant_eta"]] - rates).max()) < SETTLED_RATES * max(
-                    1.0, float(np.abs(rates).max()))
-            if ok or pinned:
-                return points, held, ("the reference (the closed loop diverges from it)"
-                                      if pinned else "the closed loop's steady motion")
+            scale = max(1.0, float(np.abs(rates).max()))
+            off = (float(np.abs(points[0][self.sl["plant_eta"]] - rates).max())
+                   if all(np.all(np.isfinite(p)) for p in points) else math.inf)
+            if off < SETTLED_RATES * scale or pinned:
+                return points, held, ("the reference (the closed loop has not settled onto a "
+                                      "steady motion there)" if pinned
+                                      else "the closed loop's steady motion")
         raise NotLinearisable(f"{self.label}: the generated step fails on the reference "
                               "itself; no operating point to linearise about")
 
