@@ -47,7 +47,7 @@ from runtime.commands.options import GENERATED_HELP, ROBOT_HELP, loaded_setting
 from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import Experiment, ExperimentFileError, load_experiment
 from runtime.freeze.header import FreezeError, describe_error, freeze
-from runtime.stability.sampled_loop import covers, refusal
+from runtime.stability.sampled_loop import NotLinearisable, covers, refusal
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -199,8 +199,7 @@ def choose_formulation(
         form = candidates[0]
         note = (f"no sampled-data verdict for robot {code.name}: `wmr stability` needs the "
                 "root's pose as its first coordinates" if not covers(code) else
-                f"no sampled-data verdict for {args.controller}: `wmr stability` models the "
-                "laws of (18) (controllers with K1, K2) and the wheel PI only")
+                f"no sampled-data verdict: {refusal(code.controller(args.controller))}")
         print(f"note: {note}", file=sys.stderr)
         return (form, _config(lib, code, args, form, nominal, exp),
                 [f"Sampled-data verdict: {note}"])
@@ -208,8 +207,13 @@ def choose_formulation(
     for form in available:
         config = _config(lib, code, args, form, nominal, exp)
         _validated(lib, code, args.controller, config)
-        verdicts.append((form, config, configuration_verdict(
-            code, args.controller, form, nominal, exp, config)))
+        try:
+            verdicts.append((form, config, configuration_verdict(
+                code, args.controller, form, nominal, exp, config)))
+        except NotLinearisable as exc:  # no verdict: said in the header, never another's
+            if form == candidates[0]:
+                print(f"note: no sampled-data verdict: {exc}", file=sys.stderr)
+                return form, config, [f"Sampled-data verdict: none: {exc}"]
     chosen = next((v for v in verdicts if v[0] in candidates and v[2].stable), None)
     if chosen is None:
         asked = next(v for v in verdicts if v[0] == candidates[0])
