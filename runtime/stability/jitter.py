@@ -50,6 +50,9 @@ Matrix = NDArray[np.float64]
 GRID = (9, 5)  # points on the varying axis of a range that varies in one, per axis in two
 SAFETY = 2.0  # the Lipschitz estimate's margin (stated in the verdict)
 NEUTRAL = 1e-7  # a mode every J keeps at 1 within this
+# Growth per sample within this of 1 is neutral, not divergence (as the analysis'
+# NEUTRAL_TOL: a mode that a finite-difference Jacobian puts at 1 ± 1e-7 is an offset)
+GROWTH_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -271,7 +274,7 @@ def verdict(loop: ClosedLoop, gain: float, timing: Timing, search: bool = False
             ) -> JitterVerdict:
     fam = family(loop, gain, timing)
     found = adversarial(loop, gain, timing) if search else None
-    if fam.radius >= 1.0 or (found is not None and found.rate >= 1.0):
+    if fam.radius >= 1.0 + GROWTH_TOL or (found is not None and found.rate >= 1.0 + GROWTH_TOL):
         return JitterVerdict(timing, "unstable", fam.radius, None, found)
     proof = prove(fam)
     if proof is not None and proof.bound < 1.0:
@@ -319,7 +322,7 @@ def budget(s: LoopSetting, gain: float) -> Budget:
         return verdict(loop, gain, delay_jitter(s.h, s.delay, j)).verdict == "proved"
 
     def calm(j: float) -> bool:
-        return adversarial(loop, gain, delay_jitter(s.h, s.delay, j)).rate < 1.0
+        return adversarial(loop, gain, delay_jitter(s.h, s.delay, j)).rate < 1.0 + GROWTH_TOL
 
     return Budget(largest(proved, necessary), necessary, largest(calm, limit),
                   time.perf_counter() - start)

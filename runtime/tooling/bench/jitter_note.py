@@ -38,7 +38,7 @@ def ms(x: float) -> str:
     return "∞" if math.isinf(x) else f"{x * 1e3:.3g} ms"
 
 
-def rows(name: str) -> list[str]:
+def rows(name: str, only: set[str] | None = None) -> list[str]:
     robot, generated = ROBOTS[name]
     base = Experiment()
     base = replace(base, sensing=replace(base.sensing, velocity="sample-instant"))
@@ -46,6 +46,8 @@ def rows(name: str) -> list[str]:
     code, nominal, exp = st.robot.code, st.robot.nominal, st.experiment
     out = []
     for info in code.controller_infos:
+        if only is not None and info.name not in only:
+            continue
         for form in info.formulations:
             where = f"| {name} | {info.label} | {form} "
             if refusal(info):
@@ -76,10 +78,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--robots", default=",".join(ROBOTS))
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "STABILITY.md")
     parser.add_argument("--print", action="store_true", help="print the rows only")
+    parser.add_argument("--controllers", default=None, help="only these (comma-separated)")
     args = parser.parse_args(argv)
     table = list(HEADER)
     for name in args.robots.split(","):
-        table += rows(name)
+        table += rows(name, set(args.controllers.split(",")) if args.controllers else None)
     if args.print:
         return 0
     text = args.out.read_text(encoding="utf-8")
