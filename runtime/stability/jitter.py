@@ -34,7 +34,6 @@ experiment's plant, sensing and configuration, D_max < h_min.
 from __future__ import annotations
 
 import itertools
-import math
 import time
 import warnings
 from dataclasses import dataclass, replace
@@ -222,7 +221,8 @@ def adversarial(loop: ClosedLoop, gain: float, timing: Timing, length: int = 6,
     """Worst-case switching between the range's extreme periods and latencies: every
     periodic pattern of the corners up to ``length`` samples (the spectral radius of the
     product, per sample), then a greedy search that picks, sample by sample, the corner
-    that grows ‖z‖ most, from each eigen-direction of the worst pattern."""
+    that grows ‖z‖ most (from random directions), its word judged as repeated: the
+    spectral radius of its product, per sample."""
     corners = sorted({(h, d) for h in (timing.h_min, timing.h_max)
                       for d in (timing.d_min, timing.d_max)})
     full = [loop.timed_jacobian(gain, h, d) for h, d in corners]
@@ -245,17 +245,19 @@ def adversarial(loop: ClosedLoop, gain: float, timing: Timing, length: int = 6,
     for _ in range(4):
         z = rng.standard_normal(len(mats[0]))
         z /= np.linalg.norm(z)
-        seq, log_growth = [], 0.0
+        greedy: list[int] = []
+        prod = np.eye(len(mats[0]))
         for _ in range(steps):
             nxt = [m @ z for m in mats]
             i = int(np.argmax([np.linalg.norm(v) for v in nxt]))
-            norm = float(np.linalg.norm(nxt[i]))
-            log_growth += math.log(max(norm, 1e-300))
-            z = nxt[i] / max(norm, 1e-300)
-            seq.append(corners[i])
-        rate = math.exp(log_growth / steps)
+            z = nxt[i] / max(float(np.linalg.norm(nxt[i])), 1e-300)
+            greedy.append(i)
+            prod = mats[i] @ prod
+        # the greedy word repeated: its asymptotic growth (a finite run's norm growth would
+        # count a non-normal map's transient as divergence)
+        rate = float(np.abs(np.linalg.eigvals(prod)).max()) ** (1.0 / steps)
         if rate > best.rate:
-            best = Search(rate, tuple(seq))
+            best = Search(rate, tuple(corners[i] for i in greedy))
     return best
 
 
@@ -309,14 +311,15 @@ def largest(ok: object, hi: float, rel_tol: float = 0.05) -> float:
     return lo
 
 
-def budget(s: LoopSetting, gain: float) -> Budget:
+def budget(s: LoopSetting, gain: float, search_only: bool = False) -> Budget:
     """The delay-jitter budget about the setting's delay D (latencies in [D − J, D + J], the
     period h): proved, necessary (every constant latency stable), and the smallest found
-    destabilising, each searched up to the model's limit D + J < h."""
+    destabilising, each searched up to the model's limit D + J < h (``search_only``: the
+    last only)."""
     start = time.perf_counter()
     loop = loop_for(s)
     limit = 0.999 * s.h - s.delay
-    necessary = min(limit, max(0.0, max_delay(s, gain) - s.delay))
+    necessary = 0.0 if search_only else min(limit, max(0.0, max_delay(s, gain) - s.delay))
 
     def proved(j: float) -> bool:
         return verdict(loop, gain, delay_jitter(s.h, s.delay, j)).verdict == "proved"
@@ -324,6 +327,8 @@ def budget(s: LoopSetting, gain: float) -> Budget:
     def calm(j: float) -> bool:
         return adversarial(loop, gain, delay_jitter(s.h, s.delay, j)).rate < 1.0 + GROWTH_TOL
 
+    if search_only:
+        return Budget(0.0, 0.0, largest(calm, limit), time.perf_counter() - start)
     return Budget(largest(proved, necessary), necessary, largest(calm, limit),
                   time.perf_counter() - start)
 

@@ -38,7 +38,8 @@ def ms(x: float) -> str:
     return "∞" if math.isinf(x) else f"{x * 1e3:.3g} ms"
 
 
-def rows(name: str, only: set[str] | None = None) -> list[str]:
+def rows(name: str, only: set[str] | None = None, forms: set[str] | None = None,
+         search_only: bool = False) -> list[str]:
     robot, generated = ROBOTS[name]
     base = Experiment()
     base = replace(base, sensing=replace(base.sensing, velocity="sample-instant"))
@@ -49,6 +50,8 @@ def rows(name: str, only: set[str] | None = None) -> list[str]:
         if only is not None and info.name not in only:
             continue
         for form in info.formulations:
+            if forms is not None and form not in forms:
+                continue
             where = f"| {name} | {info.label} | {form} "
             if refusal(info):
                 out.append(where + f"| | | | | refused: {refusal(info)} |")
@@ -59,7 +62,7 @@ def rows(name: str, only: set[str] | None = None) -> list[str]:
                 if not math.isfinite(g):
                     out.append(where + "| | | | | no configuration (ROC's bounds) |")
                     continue
-                b = budget(s, g)
+                b = budget(s, g, search_only)
             except (NotLinearisable, ValueError) as exc:
                 out.append(where + f"| | | | | {exc} |")
                 continue
@@ -79,10 +82,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "STABILITY.md")
     parser.add_argument("--print", action="store_true", help="print the rows only")
     parser.add_argument("--controllers", default=None, help="only these (comma-separated)")
+    parser.add_argument("--formulations", default=None, help="only these (comma-separated)")
+    parser.add_argument("--search-only", action="store_true",
+                        help="only the adversarial column (the others left at 0)")
     args = parser.parse_args(argv)
     table = list(HEADER)
     for name in args.robots.split(","):
-        table += rows(name, set(args.controllers.split(",")) if args.controllers else None)
+        table += rows(name, set(args.controllers.split(",")) if args.controllers else None,
+                      set(args.formulations.split(",")) if args.formulations else None,
+                      args.search_only)
     if args.print:
         return 0
     text = args.out.read_text(encoding="utf-8")
