@@ -101,7 +101,7 @@ def velocities(campaign: Campaign) -> list[str]:
 def predict(campaign: Campaign, tgt: Target) -> Prediction:
     """ε_min on the map for every controller and sensing model of the campaign."""
     from runtime.stability.analysis import analyse
-    from runtime.stability.sampled_loop import analysed, covers
+    from runtime.stability.sampled_loop import covers, refusal
 
     code = tgt.setup.code
     grip = grip_verdicts(campaign, tgt)
@@ -118,7 +118,7 @@ def predict(campaign: Campaign, tgt: Target) -> Prediction:
         campaign.experiment.paths, circle_duration=campaign.duration))
     for velocity in velocities(campaign):
         for ctrl in campaign.controllers:
-            if not analysed(code.controller(ctrl)):
+            if refusal(code.controller(ctrl)):
                 continue
             eps_min = []
             for y in ys:

@@ -48,7 +48,7 @@ from runtime.commands.output_folder import OutputFolderError, writable_folder
 from runtime.experiment.settings import Experiment, ExperimentFileError, load_experiment
 from runtime.freeze.header import FreezeError, describe_error, freeze
 from runtime.stability.analysis import configured_experiment
-from runtime.stability.sampled_loop import analysed, covers
+from runtime.stability.sampled_loop import NotLinearisable, covers, refusal
 from runtime.stability.saturation import SaturationVerdict, grip_line, saturation_verdict
 
 
@@ -179,7 +179,7 @@ def _config(lib: cbuild.CLibrary, code: RobotCode, args: argparse.Namespace,
 def _has_verdict(code: RobotCode, controller: str) -> bool:
     """Whether the sampled-data analysis covers this robot's code (any robot whose first
     coordinates are the root's pose) and this controller's law."""
-    return covers(code) and analysed(code.controller(controller))
+    return covers(code) and not refusal(code.controller(controller))
 
 
 def choose_formulation(
@@ -201,8 +201,7 @@ def choose_formulation(
         form = candidates[0]
         note = (f"no sampled-data verdict for robot {code.name}: `wmr stability` needs the "
                 "root's pose as its first coordinates" if not covers(code) else
-                f"no sampled-data verdict for {args.controller}: `wmr stability` models the "
-                "laws of (18) (controllers with K1, K2) and the wheel PI only")
+                f"no sampled-data verdict: {refusal(code.controller(args.controller))}")
         print(f"note: {note}", file=sys.stderr)
         return (form, _config(lib, code, args, form, nominal, exp),
                 [f"Sampled-data verdict: {note}"])
@@ -210,8 +209,13 @@ def choose_formulation(
     for form in available:
         config = _config(lib, code, args, form, nominal, exp)
         _validated(lib, code, args.controller, config)
-        verdicts.append((form, config, configuration_verdict(
-            code, args.controller, form, nominal, exp, config)))
+        try:
+            verdicts.append((form, config, configuration_verdict(
+                code, args.controller, form, nominal, exp, config)))
+        except NotLinearisable as exc:  # no verdict: said in the header, never another's
+            if form == candidates[0]:
+                print(f"note: no sampled-data verdict: {exc}", file=sys.stderr)
+                return form, config, [f"Sampled-data verdict: none: {exc}"]
     chosen = next((v for v in verdicts if v[0] in candidates and v[2].stable), None)
     if chosen is None:
         asked = next(v for v in verdicts if v[0] == candidates[0])
@@ -242,7 +246,8 @@ def grip_verdict(code: RobotCode, controller: str, formulation: str,
     be computed for this robot (the header then says why not)."""
     try:
         return saturation_verdict(code, controller, formulation, nominal,
-                                  configured_experiment(exp, config), simulate=True)
+                                  configured_experiment(code, controller, exp, config),
+                                  simulate=True)
     except ValueError:
         return None
 

@@ -9,16 +9,26 @@ import json
 import sys
 from dataclasses import replace
 
+from runtime.bindings.generated import RobotCode
 from runtime.bindings.robots import RobotSourceError
 from runtime.commands.options import add_experiment_option, add_robot_options, loaded_setting
 from runtime.experiment.settings import (
     VELOCITY_MODELS,
+    Experiment,
     ExperimentFileError,
     check_sensing,
     load_experiment,
 )
-from runtime.stability.analysis import analyse_all, as_json, not_analysed, table, tde_notes
-from runtime.stability.sampled_loop import OPERATING_POINTS, covers
+from runtime.stability.analysis import (
+    Analysis,
+    analyse_all,
+    as_json,
+    not_analysed,
+    table,
+    tde_notes,
+)
+from runtime.stability.jitter import budget, delay_jitter, loop_for, measured, verdict
+from runtime.stability.sampled_loop import OPERATING_POINTS, covers, setting
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -54,6 +64,17 @@ def main(argv: list[str] | None = None) -> int:
         "--no-saturation", action="store_true",
         help="do not check the torque demand and the adaptive gain's start-up (faster)",
     )  # fmt: skip
+    parser.add_argument(
+        "--jitter", action="store_true",
+        help="also the jitter verdicts: latencies varying every sample within the "
+        "experiment's [controller] jitter, and the measured timing (period_worst, "
+        "latency_worst): proved / not proved (necessary condition holds) / unstable",
+    )  # fmt: skip
+    parser.add_argument(
+        "--jitter-budget", action="store_true",
+        help="also the largest proved delay jitter beside the constant-delay (necessary) "
+        "boundary, per row (about a minute a row)",
+    )  # fmt: skip
     parser.add_argument("--json", action="store_true", help="print JSON")
     args = parser.parse_args(argv)
     try:
@@ -75,9 +96,10 @@ def main(argv: list[str] | None = None) -> int:
     exp, code, robot = setting_.experiment, setup.code, setup.nominal
     if (args.robot or exp.robot) is not None and not args.json:
         print(f"robot '{setup.name}' from {setup.source}:", *setting_.scaling, sep="\n  ")
+    refused: list[str] = []
     rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure,
                        path=args.path, delays=not args.no_delay,
-                       saturation=not args.no_saturation)
+                       saturation=not args.no_saturation, refused=refused)
     if args.json:
         print(json.dumps(as_json(rows, setup.name), indent=2))
     else:
@@ -85,8 +107,49 @@ def main(argv: list[str] | None = None) -> int:
             f"robot {setup.name}, h = {exp.controller.h} s, sensing {exp.sensing.velocity}, "
             f"plant {args.plant}, ε = {exp.controller.eps}"
         )
-        print(table(rows, code), *tde_notes(code, robot, exp), *not_analysed(code), sep="\n")
+        print(table(rows, code), *tde_notes(code, robot, exp), *not_analysed(code), *refused,
+              sep="\n")
+        if args.jitter or args.jitter_budget:
+            print(*jitter_lines(rows, code, robot, exp, args.plant, args.jitter_budget),
+                  sep="\n")
     return 0
+
+
+def jitter_lines(rows: list[Analysis], code: RobotCode, robot: dict[str, float],
+                 exp: Experiment, plant: str, with_budget: bool) -> list[str]:
+    """The jitter verdicts of every stable row (runtime.stability.jitter), one line each."""
+    c = exp.controller
+    ranges = []
+    if c.jitter_seconds() > 0:
+        ranges.append(("[controller] jitter", delay_jitter(c.h, c.delay_seconds(),
+                                                           c.jitter_seconds())))
+    if c.period_worst > 0 or c.latency_worst > 0:
+        ranges.append(("measured timing", measured(c.h, max(c.h, c.period_worst),
+                                                   c.latency_worst)))
+    out = ["", "Jitter (a common quadratic Lyapunov function over the range; "
+           "runtime/stability/jitter.py):"]
+    if not ranges and not with_budget:
+        out.append("* no jitter stated ([controller] jitter, period_worst, latency_worst)")
+    for r in rows:
+        if not r.stable:
+            continue
+        s = setting(code, r.controller, r.formulation, robot, exp, plant)
+        loop = loop_for(s)
+        for label, timing in ranges:
+            try:
+                v = verdict(loop, r.gain_at_setting, timing)
+                bound = "" if v.bound is None else f", ‖J‖_P ≤ {v.bound:.3f}"
+                out.append(f"* {r.controller} {r.formulation}, {label} ({timing.describe()}): "
+                           f"{v.verdict} (constant-timing radius ≤ {v.radius:.3f}{bound})")
+            except ValueError as exc:
+                out.append(f"* {r.controller} {r.formulation}, {label}: no verdict: {exc}")
+        if with_budget:
+            b = budget(s, r.gain_at_setting)
+            out.append(f"* {r.controller} {r.formulation}: delay jitter proved up to "
+                       f"±{b.proved * 1e3:.3g} ms, necessary boundary ±{b.necessary * 1e3:.3g} "
+                       f"ms, destabilising switching found from ±{b.destabilising * 1e3:.3g} ms "
+                       f"({b.seconds:.0f} s)")
+    return out
 
 
 if __name__ == "__main__":

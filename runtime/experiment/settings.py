@@ -83,6 +83,12 @@ class ControllerSettings:
     delay_time: float = 0.0  # s
     jitter: float = 0.0  # fraction of h
     jitter_time: float = 0.0  # s
+    # The measured timing a ros2_control user has (0: not given): the worst sampling period
+    # seen (the mean being h) and the worst latency from a sample to its torque. `wmr
+    # stability --jitter` proves (or not) the loop for every sequence of periods within
+    # ± (worst − h) of h and latencies in [0, worst] (runtime.stability.jitter).
+    period_worst: float = 0.0  # s
+    latency_worst: float = 0.0  # s
 
     def delay_seconds(self) -> float:
         """The nominal delay from a sample to its torque at the wheels (s)."""
@@ -256,6 +262,8 @@ _NON_NEGATIVE = {
     "delay_time",
     "jitter",
     "jitter_time",
+    "period_worst",
+    "latency_worst",
 }
 MAX_DELAY = 4.0  # samples: the largest delay plus jitter an experiment may state
 

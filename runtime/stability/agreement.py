@@ -22,7 +22,7 @@ from runtime.bindings.generated import RobotCode
 from runtime.experiment.settings import Experiment
 from runtime.sim import paths
 from runtime.stability.analysis import analyse
-from runtime.stability.sampled_loop import FORMULATIONS, analysed
+from runtime.stability.sampled_loop import FORMULATIONS, refusal
 
 HS = (0.1, 0.15, 0.2, 0.25, 0.3)  # s
 FRICTIONS = (1.0, 0.3, 0.15, 0.1)
@@ -74,7 +74,7 @@ def cases(code: RobotCode, nominal: dict[str, float], exp: Experiment,
             model_exp = experiment_at(exp, h, mu, "generated")
             engine_exp = experiment_at(exp, h, mu, "mujoco")
             for info in code.controller_infos:
-                if not analysed(info):
+                if refusal(info):
                     continue
                 for form in info.formulations:
                     if form not in FORMULATIONS or (

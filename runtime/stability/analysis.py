@@ -26,16 +26,17 @@ from runtime.experiment.settings import ACCEL_CODES, Experiment
 from runtime.plants import plant_for
 from runtime.sim import loop, paths
 from runtime.stability.sampled_loop import (
+    EPS_SOURCE,
     FORMULATIONS,
     ClosedLoop,
     LoopSetting,
+    NotLinearisable,
     Pencil,
-    analysed,
     delay_radius,
-    is_pi,
     max_delay,
     operating_rates,
     pencil,
+    refusal,
     roc_gain,
     setting,
 )
@@ -244,23 +245,25 @@ class ConfigurationVerdict:
 ESTIMATOR_NAMES = {code: name for name, code in ACCEL_CODES.items()}
 
 
-def configured_experiment(exp: Experiment, config: Any) -> Experiment:
-    """``exp`` with the fields a filled configuration holds: h, quantisation, τ_max, the
-    switching fields, the PI's gains and (when uniform over the coordinates) K1, K2: the
-    setting the configuration runs at (``wmr freeze``'s verdicts, sampled-data and grip,
-    are at it)."""
+def configured_experiment(code: RobotCode, controller: str, exp: Experiment,
+                          config: Any) -> Experiment:
+    """``exp`` with what a filled configuration holds: every field whose declared source
+    (robot.py's ``CONTROLLERS``) is ``experiment.controller.<name>`` (h, quantisation,
+    τ_max, the switching fields, the PI's gains; K1, K2 when uniform over the
+    coordinates): the setting the configuration runs at (``wmr freeze``'s verdicts,
+    sampled-data and grip, are at it)."""
     changes: dict[str, Any] = {}
-    for name, field in (("h", "h"), ("q_pos", "q_pos"), ("q_vel", "q_vel"),
-                        ("tau_max", "tau_max"), ("eps", "eps"), ("n", "n"), ("a", "a"),
-                        ("gamma", "gamma"), ("kx", "pi_kx"), ("ky", "pi_ky"),
-                        ("ktheta", "pi_ktheta")):
-        if hasattr(config, name):
-            changes[field] = type(getattr(exp.controller, field))(getattr(config, name))
-    if hasattr(config, "k1"):
-        k1 = tuple(float(x) for x in config.k1)
-        k2 = tuple(float(x) for x in config.k2)
-        if len(set(k1)) == 1 and len(set(k2)) == 1:
-            changes.update(k1=k1[0], k2=k2[0])
+    for f in code.controller(controller).fields:
+        name = f.source.removeprefix("experiment.controller.")
+        if name == f.source or not hasattr(exp.controller, name):
+            continue
+        current = getattr(exp.controller, name)
+        if f.kind == "vector":
+            values = {float(x) for x in list(getattr(config, f.name))[:code.nq]}
+            if len(values) == 1 and isinstance(current, float):
+                changes[name] = values.pop()
+        else:
+            changes[name] = type(current)(getattr(config, f.name))
     return replace(exp, controller=replace(exp.controller, **changes))
 
 
@@ -268,73 +271,78 @@ def configuration_verdict(
     code: RobotCode, controller: str, formulation: str, nominal: dict[str, float],
     exp: Experiment, config: Any,
 ) -> ConfigurationVerdict:
-    """Stability of ``config`` (a filled ``wmr_<controller>_config_t``) on the robot whose
-    parameters are ``nominal`` (plant = model, as ``wmr stability`` with the nominal plant),
-    with the experiment's sensing and the configuration's h, gains, estimator and switching
-    gain: 0 (TDC), held_gain/ε (TDROC with k̂ held), φ/(1 − α)/ε (ROC at zero error, from
-    the configuration's bounds), else k̂ measured on the closed-loop circle / ε."""
+    """Stability of ``config`` (a filled ``<prefix>_<controller>_config_t``) on the robot
+    whose parameters are ``nominal`` (plant = model, as ``wmr stability`` with the nominal
+    plant), with the experiment's sensing: the generated law linearised with this
+    configuration's fields, at the switching gain it gives, by its declared kind (the
+    registry's ``Gain``): none, k̂ held / ε (a window gain held), φ/(1 − α)/ε (bounds, at
+    zero error), else k̂ measured on the closed-loop circle / ε. Every field is read by
+    its declared source (robot.py's ``CONTROLLERS``), never by its name."""
     info = code.controller(controller)
-    if is_pi(info):  # its gains, h and limit from the configuration; no switching term
-        pi_exp = replace(exp, controller=replace(
-            exp.controller, h=float(config.h), tau_max=float(config.tau_max),
-            pi_kx=float(config.kx), pi_ky=float(config.ky), pi_ktheta=float(config.ktheta)))
-        pi_setting = replace(
-            setting(code, controller, formulation, nominal, pi_exp),
-            pi_gains=(float(config.kx), float(config.ky), float(config.ktheta),
-                      float(config.kp), float(config.ki)))
-        radius = delay_radius(pi_setting, 0.0, exp.controller.jitter_seconds())
-        return ConfigurationVerdict(
-            controller=controller, formulation=formulation, stable=radius < 1.0,
-            spectral_radius=radius, gain=0.0, gain_source=f"{info.label} has no switching term",
-            h=float(config.h), sensing=exp.sensing.velocity, estimator="model")
-    k1 = tuple(float(x) for x in config.k1)
-    k2 = tuple(float(x) for x in config.k2)
-    uniform = len(set(k1)) == 1 and len(set(k2)) == 1
-    exp = configured_experiment(exp, config)
-    loop_setting = replace(setting(code, controller, formulation, nominal, exp), k1=k1, k2=k2)
-    if hasattr(config, "accel_estimator"):
+    values: dict[str, Any] = {}
+    by_source: dict[str, Any] = {}
+    for f in info.fields:
+        v = getattr(config, f.name)
+        v = tuple(float(x) for x in list(v)[:code.nq]) if f.kind == "vector" else v
+        values[f.name] = v
+        by_source[f.source] = v
+    h = float(by_source["experiment.controller.h"])
+    exp = replace(exp, controller=replace(exp.controller, h=h))
+    loop_setting = replace(setting(code, controller, formulation, nominal, exp),
+                           config=tuple(values.items()))
+    if "accel_estimator" in by_source:  # the TDE's estimator, for the report
         loop_setting = replace(loop_setting,
-                               estimator=ESTIMATOR_NAMES[int(config.accel_estimator)],
-                               rate_window=float(config.rate_window))
+                               estimator=ESTIMATOR_NAMES[int(by_source["accel_estimator"])])
     pen = pencil(loop_setting)
-    eps = float(getattr(config, "eps", 1.0))
+    eps = float(by_source.get(EPS_SOURCE, 1.0))
     if not info.switching:
         g, source = 0.0, f"{info.label} has no switching term"
     elif info.bounds:
-        g = float(config.phi) / (1.0 - float(config.alpha)) / eps
+        alpha, phi = (float(by_source[k]) for k in ("roc_bounds.alpha", "roc_bounds.phi"))
+        g = phi / (1.0 - alpha) / eps
         source = f"{info.label}'s ρ at zero error / ε"
-    elif "hold_gain" in info.field_names() and int(config.hold_gain):
-        g, source = float(config.held_gain) / eps, "k̂ held / ε"
+    elif info.window and int(by_source.get("hold_gain", 0)):
+        g, source = float(by_source["held_gain"]) / eps, "k̂ held / ε"
     elif pen.radius(0.0) >= 1.0:
         g, source = 0.0, "not measured: unstable without switching"
     else:
         g = measured_gain(code, controller, formulation, nominal, exp) / eps
-        source = "median k̂ of the closed-loop circle / ε" + (
-            "" if uniform else " (measured with K1, K2 of the experiment)")
+        source = "median k̂ of the closed-loop circle / ε (measured with the experiment's gains)"
     radius = delay_radius(loop_setting, g, exp.controller.jitter_seconds())
     return ConfigurationVerdict(
         controller=controller, formulation=formulation, stable=radius < 1.0,
-        spectral_radius=radius, gain=g, gain_source=source, h=float(config.h),
+        spectral_radius=radius, gain=g, gain_source=source, h=h,
         sensing=exp.sensing.velocity, estimator=loop_setting.estimator)
 
 
 def analyse_all(
     code: RobotCode, robot: dict[str, float], exp: Experiment, plant: str = "nominal",
     measure: bool = True, path: str = "circle", delays: bool = False,
-    saturation: bool = False,
+    saturation: bool = False, refused: list[str] | None = None,
 ) -> list[Analysis]:
-    """Every controller the analysis models (:func:`~runtime.stability.sampled_loop.analysed`)
-    in every formulation it is generated in."""
-    return [analyse(code, c.name, f, robot, exp, plant, measure, path, delays, saturation)
-            for c in code.controller_infos if analysed(c)
-            for f in c.formulations if f in FORMULATIONS]
+    """Every controller of the robot's code in every formulation it is generated in, each
+    linearised from its own generated law; one the analysis cannot take is left out, its
+    reason appended to ``refused`` (if given; :func:`not_analysed` for the command)."""
+    rows = []
+    for c in code.controller_infos:
+        if refusal(c):
+            continue
+        for f in c.formulations:
+            if f not in FORMULATIONS:
+                continue
+            try:
+                rows.append(analyse(code, c.name, f, robot, exp, plant, measure, path, delays,
+                                    saturation))
+            except NotLinearisable as exc:
+                if refused is not None:
+                    refused.append(f"* {c.label} {f}: no sampled-data verdict: {exc}")
+    return rows
 
 
 def not_analysed(code: RobotCode) -> list[str]:
-    """A note for each controller the analysis does not model."""
-    return [f"* {c.label} ({c.title}): no sampled-data verdict; the analysis models the laws "
-            "of (18) (controllers with K1, K2) and the wheel PI" for c in code.controller_infos
-            if not analysed(c)]
+    """A note for each controller the analysis refuses from its declarations alone."""
+    return [f"* {c.label} ({c.title}): no sampled-data verdict: {refusal(c)}"
+            for c in code.controller_infos if refusal(c)]
 
 
 def tde_notes(code: RobotCode, robot: dict[str, float], exp: Experiment) -> list[str]:

@@ -18,7 +18,7 @@ from collections.abc import Mapping
 from runtime.bindings.generated import RobotCode
 from runtime.bindings.uncertainty import check_tde
 from runtime.experiment.settings import Experiment
-from runtime.stability.sampled_loop import analysed, check_sampled_loop, covers
+from runtime.stability.sampled_loop import check_sampled_loop, covers, refusal
 
 
 def check_configuration(code: RobotCode, name: str, formulation: str,
@@ -30,5 +30,5 @@ def check_configuration(code: RobotCode, name: str, formulation: str,
     if info.tde:
         check_tde(code, nominal, exp.controller.uncertainty, true_params=true_params,
                   formulation=formulation)
-    if covers(code) and analysed(info):
+    if covers(code) and not refusal(info):
         check_sampled_loop(code, name, formulation, dict(nominal), exp)

@@ -159,7 +159,11 @@ def main(argv: list[str] | None = None) -> int:
                 assert wmr(["model", "--robot", str(robot), "--out", str(folder)]) == 0
             out += robot_section(name, robot, folder)
             print(f"{name} done", flush=True)
-    args.out.write_text("\n".join(out), encoding="utf-8")
+    # The jitter section is written by runtime.tooling.bench.jitter_note: kept as it is.
+    old = args.out.read_text(encoding="utf-8") if args.out.exists() else ""
+    begin = old.find("## Jitter")
+    kept = ["", old[begin:].rstrip("\n"), ""] if begin >= 0 else []
+    args.out.write_text("\n".join(out + kept), encoding="utf-8")
     print(f"wrote {args.out}")
     return 0
 
