@@ -54,15 +54,17 @@ def model_checks(setup: RobotSetup, exp: Experiment, formulation: str) -> ModelC
     return ModelChecks(tde, alpha, phi)
 
 
-def sampled_data_table(setting: Setting, sensing: str) -> str:
+def sampled_data_table(setting: Setting, sensing: str, grip: bool = False) -> str:
     """The sampled-data verdict of every controller and formulation with this sensing model:
     ``wmr stability``'s table for the same robot, scaled experiment and code
-    (:func:`runtime.stability.analysis.analyse_all`, k̂ measured as it measures it)."""
+    (:func:`runtime.stability.analysis.analyse_all`, k̂ measured as it measures it); with
+    ``grip``, its saturation, wind-up and grip verdict too (``slips`` with the wheel, time
+    and the ``traction_mu`` to set, at the experiment's ``[plant] friction``)."""
     code, exp = setting.robot.code, setting.experiment
     if not covers(code):
         return "No sampled-data verdict: the root's pose is not the first coordinates.\n"
     e = replace(exp, sensing=replace(exp.sensing, velocity=sensing))
-    return table(analyse_all(code, setting.robot.nominal, e), code)
+    return table(analyse_all(code, setting.robot.nominal, e, saturation=grip), code)
 
 
 # --------------------------------------------------------------------------- outputs
@@ -103,7 +105,10 @@ def report_lines(rep: Reproduction) -> list[str]:
     s, exp = rep.setting.robot, rep.experiment
     checks = {f: model_checks(s, exp, f) for f in s.code.formulations}
     tde = schedule_tdes(s, exp)
-    verdicts = {sensing: sampled_data_table(rep.setting, sensing) for sensing in rep.sensings}
+    # The grip verdict (a simulation per controller) once, at the first sensing model: the
+    # saturation and grip columns of the others would repeat it within their sensing noise.
+    verdicts = {sensing: sampled_data_table(rep.setting, sensing, grip=i == 0)
+                for i, sensing in enumerate(rep.sensings)}
     c, pl, se = exp.controller, exp.plant, exp.sensing
     inertial = inertial_keys(s.code, s.nominal)
     out = [
@@ -179,7 +184,9 @@ def report_lines(rep: Reproduction) -> list[str]:
         out += ["## Sampled-data verdict", "",
                 "Predicted as `wmr stability` predicts it for this robot and scaled experiment "
                 "(nominal robot, no friction, linearised about the circle's steady motion; "
-                "`runtime/stability/`):", ""]
+                "`runtime/stability/`); the saturation column, at the first sensing model, is "
+                "its torque, wind-up and grip verdict (the payload on, the experiment's "
+                f"friction μ = {exp.plant.friction:g}, loads from the one load model):", ""]
         for sensing, text in verdicts.items():
             out += [f"{sensing}:", "", *text.rstrip("\n").split("\n"), ""]
     return out

@@ -161,6 +161,9 @@ def test_lumped_robot_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert len(rows) == 2 * len(load_robot_code("").runs())  # paths × (formulation, ctrl)
     assert all((r[12] == "refused") == (r[2] == "paper") for r in rows)
     assert "predicted unstable on this robot" in report
+    # the grip verdict travels into the report (issue 45): the saturation column is
+    # stability's torque, wind-up and grip verdict at the experiment's friction
+    assert "| not checked |" not in report and "grip margin" in report
     minimal_tdc = [r for r in rows if r[2] == "minimal" and r[3] == "tdc"]
     assert all(float(r[4]) < 0.01 for r in minimal_tdc)  # metres
 
