@@ -150,7 +150,7 @@ void wmr_paper_tde_trig(const wmr_params_t *p, const wmr_real_t *trig_prev,
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * norm 1.5e-05 (largest entry).
+ * norm 1.4e-05 (largest entry).
  */
 void wmr_paper_minv_norm(const wmr_params_t *p, wmr_real_t *norm);
 

@@ -92,9 +92,9 @@ payload_mass, payload_x, payload_y (kg, kg m^2, m)
  *
  * operations after CSE: 34 add, 34 mul, 0 div, 0 sin/cos, 0 sqrt
  *
- * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
- * certificate (the printed code changed since the
- * last run: run it again).
+ * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * base 9.6e-06 (largest entry).
  */
 void trailer_plant_params_from_physical(const trailer_real_t *phys, trailer_real_t *base);
 

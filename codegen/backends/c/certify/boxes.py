@@ -161,6 +161,8 @@ def input_range(access: str, angles: Sequence[bool], params: Mapping[str, Interv
         return env.h if index == 0 else (1.0, env.torque)
     if arg == "payload":
         return env.payload_mass if index == 0 else _sym(env.payload_offset)
+    if arg == "phys" and f"phys[{index}]" in params:  # plant_params_from_physical's inputs
+        return params[f"phys[{index}]"]
     if arg == "x":  # the plant's state: q's pose, then the wheel rates
         return _sym(env.angle_rate) if index >= 3 else input_range(
             f"q[{index}]", angles, params, derived, env)

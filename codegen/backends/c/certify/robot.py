@@ -27,12 +27,21 @@ def robot_angles(target: RobotTarget) -> tuple[bool, ...]:
 
 
 def robot_params(target: RobotTarget, env: Envelope) -> dict[str, Interval]:
-    """C field -> interval of every parameter (model and plant structs)."""
+    """C field -> interval of every parameter (model and plant structs), and ``phys[i]`` ->
+    that of the physical quantities the map from them reads."""
     values = target.model.values
     fields = {p.c_field: float(values[p.key]) for p in target.model.params}
     fields.update({p.c_field: float(values[p.key]) for p in target.model.plant_params
                    if p.key in values})
-    return parameter_ranges(fields, env)
+    ranges = parameter_ranges(fields, env)
+    if target.model.physical is not None:  # plant_params_from_physical's inputs, phys[i]:
+        # each physical quantity within the stated uncertainty of its nominal value; a
+        # centre of mass or payload offset stated at 0 anywhere within ±payload_offset
+        for i, q in enumerate(target.model.physical.inputs):
+            a, b = q.nominal * (1 - env.uncertainty), q.nominal * (1 + env.uncertainty)
+            ranges[f"phys[{i}]"] = ((min(a, b), max(a, b)) if q.nominal != 0.0 or q.unit != "m"
+                                    else (-env.payload_offset, env.payload_offset))
+    return ranges
 
 
 def programs(target: RobotTarget) -> Iterator[tuple[FunctionIR, Program]]:
