@@ -16,7 +16,8 @@ Each sample k (t = k h), in this order:
    actuators deliver τ (a torque limit fault clips it), and the robot moves for h under it
    (``substeps`` RK4 steps; the motor-encoder's window start is read on the way). With a
    delay (``controller.delay``/``delay_time``, each sample's within ± the jitter bound,
-   drawn by a seeded generator), the torque computed at t_k reaches the actuators at
+   drawn by a seeded generator, or a given sequence of periods and latencies:
+   :mod:`runtime.sim.timing`), the torque computed at t_k reaches the actuators at
    t_k + D_k: until then the plant gets the latest command that has arrived
    (:class:`Latency`; without a delay, the command of t_k from t_k on). The plant
    advances over the sample piece by piece (:func:`advance_pieces`).
@@ -49,32 +50,29 @@ from runtime.sim.payload import payload_mass, payload_masses, plant_params_at
 from runtime.sim.plant import Plant, generated_plant, library_for, plant_base
 from runtime.sim.reference import Reference
 from runtime.sim.sensors import Sensors
+from runtime.sim.timing import DrawnTiming, Schedule
 
 Array = NDArray[np.float64]
 NOT_CALLED = -(2**31)  # Run.status of a sample whose step was not called (dropped)
 NON_FINITE = "non-finite plant state"  # Run.stop_reason when the plant's state blew up
-JITTER_SEED = 29  # the jitter's draws: the same run every time
 
 
 class Latency:
     """The commands in flight between the controller and the actuators: each command is
-    delivered ``delay`` s after its sample, ± a uniform draw within ``jitter`` (never
+    delivered its sample's latency after its sample (the timing :class:`Schedule`; never
     before its sample); a command overtaken by a later one that arrived first is dropped.
     Without delay nor jitter each command acts from its own sample on: one piece per
     sample, the zero-order hold (every run goes through here, delayed or not)."""
 
-    def __init__(self, delay: float, jitter: float, initial: Array) -> None:
-        self.delay, self.jitter = delay, jitter
-        self.rng = np.random.default_rng(JITTER_SEED)
+    def __init__(self, timing: Schedule, initial: Array) -> None:
+        self.timing = timing
         self.active = np.array(initial, dtype=np.float64)
         self.sent = -1  # index of the command now active
         self.pending: list[tuple[float, int, Array]] = []  # (arrival, index, τ)
 
     def send(self, t: float, k: int, tau: Array) -> None:
         """The command of sample k (at time t) leaves the controller."""
-        d = self.delay
-        if self.jitter > 0:
-            d += float(self.rng.uniform(-self.jitter, self.jitter))
+        d = self.timing.latency(k)
         self.pending.append((t + max(0.0, d), k, np.array(tau, dtype=np.float64)))
         self.pending.sort(key=lambda p: (p[0], p[1]))
 
@@ -142,6 +140,7 @@ def run(
     held_gain: float | None = None,
     faults: Sequence[Fault] = (),
     bounds: tuple[float, float] | None = None,
+    timing: Schedule | None = None,
 ) -> Run:
     """Simulate controller ``name`` in ``formulation`` on ``ref`` with the nominal model
     ``nominal``. ``plant_params``: the simulated robot before payload (default: the nominal
@@ -151,7 +150,9 @@ def run(
     the registry, :func:`runtime.plants.plant_for`); ``float32``: the single-precision
     build of the controllers and the plant; ``held_gain``: k̂ held at that value (the
     stability analysis' verification); ``faults``: injected as ``runtime.experiment.faults``
-    describes; ``bounds``: ROC's (α, φ) if not sampled. The run does not judge the
+    describes; ``bounds``: ROC's (α, φ) if not sampled; ``timing``: each sample's
+    period and latency (:mod:`runtime.sim.timing`; default the experiment's h and delay ±
+    jitter, :class:`runtime.sim.timing.DrawnTiming`). The run does not judge the
     configuration: refusing one the toolchain predicts will fail is the caller's
     (:func:`runtime.stability.checks.check_configuration`)."""
     lib = library_for(code, float32)
@@ -181,15 +182,18 @@ def run(
                          f"it has {code.nu}")
     act = list(code.actuated)
     rows = list(range(code.nq)) if formulation == "paper" else act
+    if timing is None:
+        timing = DrawnTiming(ref.t, h, exp.controller.delay_seconds(),
+                             exp.controller.jitter_seconds())
     # Without a delay each command acts from its own sample on (one piece per sample).
-    latency = Latency(exp.controller.delay_seconds(), exp.controller.jitter_seconds(),
-                      np.zeros(code.nu))
+    latency = Latency(timing, np.zeros(code.nu))
     rec = _Record()
     delivered = (ref.q[0].copy(), np.zeros(code.nq))
     prev_gain = float(ctl.read("gain"))  # an adaptive gain before each step's adaptation
     payload_on: bool | None = None  # the payload state the plant's parameters were set for
     for k in range(n):
-        t = float(ref.t[k])
+        # the plant's clock and period (the law keeps ref.t[k] and its configured h)
+        t, hk = timing.start(k), timing.period(k)
         true_q = plant.q
         wheel_angles, wheel_rates = plant.wheels()
         sensors.offset = sched.encoder_offset[k]
@@ -213,8 +217,8 @@ def run(
             plant.set_parameters(plant_params_at(code, exp, t, base))
             plant.set_payload(payload_masses(exp, t))
         plant.set_faults(sched.traction_loss[k], sched.torque_limit[k])
-        # What the actuators deliver over [t, t + h): (start within the sample, τ) pieces.
-        pieces = [(a - t, plant.actuate(cmd)) for a, cmd in latency.pieces(t, t + h)]
+        # What the actuators deliver over [t, t + h_k): (start within the sample, τ) pieces.
+        pieces = [(a - t, plant.actuate(cmd)) for a, cmd in latency.pieces(t, t + hk)]
         gain, s_norm = ctl.read("gain"), ctl.read("s_norm")
         h1 = ctl.read("H1hat", None)
         err = np.concatenate([ref.q[k, rows] - q_meas[rows], ref.qdot[k, rows] - qdot_meas[rows]])
@@ -232,7 +236,7 @@ def run(
         prev_gain = gain
         if k == n - 1:
             break
-        ok, window_start = advance_pieces(plant, pieces, h, nsub, window)
+        ok, window_start = advance_pieces(plant, pieces, hk, nsub, window)
         if not ok:
             rec.stop = (t, None, NON_FINITE)
             break

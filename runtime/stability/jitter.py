@@ -43,7 +43,14 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import null_space, sqrtm
 
+from runtime.bindings.generated import RobotCode
+from runtime.experiment.settings import Experiment
+from runtime.plants import plant_for
+from runtime.sim import loop as closed_loop
+from runtime.sim import paths
+from runtime.sim.timing import GivenTiming
 from runtime.stability.sampled_loop import ClosedLoop, LoopSetting, loop_states, max_delay
+from runtime.stability.verification import diverged, linear_experiment
 
 Matrix = NDArray[np.float64]
 GRID = (9, 5)  # points on the varying axis of a range that varies in one, per axis in two
@@ -360,3 +367,35 @@ def sequence_growth(loop: ClosedLoop, gain: float, sequence: tuple[tuple[float, 
         loop.period, loop.lag, loop.frac = saved
     gap = float(np.linalg.norm((b - a)[eta]))
     return (max(gap, 1e-300) / first) ** (1.0 / n)
+
+
+@dataclass(frozen=True)
+class Replay:
+    """A timing sequence replayed in the closed loop: the plant it ran on, the run, whether
+    it diverged (:func:`runtime.stability.verification.diverged`) and its last third's
+    largest ‖(e, ė)‖ over its middle third's (> 1: the error grows)."""
+
+    plant: str
+    run: closed_loop.Run
+    diverged: bool
+    growth: float
+
+
+def replay(code: RobotCode, name: str, formulation: str, nominal: dict[str, float],
+           exp: Experiment, sequence: tuple[tuple[float, float], ...],
+           duration: float = 10.0) -> Replay:
+    """``sequence`` of (period, latency), repeated from the first sample on, in the closed
+    loop (:func:`runtime.sim.loop.run`, its timing :class:`runtime.sim.timing.GivenTiming`)
+    on the plant ``[plant] model`` names: the model, or MuJoCo (the engine, not the
+    linearisation the budget is proved on). The experiment as the analysis sees it
+    (:func:`runtime.stability.verification.linear_experiment`: no friction, payload nor
+    torque limit), on its circle of ``duration`` s."""
+    lin = linear_experiment(exp)
+    lin = replace(lin, paths=replace(lin.paths, circle_duration=duration))
+    ref = paths.circle(code, nominal, lin)
+    r = closed_loop.run(code, name, formulation, ref, nominal, lin,
+                        plant=plant_for(code, lin, nominal), timing=GivenTiming(sequence))
+    n = len(r.error_norm)
+    middle = float(np.max(r.error_norm[n // 3: 2 * n // 3])) if n >= 3 else float("nan")
+    last = float(np.max(r.error_norm[2 * n // 3:])) if n >= 3 else float("nan")
+    return Replay(exp.plant.model, r, diverged(r), last / max(middle, 1e-300))

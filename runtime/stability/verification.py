@@ -50,6 +50,13 @@ def simulated_unstable(
     # (which a trailer's lumped coefficients fail) is not what is bisected here.
     r = loop.run(code, controller, formulation, ref, robot, lin, held_gain=gain * EPS,
                  plant=plant_for(code, lin, robot))
+    return diverged(r)
+
+
+def diverged(r: loop.Run) -> bool:
+    """The run is unstable (this module's criterion): it failed, a torque reached the
+    (far) limit, ‖(e, ė)‖ exceeded ``DIVERGED``, or its last third's error is more than
+    ``GROWTH`` times its middle third's."""
     if r.failed_at is not None or r.saturated > 0 or float(r.error_norm.max()) > DIVERGED:
         return True
     n = len(r.error_norm)

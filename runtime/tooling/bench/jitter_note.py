@@ -1,14 +1,15 @@
 """The jitter budget table (issue 46) → the marked section of ``docs/STABILITY.md``.
 
-For each robot (Drishti, the trailer, tests/robots/small_robot.toml) and every controller
-and formulation the analysis takes, at the experiment's setting (sample-instant rates, the
-setting's switching gain, the paper's experiment scaled to the robot): the delay jitter
-proved (:func:`runtime.stability.jitter.budget`: latencies in [D − J, D + J] every sample,
-a common quadratic Lyapunov function), the necessary boundary (every constant latency
-stable), the smallest jitter at which the adversarial search (periodic patterns of the
-extreme latencies, greedy norm growth) found a growing sequence, and the time of one
-budget. Run: ``python -m runtime.tooling.bench.jitter_note [--robots a,b] [--out FILE]``
-(several minutes per robot on one core); with ``--print`` the rows go to stdout only.
+For each robot (Drishti, the trailer, trailer2, trailer3, tests/robots/small_robot.toml)
+and every controller and formulation the analysis takes, at the experiment's setting
+(sample-instant rates, the setting's switching gain, the paper's experiment scaled to the
+robot): the delay jitter proved (:func:`runtime.stability.jitter.budget`: latencies in
+[D − J, D + J] every sample, a common quadratic Lyapunov function), the necessary boundary
+(every constant latency stable), the smallest jitter at which the adversarial search
+(periodic patterns of the extreme latencies, greedy norm growth) found a growing sequence,
+and the time of one budget. Run: ``python -m runtime.tooling.bench.jitter_note [--robots
+a,b] [--out FILE]`` (several minutes per robot on one core); with ``--print`` the rows go
+to stdout only.
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ ROOT = Path(__file__).resolve().parents[3]
 ROBOTS = {
     "drishti": (None, None),
     "trailer": (str(ROOT / "modeling" / "robots" / "trailer" / "trailer.toml"), None),
+    "trailer2": (str(ROOT / "modeling" / "robots" / "trailer2" / "trailer2.toml"), None),
+    "trailer3": (str(ROOT / "modeling" / "robots" / "trailer3" / "trailer3.toml"), None),
     "small_robot": (str(ROOT / "tests" / "robots" / "small_robot.toml"), None),
 }
 BEGIN, END = "<!-- jitter budget: begin -->", "<!-- jitter budget: end -->"
