@@ -13,6 +13,7 @@ from runtime.tooling.mutation.engine import Mutant
 STAGED = "modeling/staged.py"
 LAGRANGE = "modeling/lagrange.py"
 LOOP = "runtime/sim/loop.py"
+TIMING = "runtime/sim/timing.py"
 SENSORS = "runtime/sim/sensors.py"
 FAULTS = "runtime/experiment/faults.py"
 PAYLOAD = "runtime/sim/payload.py"
@@ -143,7 +144,7 @@ MUTANTS: tuple[Mutant, ...] = (
            "x[i] += dt / SIM_LIT(6.0) * (k1[i] + SIM_LIT(2.0) * k2[i] + SIM_LIT(2.0) * k3[i]",
            "x[i] += dt / SIM_LIT(6.0) * (k1[i] + SIM_LIT(2.0) * k2[i] + SIM_LIT(1.0) * k3[i]",
            (T_RK4,), "RK4 with a wrong weight: a first-order plant"),
-    Mutant("jitter-not-drawn", LOOP,
+    Mutant("jitter-not-drawn", TIMING,
            "d += float(self.rng.uniform(-self.jitter, self.jitter))",
            "d += 0.0 * float(self.rng.uniform(-self.jitter, self.jitter))",
            (T_JITTER,), "a loop that ignores the jitter it is given"),
