@@ -25,15 +25,18 @@ from codegen.backends.c.certify.analysis import U
 from codegen.backends.c.certify.bound import Certificate, certify
 from codegen.backends.c.certify.boxes import ENVELOPE, Envelope, Interval
 from codegen.backends.c.certify.program import Program
+from codegen.backends.c.kernels import StepFeatures
+from modeling.controllers import ControllerSpec
 
-# controller -> (estimator, gain, law) name stems; "{f}" is the formulation
-CHAINS: Mapping[str, tuple[str, str, str]] = {
-    "tdc": ("{f}_tde", "", "{f}_tdc_law"),
-    "tdroc": ("{f}_tde", "tdroc_weighted_gain", "{f}_tdroc_law"),
-    "roc": ("", "", "{f}_roc_law"),
-    "asmc": ("", "", "{f}_asmc_law"),
-    "pi": ("", "", "{f}_pi_law"),
-}
+
+def chain(info: ControllerSpec) -> tuple[str, str, str]:
+    """The (estimator, gain, law) name stems of a controller's step, "{f}" the formulation,
+    from its declaration (:class:`~codegen.backends.c.kernels.StepFeatures`, what decides
+    the kernels its step calls): (17)'s estimate if it has one, (25)'s window gain if it
+    has a window, its law."""
+    f = StepFeatures.of(info)
+    return ("{f}_tde" if f.tde else "", "tdroc_weighted_gain" if f.window else "",
+            f"{{f}}_{f.name}_law")
 
 
 @dataclass(frozen=True)
@@ -68,7 +71,8 @@ def step_certificates(target: RobotTarget,
     def bound_of(name: str) -> float:
         return max(certs[name][2].bounds) if name in certs else float("inf")
 
-    for ctrl, (est, gain, law) in CHAINS.items():
+    for info in target.controllers:
+        ctrl, (est, gain, law) = info.name, chain(info)
         for form, paper in forms:
             law_name = _pick(names, law.format(f=form), paper)
             if not law_name:
