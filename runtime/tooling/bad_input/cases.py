@@ -19,6 +19,8 @@ CONTROLLER_FORMULATIONS = {str(c["name"]): tuple(c["formulations"])
                            for c in generated_robot.CONTROLLERS}
 CONTROLLER_FIELDS = {str(c["name"]): frozenset(f[0] for f in c["fields"])
                      for c in generated_robot.CONTROLLERS}
+# Those whose state holds a window's ring (omega_head, omega_count): declared ``window``.
+WINDOWED = tuple(str(c["name"]) for c in generated_robot.CONTROLLERS if c["window"])
 FORMULATIONS = {"paper": 0, "minimal": 1}
 INPUT_NAMES = ("q", "qdot", "q_des", "qdot_des", "qddot_des")
 WARMUP = 5
@@ -266,13 +268,13 @@ def cases(max_win: int) -> list[Case]:
     # range is refused, as is its kept configuration, which no longer equals the caller's.
     for row, path, bit, status, applies in (
         ("TDROC `omega_head` bit 3 flipped (head 8..15; magic intact)", ("omega_head",), 3,
-         "WMR_ERR_NOT_INITIALISED", ("tdroc",)),
+         "WMR_ERR_NOT_INITIALISED", WINDOWED),
         ("TDROC `omega_head` bit 31 flipped (head < 0; magic intact)", ("omega_head",), 31,
-         "WMR_ERR_NOT_INITIALISED", ("tdroc",)),
+         "WMR_ERR_NOT_INITIALISED", WINDOWED),
         ("TDROC `omega_count` bit 4 flipped (count > WMR_MAX_WINDOW + 1; magic intact)",
-         ("omega_count",), 4, "WMR_ERR_NOT_INITIALISED", ("tdroc",)),
+         ("omega_count",), 4, "WMR_ERR_NOT_INITIALISED", WINDOWED),
         ("TDROC `omega_count` bit 31 flipped (count < 0; magic intact)", ("omega_count",), 31,
-         "WMR_ERR_NOT_INITIALISED", ("tdroc",)),
+         "WMR_ERR_NOT_INITIALISED", WINDOWED),
         ("kept configuration: `tau_max`'s lowest bit flipped in the state (magic intact)",
          ("config", "tau_max"), 0, "WMR_ERR_CONFIG_CHANGED", CONTROLLERS),
         ("kept configuration: `formulation`'s bit 0 flipped in the state (magic intact)",
