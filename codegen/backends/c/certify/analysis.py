@@ -32,7 +32,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
-import sympy as sp
 
 from codegen.backends.c.certify.affine import affine_bounds
 from codegen.backends.c.certify.program import Node, Program
@@ -463,7 +462,3 @@ class Analysis:
                          np.maximum(a.err, b.err))
         raise ValueError(f"cannot analyse {where}: no model of {name}")
 
-
-def symbol_order(program: Program) -> list[sp.Symbol]:
-    """The program's input symbols, in node order (the box's dimensions)."""
-    return sorted(program.inputs, key=lambda s: program.inputs[s])

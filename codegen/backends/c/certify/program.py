@@ -243,10 +243,6 @@ def program_of(ir: FunctionIR, config: CConfig, module: str = "") -> Program:
     return prog
 
 
-def output_symbols(ir: FunctionIR) -> list[str]:
-    """The outputs' C lvalues in store order (``M[0]``, ``longitudinal[1]`` ...)."""
-    return [access(a, None, i) for a in ir.spec.outputs for i in range(len(a.exprs))]
-
 
 def parse_only(text: str, names: Sequence[str], config: CConfig) -> Program:
     """A one-expression program over inputs ``names`` (tests)."""

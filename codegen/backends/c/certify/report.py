@@ -53,9 +53,6 @@ def certify_and_search(target: RobotTarget, seconds: float, points: int,
         }
 
 
-def _box_text(box: Mapping[str, Sequence[float]]) -> str:
-    return ", ".join(f"{k} ∈ [{v[0]:.4g}, {v[1]:.4g}]" for k, v in sorted(box.items()))
-
 
 def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
     """docs/FLOAT32.md."""
