@@ -46,12 +46,15 @@ PRECISIONS = ("double", "float32")
 # configuration compiled in; ours_libm = wmr_tdroc_step built with -DWMR_LIBM_TRIG
 # (libm's sin/cos, as the hand-written step uses), in both precisions: on an x86-64 host
 # glibc's float32 sincosf is an FMA build that our portable one is not.
-VARIANTS = ("ours", "hand", "ours_frozen", "hand_frozen", "ours_libm")
+VARIANTS = ("ours", "hand", "ours_frozen", "hand_frozen", "ours_libm", "hand_fast",
+            "hand_fast_frozen")
 # The torques of every variant against ours over the recording, relative to the largest
 # |tau|: double agrees to rounding; float32 to float rounding amplified by (17)'s 1/h.
 TORQUE_TOLERANCE = {"double": 1e-9, "float32": 1e-4}
 # (numerator, denominator) of each ratio the benchmark reports; the goals are <= 1.0.
-RATIOS = (("ours", "hand"), ("ours_frozen", "hand_frozen"), ("ours_libm", "hand"))
+RATIOS = (("ours", "hand"), ("ours_frozen", "hand_frozen"), ("ours_libm", "hand"),
+          ("ours", "hand_fast"), ("ours_frozen", "hand_fast_frozen"),
+          ("ours_libm", "hand_fast"))
 
 HARNESS = r"""
 #define _POSIX_C_SOURCE 199309L
@@ -86,7 +89,8 @@ static any_state states[NV];
 
 static const wmr_tdroc_config_t *config_of(const variant *v) {
     return v->frozen == 1 ? &fz_wmr_tdroc_frozen_config
-         : v->frozen == 2 ? &handfz_frozen_config : &cfg;
+         : v->frozen == 2 ? &handfz_frozen_config
+         : v->frozen == 3 ? &handfastfz_frozen_config : &cfg;
 }
 
 /* A fresh state for variant k (not timed). */
@@ -274,6 +278,7 @@ class StepRobot:
     label: str  # prefixed to its cases' names ("" for Drishti)
     code: str  # ``load_robot_code``'s name ("" for Drishti)
     hand: str
+    fast: str  # the improved competitor (``handfast_``/``handfastfz_``; issue 52)
     formulations: tuple[str, ...]
     config_cases: tuple[str, ...]
 
@@ -293,13 +298,14 @@ _COMMON_CONFIG_CASES = (
 _CHANGES = ("c->k1[0] = -4; c->k2[0] = -4;", "c->tau_max = -c->tau_max; c->eps = -c->eps;",
             "c->k1[0] *= (real)1.01;", "c->hold_gain = 1 - c->hold_gain;")
 STEP_ROBOTS = (
-    StepRobot("", "", "hand_tdroc.c", FORMULATIONS, (
+    StepRobot("", "", "hand_tdroc.c", "hand_tdroc_fast.c", FORMULATIONS, (
         *_COMMON_CONFIG_CASES, "c->nominal.m = (real)NAN;", "c->nominal.r = 0;",
         "c->nominal.b = (real)1e-9;",
         "c->nominal.K = 100;",  # m I - K^2 < 0
         "c->nominal.Iw = 0;", *_CHANGES,
         "c->nominal.d = -c->nominal.d;")),  # valid, but changed
-    StepRobot("trailer ", "trailer", "hand_trailer_tdroc.c", ("minimal",), (
+    StepRobot("trailer ", "trailer", "hand_trailer_tdroc.c", "hand_trailer_tdroc_fast.c",
+              ("minimal",), (
         *_COMMON_CONFIG_CASES, "c->nominal.J_x_tractor = (real)NAN;",
         "c->nominal.radius_right = 0;", "c->nominal.radius_left = (real)1e-9;",
         "c->nominal.K_theta_cart_x_tractor = 1000;",  # beyond its bound / M-hat indefinite
@@ -338,11 +344,13 @@ def frozen_header(workdir: Path, config: dict[str, Any], float32: bool = False,
 
 
 def _variants(float32: bool, pre: str) -> list[tuple[str, str, str, int]]:
-    """(name, init symbol, step symbol, frozen: 0 run-time, 1 ours, 2 hand) in check order:
-    ours first (the reference of the run-time variants), then the first frozen one."""
+    """(name, init symbol, step symbol, frozen: 0 run-time, 1 ours, 2 hand, 3 the improved
+    hand) in check order: ours first (the reference of the run-time variants), then the
+    first frozen one."""
     rows = [("ours", pre, 0), ("hand", "hand", 0), ("ours_frozen", f"fz_{pre}", 1),
             ("hand_frozen", "handfz", 2)]
     rows.append(("ours_libm", f"lm_{pre}", 0))
+    rows += [("hand_fast", "handfast", 0), ("hand_fast_frozen", "handfastfz", 3)]
     return [(name, f"{p}_tdroc_init", f"{p}_tdroc_step", frozen) for name, p, frozen in rows]
 
 
@@ -375,6 +383,13 @@ def build_step_bench(workdir: Path, config: dict[str, Any], inputs: list[list[li
                   "const wmr_tdroc_config_t *, const real *, const real *, const real *, "
                   "const real *, const real *, real *);")
     protos.append("extern const wmr_tdroc_config_t handfz_frozen_config;")
+    for p in ("handfast", "handfastfz"):
+        protos.append(f"wmr_status_t {p}_tdroc_init(hand_tdroc_state_t *, "
+                      "const wmr_tdroc_config_t *);")
+        protos.append(f"wmr_status_t {p}_tdroc_step(hand_tdroc_state_t *, "
+                      "const wmr_tdroc_config_t *, const real *, const real *, const real *, "
+                      "const real *, const real *, real *);")
+    protos.append("extern const wmr_tdroc_config_t handfastfz_frozen_config;")
     table = ",\n    ".join(f'{{"{n}", (init_fn){i}, (step_fn){s}, {f}}}'
                            for n, i, s, f in variants)
     protos.append(f"#define NV {len(variants)}")
@@ -411,10 +426,13 @@ def build_step_bench(workdir: Path, config: dict[str, Any], inputs: list[list[li
     objs += renamed_objects(workdir, sources, (*prec, frozen_define("tdroc", pre),
                                                f"-I{workdir}"), "fz_", include=c_dir,
                             symbols=f"{pre}_")
-    for tag, defines in (("hand", ()), ("handfz", ("-DHAND_FROZEN",))):
+    for tag, src_name, defines in (
+            ("hand", robot.hand, ()), ("handfz", robot.hand, ("-DHAND_FROZEN",)),
+            ("handfast", robot.fast, ("-DHAND_FAST",)),
+            ("handfastfz", robot.fast, ("-DHAND_FAST", "-DHAND_FROZEN"))):
         obj = workdir / f"{tag}.o"
         subprocess.run(["gcc", *CFLAGS, *prec, *defines, "-c", f"-I{c_dir}",
-                        f"-I{workdir}", f"-I{BENCH_CSRC}", str(BENCH_CSRC / robot.hand),
+                        f"-I{workdir}", f"-I{BENCH_CSRC}", str(BENCH_CSRC / src_name),
                         "-o", str(obj)], check=True)
         objs.append(str(obj))
     exe = workdir / "step_bench"

@@ -34,7 +34,7 @@
 
 #ifdef HAND_FROZEN
 #include "wmr_tdroc_frozen.h"
-const wmr_tdroc_config_t handfz_frozen_config = WMR_TDROC_FROZEN_CONFIG;
+const wmr_tdroc_config_t HAND_NAME(frozen_config) = WMR_TDROC_FROZEN_CONFIG;
 #endif
 
 typedef wmr_real_t real;
@@ -292,7 +292,7 @@ wmr_status_t HAND_NAME(tdroc_init)(hand_tdroc_state_t *state, const wmr_tdroc_co
         return WMR_ERR_NULL_POINTER;
     }
 #ifdef HAND_FROZEN
-    if (config != &handfz_frozen_config) {
+    if (config != &HAND_NAME(frozen_config)) {
         return WMR_ERR_CONFIG_CHANGED;
     }
 #endif
@@ -339,6 +339,9 @@ wmr_status_t HAND_NAME(tdroc_init)(hand_tdroc_state_t *state, const wmr_tdroc_co
     return WMR_OK;
 }
 
+/* The improved competitor (hand_*_fast.c) includes this file for what precedes: the
+   helpers, the configuration check and compare, _init; its step is its own. */
+#ifndef HAND_HELPERS_ONLY
 /* What the step reads that depends on the configuration only. A run-time build loads it
    from the state (_init computed it); a frozen build computes it from the compiled-in
    configuration, which the compiler folds to constants. */
@@ -555,10 +558,10 @@ wmr_status_t HAND_NAME(tdroc_step)(hand_tdroc_state_t *state, const wmr_tdroc_co
         return WMR_ERR_NOT_INITIALISED;
     }
 #ifdef HAND_FROZEN
-    if (config != &handfz_frozen_config) {
+    if (config != &HAND_NAME(frozen_config)) {
         return WMR_ERR_CONFIG_CHANGED;
     }
-    return step_body(state, &handfz_frozen_config, q, qdot, q_des, qdot_des, qddot_des, tau);
+    return step_body(state, &HAND_NAME(frozen_config), q, qdot, q_des, qdot_des, qddot_des, tau);
 #else
     if (!unchanged(config, &state->config)) {
         const wmr_status_t st = check_config(config);
@@ -617,3 +620,4 @@ int HAND_NAME(forward_dynamics_checked)(const real *in, real *qdd)
     qdd[4] = el;
     return WMR_OK;
 }
+#endif /* HAND_HELPERS_ONLY */

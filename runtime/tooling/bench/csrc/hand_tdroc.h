@@ -14,7 +14,12 @@
 
 #include "wmr_tdroc.h"
 
-#ifdef HAND_FROZEN
+/* -DHAND_FAST: the improved competitor (the same state; handfast_* / handfastfz_*) */
+#if defined(HAND_FAST) && defined(HAND_FROZEN)
+#define HAND_NAME(x) handfastfz_##x
+#elif defined(HAND_FAST)
+#define HAND_NAME(x) handfast_##x
+#elif defined(HAND_FROZEN)
 #define HAND_NAME(x) handfz_##x
 #else
 #define HAND_NAME(x) hand_##x
@@ -57,7 +62,7 @@ wmr_status_t HAND_NAME(tdroc_step)(hand_tdroc_state_t *state, const wmr_tdroc_co
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2]);
 
 #ifdef HAND_FROZEN
-extern const wmr_tdroc_config_t handfz_frozen_config;
+extern const wmr_tdroc_config_t HAND_NAME(frozen_config);
 #endif
 
 /* wmr_forward_dynamics by hand, with the same checks and status codes (in = params, q,

@@ -60,7 +60,7 @@
 
 #ifdef HAND_FROZEN
 #include "trailer_tdroc_frozen.h"
-const trailer_tdroc_config_t handfz_frozen_config = TRAILER_TDROC_FROZEN_CONFIG;
+const trailer_tdroc_config_t HAND_NAME(frozen_config) = TRAILER_TDROC_FROZEN_CONFIG;
 #endif
 
 typedef trailer_real_t real;
@@ -338,7 +338,7 @@ trailer_status_t HAND_NAME(tdroc_init)(hand_tdroc_state_t *state,
         return TRAILER_ERR_NULL_POINTER;
     }
 #ifdef HAND_FROZEN
-    if (config != &handfz_frozen_config) {
+    if (config != &HAND_NAME(frozen_config)) {
         return TRAILER_ERR_CONFIG_CHANGED;
     }
 #else
@@ -376,6 +376,9 @@ trailer_status_t HAND_NAME(tdroc_init)(hand_tdroc_state_t *state,
     return TRAILER_OK;
 }
 
+/* The improved competitor (hand_*_fast.c) includes this file for what precedes: the
+   helpers, the configuration check and compare, _init; its step is its own. */
+#ifndef HAND_HELPERS_ONLY
 /* What the step reads that depends on the configuration only. A run-time build loads it
    from the state (_init computed it); a frozen build computes it from the compiled-in
    configuration, which the compiler folds to constants. */
@@ -573,10 +576,10 @@ trailer_status_t HAND_NAME(tdroc_step)(hand_tdroc_state_t *state,
         return TRAILER_ERR_NOT_INITIALISED;
     }
 #ifdef HAND_FROZEN
-    if (config != &handfz_frozen_config) {
+    if (config != &HAND_NAME(frozen_config)) {
         return TRAILER_ERR_CONFIG_CHANGED;
     }
-    return step_body(state, &handfz_frozen_config, q, qdot, q_des, qdot_des, qddot_des, tau);
+    return step_body(state, &HAND_NAME(frozen_config), q, qdot, q_des, qdot_des, qddot_des, tau);
 #else
     if (!unchanged(config, &state->config)) {
         const trailer_status_t st = check_config(config);
@@ -585,3 +588,4 @@ trailer_status_t HAND_NAME(tdroc_step)(hand_tdroc_state_t *state,
     return step_body(state, &state->config, q, qdot, q_des, qdot_des, qddot_des, tau);
 #endif
 }
+#endif /* HAND_HELPERS_ONLY */

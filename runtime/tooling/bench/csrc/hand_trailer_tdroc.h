@@ -17,7 +17,12 @@
 
 #include "trailer_tdroc.h"
 
-#ifdef HAND_FROZEN
+/* -DHAND_FAST: the improved competitor (the same state; handfast_* / handfastfz_*) */
+#if defined(HAND_FAST) && defined(HAND_FROZEN)
+#define HAND_NAME(x) handfastfz_##x
+#elif defined(HAND_FAST)
+#define HAND_NAME(x) handfast_##x
+#elif defined(HAND_FROZEN)
 #define HAND_NAME(x) handfz_##x
 #else
 #define HAND_NAME(x) hand_##x
@@ -64,7 +69,7 @@ trailer_status_t HAND_NAME(tdroc_step)(hand_tdroc_state_t *state,
     const trailer_real_t qddot_des[8], trailer_real_t tau[2]);
 
 #ifdef HAND_FROZEN
-extern const trailer_tdroc_config_t handfz_frozen_config;
+extern const trailer_tdroc_config_t HAND_NAME(frozen_config);
 #endif
 
 #endif /* HAND_TRAILER_TDROC_H */
