@@ -253,11 +253,13 @@ static inline void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5
     const wmr_real_t qdot[5], const wmr_real_t tau[2])
 {
     int i;
+    /* whole arrays, in this order (each read before it is overwritten): a copy the
+       compiler does in vector moves, where an element loop over five arrays stays scalar */
+    (void)memcpy(q_prev, q, 5u * sizeof q_prev[0]);
+    (void)memcpy(qdot_prev2, qdot_prev, 5u * sizeof qdot_prev2[0]);
+    (void)memcpy(qdot_prev, qdot, 5u * sizeof qdot_prev[0]);
+    (void)memcpy(u_prev2, u_prev, 5u * sizeof u_prev2[0]);
     for (i = 0; i < 5; ++i) {
-        q_prev[i] = q[i];
-        qdot_prev2[i] = qdot_prev[i];
-        qdot_prev[i] = qdot[i];
-        u_prev2[i] = u_prev[i];
         u_prev[i] = WMR_LIT(0.0);
     }
     u_prev[3] = tau[0];

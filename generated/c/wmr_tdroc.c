@@ -96,8 +96,17 @@ static inline bool wmr_tdroc_inputs_bounded(const wmr_real_t q[5], const wmr_rea
     /* |x| > bound exactly when bound - |x|'s bits wraps and sets the top bit (both below
        it; +Inf and every NaN lie above every finite magnitude): subtractions OR-ed, which
        the compiler vectorises, and one test, where a comparison each is a branch-free
-       but serial flag per value. */
-    for (i = 0; i < 5; ++i) {
+       but serial flag per value. gcc -O2 vectorises a loop only when no scalar rest is
+       left over, so the loop runs over a multiple of four entries (a vector of four floats,
+       two of two doubles) and the rest is a second loop. */
+    for (i = 0; i < 4; ++i) {
+        beyond |= bound - (wmr_real_bits(q[i]) & mask);
+        beyond |= bound - (wmr_real_bits(qdot[i]) & mask);
+        beyond |= bound - (wmr_real_bits(q_des[i]) & mask);
+        beyond |= bound - (wmr_real_bits(qdot_des[i]) & mask);
+        beyond |= bound - (wmr_real_bits(qddot_des[i]) & mask);
+    }
+    for (i = 4; i < 5; ++i) {
         beyond |= bound - (wmr_real_bits(q[i]) & mask);
         beyond |= bound - (wmr_real_bits(qdot[i]) & mask);
         beyond |= bound - (wmr_real_bits(q_des[i]) & mask);

@@ -71,8 +71,17 @@ static inline bool trailer3_tdc_inputs_bounded(const trailer3_real_t q[14],
     /* |x| > bound exactly when bound - |x|'s bits wraps and sets the top bit (both below
        it; +Inf and every NaN lie above every finite magnitude): subtractions OR-ed, which
        the compiler vectorises, and one test, where a comparison each is a branch-free
-       but serial flag per value. */
-    for (i = 0; i < 14; ++i) {
+       but serial flag per value. gcc -O2 vectorises a loop only when no scalar rest is
+       left over, so the loop runs over a multiple of four entries (a vector of four floats,
+       two of two doubles) and the rest is a second loop. */
+    for (i = 0; i < 12; ++i) {
+        beyond |= bound - (trailer3_real_bits(q[i]) & mask);
+        beyond |= bound - (trailer3_real_bits(qdot[i]) & mask);
+        beyond |= bound - (trailer3_real_bits(q_des[i]) & mask);
+        beyond |= bound - (trailer3_real_bits(qdot_des[i]) & mask);
+        beyond |= bound - (trailer3_real_bits(qddot_des[i]) & mask);
+    }
+    for (i = 12; i < 14; ++i) {
         beyond |= bound - (trailer3_real_bits(q[i]) & mask);
         beyond |= bound - (trailer3_real_bits(qdot[i]) & mask);
         beyond |= bound - (trailer3_real_bits(q_des[i]) & mask);

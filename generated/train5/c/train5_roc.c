@@ -73,7 +73,9 @@ static inline bool train5_roc_inputs_bounded(const train5_real_t q[20],
     /* |x| > bound exactly when bound - |x|'s bits wraps and sets the top bit (both below
        it; +Inf and every NaN lie above every finite magnitude): subtractions OR-ed, which
        the compiler vectorises, and one test, where a comparison each is a branch-free
-       but serial flag per value. */
+       but serial flag per value. gcc -O2 vectorises a loop only when no scalar rest is
+       left over, so the loop runs over a multiple of four entries (a vector of four floats,
+       two of two doubles) and the rest is a second loop. */
     for (i = 0; i < 20; ++i) {
         beyond |= bound - (train5_real_bits(q[i]) & mask);
         beyond |= bound - (train5_real_bits(qdot[i]) & mask);
