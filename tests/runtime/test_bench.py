@@ -77,8 +77,12 @@ def test_full_step_benchmark_checks_before_timing() -> None:
     assert ("paper/double", "ours_libm") in variants
     assert ("minimal/float32", "ours_libm") in variants
     assert ("minimal/float32", "hand_frozen") in variants
+    # the improved competitor (issue 52), run-time and frozen, checked like the old one
+    for case in result["checks"]:
+        assert (case, "hand_fast") in variants and (case, "hand_fast_frozen") in variants
     st = summarise_steps(result)
     assert st[("paper/double", "ratio:ours/hand")]["median"] > 0.0
+    assert st[("minimal/float32", "ratio:ours_frozen/hand_fast_frozen")]["median"] > 0.0
 
 
 def test_trailer_step_benchmark_checks_before_timing() -> None:
@@ -111,7 +115,7 @@ def test_trailer_step_benchmark_checks_before_timing() -> None:
         tol = 1e-4 if case.endswith("float32") else 1e-9
         assert check["max_abs_tau_diff"] <= tol * check["tau_scale"], case
     st = summarise_steps(result)
-    for v in ("ours", "hand", "ours_frozen", "hand_frozen"):
+    for v in ("ours", "hand", "ours_frozen", "hand_frozen", "hand_fast", "hand_fast_frozen"):
         assert st[("trailer minimal/float32", v)]["median"] > 0.0
     for p in ("double", "float32"):
         assert st[(f"trailer minimal/{p}", "ratio:ours_libm/hand")]["median"] > 0.0
@@ -165,6 +169,42 @@ def test_step_benchmark_refuses_a_competitor_with_other_torques(
     with pytest.raises(RuntimeError, match=r"refused to time: \[\{'check'") as caught:
         step_bench.run_steps(601, 1, cases=case)
     assert "max_abs_tau_diff" in str(caught.value) and "'ns'" not in str(caught.value)
+
+
+@pytest.mark.parametrize(("robot", "source", "edit", "refusal"), [
+    # a torque off by one part in a million (Drishti's paper form: u rows 4, 5)
+    (0, "hand_tdroc_fast.c",
+     ("    return commit(st, cfg, pushed, head, count, dnew, H1, qdot, sth, cth, gain, sn, "
+      "udisc,\n                  u[3], u[4], tau);",
+      "    return commit(st, cfg, pushed, head, count, dnew, H1, qdot, sth, cth, gain, sn, "
+      "udisc,\n                  u[3] * (1.0 + 1e-6), u[4], tau);"), "max_abs_tau_diff"),
+    # a status out of order: the ring's bound checked before the inputs
+    (1, "hand_trailer_tdroc_fast.c",
+     ("    if (((meas | ref) & TOP_BIT) != 0u) {",
+      "    if (((meas | ref) & TOP_BIT) != 0u && state->steps > 100000u) {"),
+     "hand_fast: bad-input case"),
+])
+def test_step_benchmark_refuses_an_improved_competitor_that_diverges(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, robot: int, source: str,
+        edit: tuple[str, str], refusal: str) -> None:
+    """The improved competitors (issue 52: ``csrc/hand_tdroc_fast.c``,
+    ``hand_trailer_tdroc_fast.c``) are checked against the generated step like the old
+    ones: one whose torque or whose status on a bad input differs is refused before any
+    timing."""
+    from runtime.tooling.bench import step_bench
+
+    csrc = tmp_path / "csrc"
+    shutil.copytree(step_bench.BENCH_CSRC, csrc)
+    src = csrc / source
+    text = src.read_text()
+    assert text.count(edit[0]) == 1
+    src.write_text(text.replace(*edit))
+    monkeypatch.setattr(step_bench, "BENCH_CSRC", csrc)
+    r = step_bench.STEP_ROBOTS[robot]
+    case = [(r, r.formulations[0], "double")]
+    with pytest.raises(RuntimeError, match="refused to time") as caught:
+        step_bench.run_steps(601, 1, cases=case)
+    assert refusal in str(caught.value) and "'ns'" not in str(caught.value)
 
 
 def test_casadi_op_counts_are_counted() -> None:

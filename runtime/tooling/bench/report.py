@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import json
 import platform
+import shutil
 import sys
 from dataclasses import asdict
 from pathlib import Path
@@ -25,7 +26,8 @@ from runtime.tooling.bench.robot_c_bench import summarise as summarise_robots
 from runtime.tooling.bench.scale import Rung, budget_section, growth_section
 from runtime.tooling.bench.scale import measure as measure_scaling
 from runtime.tooling.bench.scale import section as scale_section
-from runtime.tooling.bench.step_bench import run_steps, summarise_steps
+from runtime.tooling.bench.step_bench import run_steps, step_cases, summarise_steps
+from runtime.tooling.bench.step_callgrind import step_instructions
 
 ROOT = default_output(".")  # BENCHMARKS.md and benchmarks.json: the repository's, else ./
 
@@ -36,11 +38,16 @@ STEP_LABELS = {
     "ours_frozen": "`<P>_tdroc_step`, `-D<P>_TDROC_FROZEN` (`wmr freeze`)",
     "hand_frozen": "hand-written step, configuration compiled in",
     "ours_libm": "`<P>_tdroc_step`, `-D<P>_LIBM_TRIG` (libm's sin/cos, as the hand-written step)",
+    "hand_fast": "improved hand-written step (issue 52)",
+    "hand_fast_frozen": "improved hand-written step, configuration compiled in",
 }
 RATIO_LABELS = {
     "ratio:ours/hand": "`<P>_tdroc_step` / hand-written step",
     "ratio:ours_frozen/hand_frozen": "frozen `<P>_tdroc_step` / frozen hand-written step",
     "ratio:ours_libm/hand": "`<P>_tdroc_step` with libm's sin/cos / hand-written step",
+    "ratio:ours/hand_fast": "`<P>_tdroc_step` / improved hand-written step",
+    "ratio:ours_frozen/hand_fast_frozen":
+        "frozen `<P>_tdroc_step` / frozen improved hand-written step",
 }
 
 
@@ -64,7 +71,10 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
         "",
         "`<P>_tdroc_step` (what firmware calls; `<P>` is `wmr` for Drishti, `trailer` for",
         "the trailer) against a hand-written step written to be fast under the same contract",
-        "(`runtime/tooling/bench/csrc/hand_tdroc.c`, `hand_trailer_tdroc.c`: the same",
+        "(`runtime/tooling/bench/csrc/hand_tdroc.c`, `hand_trailer_tdroc.c`; and the",
+        "improved ones of issue 52, `hand_tdroc_fast.c`, `hand_trailer_tdroc_fast.c`: norms",
+        "and M-tilde x inlined, one straight-line body per formulation, the kept constants",
+        "read in place, the configuration compared branch-free or by memcmp; the same",
         "statuses in the same order, the configuration compared bit for bit with the copy",
         "`_init` kept, commit on success; M-hat's structure, everything that depends on",
         "the configuration only kept by `_init`, the window's norms in a contiguous ring),",
@@ -97,15 +107,20 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
         "",
         "Every process's ratio of medians, in the order they ran (the median one is the table's):",
         "",
-        "| case | ours / hand | frozen: ours / hand |",
-        "|---|---|---|",
+        "| case | ours / hand | frozen: ours / hand | ours / improved hand "
+        "| frozen: ours / improved hand |",
+        "|---|---|---|---|---|",
     ]
     for case in cases:
         med = by_case[case]
-        pairs = [("ours", "hand"), ("ours_frozen", "hand_frozen")]
+        pairs = [(n, d) for n, d in (("ours", "hand"), ("ours_frozen", "hand_frozen"),
+                                     ("ours", "hand_fast"),
+                                     ("ours_frozen", "hand_fast_frozen"))
+                 if n in med and d in med]
         lines.append(f"| {case} | " + " | ".join(
             ", ".join(f"{a / b:.2f}" for a, b in zip(med[n], med[d], strict=True))
             for n, d in pairs) + " |")
+    lines += instructions_section(steps.get("instructions", {}))
     lines += [
         "",
         "| forward dynamics | ns per call, median (min–max) |",
@@ -114,6 +129,32 @@ def _step_section(c: dict[tuple[str, str], dict[str, float]], steps: dict[str, A
         "",
         *ratio_tables(c, steps, robots),
     ]
+    return lines
+
+
+def instructions_section(counts: dict[str, dict[str, float]]) -> list[str]:
+    """Instructions per step under callgrind (:mod:`runtime.tooling.bench.step_callgrind`),
+    the noise-free figure beside the times; a line saying why when valgrind is missing."""
+    if not counts:
+        return ["", "Instructions per step: not measured (valgrind's callgrind not installed)."]
+    names = ("ours", "ours_libm", "hand", "hand_fast", "ours_frozen", "hand_frozen",
+             "hand_fast_frozen")
+    ratios = ("ratio:ours/hand", "ratio:ours/hand_fast", "ratio:ours_libm/hand_fast",
+              "ratio:ours_frozen/hand_frozen", "ratio:ours_frozen/hand_fast_frozen")
+    lines = [
+        "",
+        "Instructions per step (valgrind's callgrind, inclusive of libm's sin/cos, over the",
+        "recorded loop: the difference of two runs with one and three timed passes), the",
+        "noise-free figure; goal: ours ≤ the improved hand-written step.",
+        "",
+        "| case | ours | ours, libm sin/cos | hand | improved hand | ours frozen "
+        "| hand frozen | improved hand frozen | ours / hand | ours / improved "
+        "| ours, libm sin/cos / improved | frozen: ours / hand | frozen: ours / improved |",
+        "|---|" + "---:|" * (len(names) + len(ratios)),
+    ]
+    for case, r in counts.items():
+        lines.append(f"| {case} | " + " | ".join(f"{r[n]:.0f}" for n in names) + " | "
+                     + " | ".join(f"{r[k]:.3f}" for k in ratios) + " |")
     return lines
 
 
@@ -346,6 +387,10 @@ def main(argv: list[str] | None = None) -> int:
     c = summarise_c(run_c(args.calls, args.repeats))
     print("C step benchmark ...", flush=True)
     steps = run_steps(args.calls, args.repeats, args.runs)
+    if shutil.which("valgrind") is not None and shutil.which("callgrind_annotate") is not None:
+        print("C step instructions (callgrind) ...", flush=True)
+        steps["instructions"] = {robot.case(f, p): step_instructions(robot, f, p)
+                                 for robot, f, p in step_cases()}
     robot_calls = max(1, args.calls // 5)  # the trailers' functions take 5-30x longer
     robots = summarise_robots(run_robots(robot_calls, args.repeats))
     print("Python benchmarks ...", flush=True)
@@ -383,6 +428,7 @@ def main(argv: list[str] | None = None) -> int:
                     f"{case}/{v}": s for (case, v), s in sorted(summarise_steps(steps).items())
                 },
                 "c_step_checks": steps["checks"],
+                "c_step_instructions": steps.get("instructions", {}),
                 "c_robots_ns": {"/".join(k): s for k, s in sorted(robots.items())},
                 "python_us": py,
                 "ops": ops,

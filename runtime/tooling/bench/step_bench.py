@@ -3,7 +3,10 @@ a hand-written step written to be fast under the same contract (``csrc/hand_tdro
 Drishti, ``csrc/hand_trailer_tdroc.c`` for the trailer: :data:`STEP_ROBOTS`), on the
 controller inputs of a recorded closed loop (consistent states, lawn-mower path), for each
 robot, formulation (Drishti: paper, minimal; the trailer: minimal) and precision (double,
-float32).
+float32). Each robot also has an improved hand-written step (issue 52:
+``csrc/hand_tdroc_fast.c``, ``csrc/hand_trailer_tdroc_fast.c``; norms and M-tilde x
+inlined, one straight-line body per formulation, the kept constants read in place, the
+configuration compared branch-free or by memcmp), checked and timed beside the old one.
 
 One executable per formulation and precision (gcc -O2) holds every variant: ours
 (run-time configuration), the hand-written step, both again built with the configuration

@@ -77,14 +77,15 @@ def main() -> None:
     args = parser.parse_args()
     if shutil.which("valgrind") is None or shutil.which("callgrind_annotate") is None:
         raise SystemExit("step_callgrind: valgrind (callgrind) is not installed")
-    names = ("ours", "hand", "hand_fast", "ours_frozen", "hand_frozen", "hand_fast_frozen")
-    print("| case | " + " | ".join(names) + " | ours/hand | ours/hand_fast "
-          "| frozen ours/hand | frozen ours/hand_fast |")
-    print("|---" * (len(names) + 5) + "|")
+    names = ("ours", "ours_libm", "hand", "hand_fast", "ours_frozen", "hand_frozen",
+             "hand_fast_frozen")
+    keys = ("ours/hand", "ours/hand_fast", "ours_libm/hand_fast", "ours_frozen/hand_frozen",
+            "ours_frozen/hand_fast_frozen")
+    print("| case | " + " | ".join(names) + " | " + " | ".join(keys) + " |")
+    print("|---" * (len(names) + len(keys) + 1) + "|")
     for robot, formulation, precision in step_cases(STEP_ROBOTS):
         r = step_instructions(robot, formulation, precision, args.extra)
-        ratios = [r["ratio:ours/hand"], r["ratio:ours/hand_fast"],
-                  r["ratio:ours_frozen/hand_frozen"], r["ratio:ours_frozen/hand_fast_frozen"]]
+        ratios = [r[f"ratio:{k}"] for k in keys]
         print(f"| {robot.case(formulation, precision)} | "
               + " | ".join(f"{r[n]:.0f}" for n in names) + " | "
               + " | ".join(f"{x:.3f}" for x in ratios) + " |", flush=True)
