@@ -16,12 +16,13 @@ function per robot by :func:`function_ir`. Backends print from the IR; none runs
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from codegen import cse
 from codegen.cse import CseResult, OpCount
 from codegen.prepare import PreparedForm, prepared_form
+from codegen.shared import SharedCall, share
 from codegen.spec import FunctionSpec
 
 if TYPE_CHECKING:
@@ -51,6 +52,9 @@ class FunctionIR:
     plain: CseResult
     ops: OpCount
     prepared: PreparedForm | None = None
+    # a backend that can call a module-level helper: this function's share of its group's
+    # quantities (``codegen.shared``); ``cse`` above is still the whole function
+    shared: SharedCall | None = None
 
     @property
     def name(self) -> str:
@@ -64,6 +68,21 @@ def function_ir(spec: FunctionSpec) -> FunctionIR:
     plain = cse.cse_function(spec) if spec.guards else checked
     split = prepared_form(checked, spec) if spec.prepared else None
     return FunctionIR(spec, checked, plain, cse.count_ops(checked), split)
+
+
+def with_shared(functions: tuple[FunctionIR, ...]) -> tuple[FunctionIR, ...]:
+    """``functions`` with each group named by ``FunctionSpec.shares`` given its call of the
+    group's helper (``codegen.shared``), in the order of their first member."""
+    groups: dict[str, list[FunctionIR]] = {}
+    for f in functions:
+        if f.spec.shares:
+            groups.setdefault(f.spec.shares, []).append(f)
+    calls: dict[str, SharedCall] = {}
+    for name, members in groups.items():
+        _, group_calls = share([f.spec for f in members], name)
+        calls.update({f.name: c for f, c in zip(members, group_calls, strict=True)})
+    return tuple(replace(f, shared=calls[f.name]) if f.name in calls else f
+                 for f in functions)
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ from functools import cache
 import sympy as sp
 
 from modeling.description.elimination import block_triangular_solve
+from modeling.lagrange import StagedMinimal
 from modeling.robot_model import RobotModel
 from modeling.staged import Stage
 from modeling.wheel_constraints import NO_SIDE_SLIP, ROLLING
@@ -132,3 +133,33 @@ def contact_force_forms(model: RobotModel) -> ContactForms:
     longitudinal, lateral = s.in_root_frame(stage, [sp.Matrix(forces[:m]),
                                                     sp.Matrix(forces[m:])])
     return ContactForms(stage, longitudinal, lateral)
+
+
+def root_frame_contact_forms(model: RobotModel, sm: StagedMinimal) -> ContactForms:
+    """The contact forces of :func:`contact_force_forms` through the quantities of the
+    model's own root-frame stage ``sm`` (``staged_minimal(root_frame=True)``, the model
+    functions' of a staged robot with a planar frame): q̈ = S η̇ + Ṡ η of its forward
+    dynamics in the root body's frame, M, H and A_d evaluated there
+    (``root_frame_point``), where the multipliers are the same functions of q. S(q), M̄,
+    H̄ and the solve are then the model functions' quantities, not a second derivation of
+    them (issue 51: one helper evaluates them for all, ``codegen.shared``)."""
+    s = model.system
+    if not s.planar_frame or sm.plane is None:
+        raise ValueError(f"robot '{model.name}': no root frame to write its contact forces in")
+    rows = contact_rows(model)
+    stage = sm.stage
+    _, qdd = sm.accelerations(model.tau)
+    at_root = s.root_frame_point()
+    dep = list(s.dependent)
+    on_manifold = {s.qdot[i]: sm.velocities[i] for i in range(len(s.q))
+                   if sm.velocities[i] != s.qdot[i]}
+    m = stage.matrix(s.mass_matrix.xreplace(at_root))
+    h = stage.matrix(s.bias.xreplace(at_root).xreplace(on_manifold))
+    rhs = stage.matrix(s.input_matrix * model.tau - h - m * qdd)
+    a = s.constraint_matrix.xreplace(at_root)
+    a_d = a.extract(list(range(a.rows)), dep)
+    lam = block_triangular_solve(stage, a_d.T, rhs.extract(dep, [0]), s.simplify)
+    forces = [stage.define(_row_scale(model, r) * lam[r]) for r in rows.rolling]
+    forces += [stage.define(-_row_scale(model, r) * lam[r]) for r in rows.lateral]
+    k = len(rows.rolling)
+    return ContactForms(stage, sp.Matrix(forces[:k]), sp.Matrix(forces[k:]))

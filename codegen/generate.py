@@ -20,7 +20,7 @@ from functools import cache
 from pathlib import Path
 
 from codegen import backends
-from codegen.backend import Module, RobotTarget, function_ir
+from codegen.backend import Module, RobotTarget, function_ir, with_shared
 from codegen.certify.stored import model_section
 from codegen.controller_layout import ControllerLayout
 from codegen.progress import Progress, quiet
@@ -86,7 +86,7 @@ def robot_target(model: RobotModel, robot: Robot, progress: Progress | None = No
     modules = []
     for name, specs, source in groups:
         with progress.step(MODULE_STEPS[name]):
-            functions = tuple(function_ir(s) for s in specs())
+            functions = with_shared(tuple(function_ir(s) for s in specs()))
         modules.append(Module(f"{p}_{name}", functions, source))
     return RobotTarget(model, robot, layout_for(model), tuple(modules), src, LAW_SOURCE,
                        controllers)

@@ -25,14 +25,19 @@ from functools import cache
 
 import sympy as sp
 
-from codegen.contact_forces import contact_force_forms, contact_rows
+from codegen.contact_forces import (
+    ContactForms,
+    contact_force_forms,
+    contact_rows,
+    root_frame_contact_forms,
+)
 from codegen.controller_layout import row_span, words
 from codegen.cse import cse_function
 from codegen.prepare import prepared_form
 from codegen.spec import Argument, Field, FunctionSpec, Guard
 from modeling import controllers as ctl
 from modeling.description.derive import cofactor_determinant
-from modeling.lagrange import ConstrainedSystem
+from modeling.lagrange import ConstrainedSystem, StagedMinimal
 from modeling.robot_model import Parameter, RobotModel
 from modeling.staged import Stage, definitions_read
 from modeling.trig_polynomial import trig_polynomial
@@ -191,6 +196,7 @@ class StagedForms:
     # the mass matrix the solve factors (M̄, or M̄_u in the root's twist): positive
     # definite exactly when M̄ is, and what the guards' leading minors read
     solved_mbar: sp.Matrix
+    minimal: StagedMinimal  # the minimal form these are of (the contact forces read it)
 
     def with_definitions(self, spec: FunctionSpec) -> FunctionSpec:
         """``spec`` with the quantities its outputs and guards read."""
@@ -221,7 +227,19 @@ def staged_forms(model: RobotModel, plant: bool = False) -> StagedForms:
     jac_u = sp.Matrix(len(xdot), model.nu, lambda i, j: stage.derivative(xdot[i],
                                                                           model.tau[j]))
     return StagedForms(stage, sm.mass_matrix, sm.bias, eta_dot, qdd, xdot, jac_x, jac_u,
-                       sm.solved_mass_matrix)
+                       sm.solved_mass_matrix, sm)
+
+
+@cache
+def model_contact_forms(model: RobotModel) -> ContactForms:
+    """The contact forces of ``model``: for a staged robot whose model functions are the
+    root frame's, through their stage (``root_frame_contact_forms``: S, M̄, H̄ and the
+    solve are theirs, shared with them), else through a stage of their own."""
+    if model.staged and model.system.planar_frame:
+        forms = staged_forms(model)  # complete first: its quantities keep their numbers
+        if forms.minimal.plane is not None:
+            return root_frame_contact_forms(model, forms.minimal)
+    return contact_force_forms(model)
 
 
 @cache
@@ -302,7 +320,8 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
                 (out("qddot", qdd),),
                 ("(9)", "(14)", "(31)"),
             )
-        ), prepared=True),  # <prefix>_model_prepare + <prefix>_forward_dynamics_prepared
+        ), prepared=True,  # <prefix>_model_prepare + <prefix>_forward_dynamics_prepared
+            calls_prepared=staged is not None),  # a staged robot's: once in its C module
         FunctionSpec(
             "kinematics",
             f"(31): pose rates ({dep_names}) from the wheel rates, xi_dot = S_d(q) eta.",
@@ -345,18 +364,33 @@ def model_specs(model: RobotModel) -> tuple[FunctionSpec, ...]:
             ("(9)", "(31)"),
         ),
     )
-    specs = specs if staged is None else tuple(staged.with_definitions(f) for f in specs)
+    specs = specs if staged is None else tuple(_sharing(staged.with_definitions(f))
+                                               for f in specs)
     net_tau = replace(tau, doc="net wheel torques (after bearing friction) "
                       + ", ".join(model.input_names))
     contact = checked(FunctionSpec("wheel_contact_forces", "", (p, q, wheel_rates, net_tau), ()))
-    return (*specs, _contact_forces_spec(model, contact), *_traction_specs(model, contact))
+    contact_spec = _contact_forces_spec(model, contact)
+    if staged is not None and model_contact_forms(model).stage is staged.stage:
+        contact_spec = _sharing(contact_spec)
+    return (*specs, contact_spec, *_traction_specs(model, contact))
+
+
+# The model functions of a staged robot that read S(q), M̄ and H̄ from one helper
+# (``codegen.shared``): printed once per module instead of once per function.
+STAGED_SHARES = "staged_quantities"
+_SHARING = ("minimal_bias_forces", "minimal_forward_dynamics", "linearization",
+            "wheel_contact_forces")
+
+
+def _sharing(spec: FunctionSpec) -> FunctionSpec:
+    return replace(spec, shares=STAGED_SHARES) if spec.name in _SHARING else spec
 
 
 def _contact_forces_spec(model: RobotModel, base: FunctionSpec) -> FunctionSpec:
     """``wheel_contact_forces``: the ground's force on each wheel from the multipliers of
     (9) (``codegen.contact_forces``), with ``base``'s inputs and status contract. Its
     definitions: its own stage's, then those its guards read (a staged robot's M̄)."""
-    forms = contact_force_forms(model)
+    forms = model_contact_forms(model)
     rows = contact_rows(model)
     axles = "; ".join(f"lateral[{k}]: " + ", ".join(f"'{w}'" for w in ws)
                       for k, ws in enumerate(rows.lateral_wheels))
@@ -374,10 +408,15 @@ def _contact_forces_spec(model: RobotModel, base: FunctionSpec) -> FunctionSpec:
     outputs = (out("longitudinal", forms.longitudinal, "N, per driven wheel"),
                out("lateral", forms.lateral, "N, per no-side-slip row (axle)"))
     exprs = [*forms.longitudinal, *forms.lateral]
-    guard_defs = (staged_forms(model).stage.definitions_for([g.condition for g in base.guards])
-                  if model.staged else ())
+    guards = [g.condition for g in base.guards]
+    if model.staged and forms.stage is staged_forms(model).stage:  # one stage: one list
+        definitions = forms.stage.definitions_for([*exprs, *guards])
+    else:
+        guard_defs = (staged_forms(model).stage.definitions_for(guards)
+                      if model.staged else ())
+        definitions = (*forms.stage.definitions_for(exprs), *guard_defs)
     return replace(base, doc=doc, outputs=outputs, equations=("(9)", "(10)-(12)"),
-                   definitions=(*forms.stage.definitions_for(exprs), *guard_defs))
+                   definitions=definitions)
 
 
 # The friction budget mu N_k a traction function accepts (N): normal in float32 and in

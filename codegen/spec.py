@@ -116,6 +116,13 @@ class FunctionSpec:
     # (``<P>_SIN_BOUNDED``), never libm's: no sinf/cosf and their argument reduction (about
     # 0.5 KB of stack) linked into a firmware image. NaN beyond the bound.
     bounded_trig: bool = False
+    # The name of a group of a module's functions that evaluate the definitions they have
+    # in common once, in one helper (``codegen.shared``; C: a static function of the
+    # module). "" = none. The outputs are the same; only where they are printed differs.
+    shares: str = ""
+    # With ``prepared``: C prints the function as a call of its prepare-parameters pair
+    # (the same arithmetic, bit for bit; written once in the module instead of twice).
+    calls_prepared: bool = False
 
     def checked_spec(self) -> FunctionSpec:
         """This spec with the guard conditions as a trailing output ``guard_`` (for CSE)."""

@@ -95,12 +95,18 @@ class StagedMinimal:
     def forward_dynamics(self, tau: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix]:
         """(η̇, q̈): M̄ η̇ = Sᵀ B τ − H̄ (or M̄_u u̇ = S_uᵀ B τ − H̄_u) solved in the stage,
         q̈ = S η̇ + Ṡ η in the world frame, η̇ its ``eta_rows``."""
+        eta_dot, qdd = self.accelerations(tau)
+        return eta_dot, self.in_world(qdd)
+
+    def accelerations(self, tau: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix]:
+        """(η̇, q̈) as :meth:`forward_dynamics`, q̈ in the frame of S (the root body's
+        with a ``plane``: its x, y rows not rotated into the world's)."""
         mass, bias, inputs = ((self.mass_matrix, self.bias, self.input_matrix)
                               if self.solved is None else self.solved)
         rates = self.stage.solve(mass, inputs * tau - bias)
         qdd = self.stage.matrix(self.null_space * rates + self.null_space_rate)
         eta_dot = rates if self.solved is None else sp.Matrix([qdd[i] for i in self.eta_rows])
-        return eta_dot, self.in_world(qdd)
+        return eta_dot, qdd
 
     def world_velocities(self) -> sp.Matrix:
         """q̇ = S η in the world frame."""

@@ -177,3 +177,57 @@ def test_the_kkt_comparison_sees_a_heavier_last_cart(train: Train, code: RobotCo
                     train.accelerations(q, qdot, tau))
                 for q, qdot, tau in train.states(seed=52, count=5))
     assert worst > 1e3 * RTOL, worst
+
+
+def kane_accelerations(train: Train, q: np.ndarray, qdot: np.ndarray, tau: np.ndarray,
+                       heavier: float = 1.0) -> np.ndarray:
+    """q̈ by Kane's method, from the robot file's bodies and wheels (``Train``), with no
+    mass matrix of the whole robot and no multipliers: the generalised speeds are the
+    driven wheel rates η; every rate follows from the wheel constraints, q̇ = S(q) η (A S =
+    0, S's driven rows the identity), and at η̇ = 0 the constrained acceleration is
+    q̈₀ = w (A w = −Ȧ q̇, w's driven rows 0). Each mass point's partial velocities are
+    v_r = J S e_r and each inertia's partial angular velocities ω_r = S[k, r]; Kane's
+    equations F_r + F*_r = 0, with F_r = τ_r (the motor torque on its wheel's relative
+    spin) and the generalised inertia forces F*_r = −Σ m v_r · a − Σ I ω_r α, a = J q̈ + J̇
+    q̇, are linear in η̇: solved, then q̈ = S η̇ + w. ``heavier`` scales the last body's
+    mass (a wrong model, for the check's teeth)."""
+    a_mat, rate = train.constraints(q, qdot)
+    rest = [i for i in range(train.n) if i not in train.driven]
+    s = np.zeros((train.n, len(train.driven)))
+    s[train.driven] = np.eye(len(train.driven))
+    s[rest] = np.linalg.lstsq(a_mat[:, rest], -a_mat[:, train.driven], rcond=None)[0]
+    w = np.zeros(train.n)
+    w[rest] = np.linalg.lstsq(a_mat[:, rest], -rate, rcond=None)[0]
+    k = len(train.driven)
+    inertia = np.zeros((k, k))  # coefficient of η̇ in −F*
+    free = np.zeros(k)  # −F* at η̇ = 0
+    last = len(train.masses) - len(train.wheels) - 1  # the last body (not a wheel)
+    for i, (mass, p) in enumerate(train.masses):
+        mass = mass * heavier if i == last else mass
+        j = p.jacobian(q)
+        partial = j @ s  # 2 × k: v_r of this point
+        inertia += mass * partial.T @ partial
+        free += mass * partial.T @ (j @ w + p.drift(q, qdot))
+    for rot, col in train.inertias:
+        omega = s[col]  # ω_r of this yaw or spin
+        inertia += rot * np.outer(omega, omega)
+        free += rot * omega * w[col]
+    eta_dot = np.linalg.solve(inertia, tau - free)  # F_r = τ_r: the torques' speeds
+    return s @ eta_dot + w
+
+
+def test_forward_dynamics_equals_kanes_method(train: Train, code: RobotCode) -> None:
+    """Item 4 of issue 51: the generated forward dynamics against Kane's method written
+    from the robot file (``kane_accelerations``) at random consistent states, 1e-12."""
+    worst = 0.0
+    for q, qdot, tau in train.states(seed=53, count=N_STATES):
+        qdd = code.model.forward_dynamics(q, qdot, tau, code.params)
+        worst = max(worst, rel(qdd, kane_accelerations(train, q, qdot, tau)))
+    assert worst < RTOL, worst
+
+
+def test_the_kane_comparison_sees_a_heavier_last_cart(train: Train, code: RobotCode) -> None:
+    worst = max(rel(code.model.forward_dynamics(q, qdot, tau, code.params),
+                    kane_accelerations(train, q, qdot, tau, heavier=1.01))
+                for q, qdot, tau in train.states(seed=54, count=5))
+    assert worst > 1e3 * RTOL, worst

@@ -24,6 +24,7 @@ from codegen.backends.c.config import CConfig
 from codegen.backends.c.format import WIDTH, format_c
 from codegen.backends.c.lowering import (
     C_KEYWORDS,
+    comment_text,
     context_norms,
     function_context,
     param_decl,
@@ -35,9 +36,12 @@ from codegen.backends.c.prepared import (
     prepare_context,
     prepared_api,
     prepared_context,
+    prepared_wrapper,
 )
 from codegen.certify.header import certificate_doc
+from codegen.cse import count_ops
 from codegen.layout import is_scalar, is_vector
+from codegen.shared import SharedCall
 from codegen.spec import Field, FunctionSpec
 
 TEMPLATE_DIR = Path(__file__).resolve().parent / "templates"
@@ -207,6 +211,8 @@ class ModuleContext:
     functions: tuple[dict[str, object], ...]
     api: PreparedApi | None
     norms: frozenset[int]
+    # the static functions of the ``.c`` its functions call (``codegen.shared`` groups)
+    helpers: tuple[dict[str, object], ...] = ()
 
 
 def module_context(
@@ -237,6 +243,13 @@ def module_context(
         clash = taken & {api.prepare, f"{api.function}_prepared"}
         if clash:
             raise ValueError(f"{module}: {sorted(clash)} is already a generated function")
+    helpers: dict[str, dict[str, object]] = {}
+    for f in functions:
+        if f.shared is not None and f.shared.quantities.spec.name not in helpers:
+            helpers[f.shared.quantities.spec.name] = helper_context(f.shared, config)
+    clash = {f"{config.prefix}{n}" for n in names} & {str(h["name"]) for h in helpers.values()}
+    if clash:
+        raise ValueError(f"{module}: {sorted(clash)} is already a generated function")
     contexts = []
     for f in functions:
         ctx = function_context(f, config, module)
@@ -248,8 +261,22 @@ def module_context(
         contexts.append(ctx)
         if f.prepared is not None:
             assert api is not None
+            if f.spec.calls_prepared:
+                ctx["wrapper"] = prepared_wrapper(f, api, config)
             contexts += [prepare_context(f, api, config), prepared_context(f, api, config)]
-    return ModuleContext(module, tuple(contexts), api, context_norms(contexts))
+    return ModuleContext(module, tuple(contexts), api,
+                         context_norms([*contexts, *helpers.values()]),
+                         tuple(helpers.values()))
+
+
+def helper_context(call: SharedCall, config: CConfig) -> dict[str, object]:
+    """The static helper of ``call``'s group: what its callers read, evaluated once
+    (their own bodies hold the same arithmetic as hidden lines, :func:`.lowering.shared_lines`)."""
+    helper = call.quantities
+    ir = FunctionIR(helper.spec, helper.cse, helper.cse, count_ops(helper.cse))
+    ctx = function_context(ir, config, "")
+    ctx["summary"] = comment_text(helper.spec.doc)
+    return ctx
 
 
 def module_files(ctx: ModuleContext, config: CConfig, *, source: str = "",
@@ -267,6 +294,7 @@ def module_files(ctx: ModuleContext, config: CConfig, *, source: str = "",
                 guard=_guard(ctx.module + "_H", config),
                 header=ctx.module + ".h",
                 functions=list(ctx.functions),
+                helpers=list(ctx.helpers),
                 prepared=ctx.api,
                 includes=list(includes),
             )

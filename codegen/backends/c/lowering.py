@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import keyword
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import sympy as sp
 
@@ -41,6 +41,7 @@ from codegen.layout import (
     local_names,
     split_fields,
 )
+from codegen.shared import SharedCall
 from codegen.spec import Argument, Field, FunctionSpec
 
 _C_KEYWORD_TEXT = (
@@ -151,6 +152,15 @@ class Line:
     inner: str = ""  # check: a condition that, when the check fails, returns inner_status
     inner_status: str = ""
     inner_doc: str = ""
+    # decl of a function calling its group's helper (``codegen.shared``): ``hidden``, a
+    # helper's temporary, evaluated in the helper; ``printed``, what the decl reads instead
+    # of ``value`` (the helper's result). ``value`` is always the arithmetic the line
+    # stands for: the body is the straight-line evaluation a call executes (the float32
+    # certifier reads it so), the template prints the call.
+    # (Out of the repr, which the certificate's hash reads: they change where a value is
+    # printed, not the value; a function without a helper hashes as it always did.)
+    hidden: bool = field(default=False, repr=False)
+    printed: str = field(default="", repr=False)
 
 
 def decl(name: str, value: str) -> Line:
@@ -269,6 +279,35 @@ def temp_lines(temps: Sequence[Temp], load_for: LazyLoads, printer: CPrinter) ->
     return lines
 
 
+SHARED_LOCAL = "_shared"  # a caller's array of its group's helper results
+
+
+def shared_temps(call: SharedCall) -> tuple[list[Temp], list[Temp]]:
+    """The helper's temporaries (renamed ``_h<k>``, apart from the caller's ``_t<k>``) and
+    its results (shared symbol, value), as the caller's evaluation holds them."""
+    helper = call.quantities
+    rename = {t: sp.Symbol(f"_h{k}") for k, (t, _) in enumerate(helper.cse.temps)}
+    temps = [(rename[t], e.xreplace(rename)) for t, e in helper.cse.temps]
+    results = [e.xreplace(rename) for e in helper.cse.outputs[0]]
+    return temps, list(zip(helper.symbols, results, strict=True))
+
+
+def shared_lines(call: SharedCall, temps: Sequence[Temp], results: Sequence[Temp],
+                 printer: CPrinter, reads: set[sp.Symbol], config: CConfig) -> list[Line]:
+    """The call of ``call``'s helper as lines (``Line.printed``, ``Line.hidden``): the
+    call, then the helper's temporaries (hidden: evaluated in the helper) and its results,
+    each read from the caller's array where the rest of the function reads it
+    (``reads``), hidden elsewhere."""
+    helper = call.quantities
+    args = ", ".join([*(a.name for a in helper.spec.inputs), SHARED_LOCAL])
+    lines = [Line("call", f"{SHARED_LOCAL}[{len(results)}]",
+                  f"{config.prefix}{helper.spec.name}({args})")]
+    lines += [Line("decl", str(t), printer.expr_code(e), hidden=True) for t, e in temps]
+    lines += [Line("decl", str(q), printer.expr_code(e), hidden=q not in reads,
+                   printed=f"{SHARED_LOCAL}[{k}]") for k, (q, e) in enumerate(results)]
+    return lines
+
+
 def function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str, object]:
     spec = ir.spec
     slots = input_slots(spec)
@@ -277,12 +316,15 @@ def function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str, 
     n_out = len(spec.outputs)
     late_temps: Sequence[Temp] = ()
     late_guards: Sequence[tuple[int, sp.Expr]] = ()
+    call = ir.shared if form is None else None
     if form is None:
-        used = ir.cse.used_symbols()
-        temps: Sequence[Temp] = ir.cse.temps
-        guard_values = ir.cse.outputs[n_out:]
+        result = ir.cse if call is None else call.cse
+        inputs = set(spec.input_symbols())
+        used = frozenset(s for s in result.used_symbols() if s in inputs)
+        temps: Sequence[Temp] = result.temps
+        guard_values = result.outputs[n_out:]
         guards = list(enumerate(guard_values[0] if guard_values else ()))
-        outputs = ir.cse.outputs[:n_out]
+        outputs = result.outputs[:n_out]
     else:  # the same evaluation as prepare + prepared: bit-identical results
         used = form.used_params() | form.used_state()
         temps, guards = form.param_temps, list(form.param_guards)
@@ -291,18 +333,39 @@ def function_context(ir: FunctionIR, config: CConfig, module: str) -> dict[str, 
     if len(guards) + len(late_guards) != len(spec.guards):
         raise ValueError(f"{spec.name}: {len(spec.guards)} guards, conditions for "
                          f"{len(guards) + len(late_guards)}")
-    printer = printer_for(names, (*temps, *late_temps), config, spec)
+    checked = spec.returns_status and bool(spec.nonfinite_input)
+    call_lines: list[Line] = []
+    passed: set[str] = set()  # inputs handed to the helper
+    check_only: set[sp.Symbol] = set()  # inputs the helper alone reads, loaded to be checked
+    helper: tuple[list[Temp], list[Temp]] = ([], [])
+    if call is not None:
+        helper = shared_temps(call)
+        passed = {a.name for a in call.quantities.spec.inputs}
+        if checked:  # what the helper reads is checked with the rest of the inputs
+            check_only = set(call.quantities.cse.used_symbols()) - used
+            used = used | check_only
+    printer = printer_for(names, (*helper[0], *helper[1], *temps, *late_temps), config, spec)
+    if call is not None:
+        reads = {s for _, e in temps for s in e.free_symbols}
+        reads |= {s for exprs in result.outputs for e in exprs for s in e.free_symbols}
+        call_lines = shared_lines(call, *helper, printer, reads, config)
 
     loads = {s.symbol: decl(names[s.symbol], access(s.arg, s.field, s.index))
              for s in slots if s.symbol in used}
     body = [Line("void", a.name) for a in spec.inputs
-            if not any(s in used for s in a.all_symbols())]
-    checked = spec.returns_status and bool(spec.nonfinite_input)
+            if not any(s in used for s in a.all_symbols()) and a.name not in passed]
     load_for = LazyLoads({} if checked else loads)
     if checked:  # the check reads every input: all loaded first
         body += loads.values()
         body += nonfinite_check([line.target for line in loads.values()], spec.nonfinite_input,
                                  config)
+        body += [Line("void", names[s]) for s in sorted(check_only, key=str)]
+    if call is not None:  # what the helper reads, before its (hidden) arithmetic
+        helper_reads = call.quantities.cse.used_symbols()
+        body += load_for(sorted(helper_reads & used, key=str))
+        body += [replace(decl(names[s.symbol], access(s.arg, s.field, s.index)), hidden=True)
+                 for s in slots if s.symbol in helper_reads - used]
+    body += call_lines
     body += temp_lines(temps, load_for, printer)
     body += load_for([e for _, e in guards])
     body += guard_lines(spec, guards, printer, config)

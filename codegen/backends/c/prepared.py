@@ -19,6 +19,7 @@ from codegen.backends.c.lowering import (
     Line,
     Temp,
     access,
+    any_nonfinite,
     c_local_names,
     commit,
     decl,
@@ -283,3 +284,36 @@ def prepared_context(ir: FunctionIR, api: PreparedApi, config: CConfig) -> dict[
         "status_ok": ok,
     }
 
+
+
+def prepared_wrapper(ir: FunctionIR, api: PreparedApi, config: CConfig) -> list[str]:
+    """The body of ``<name>`` as a call of its prepare-parameters pair (C statements; the
+    function's own ``body`` stays its straight-line evaluation, which the pair's is, bit
+    for bit): the state inputs' check first, so that the statuses come in the function's
+    order (every input's non-finiteness before any guard), then ``<module>_prepare`` and
+    ``<name>_prepared``. One copy of the arithmetic in the module where there were two."""
+    spec, form = ir.spec, ir.prepared
+    assert form is not None
+    slots = input_slots(spec)
+    names = c_local_names(spec, slots)
+    used = form.used_state()
+    status = "prepare_status"
+    if status in names.values():
+        raise ValueError(f"{spec.name}: an input's local is named {status}")
+    loads = [(names[s.symbol], access(s.arg, s.field, s.index))
+             for s in slots if s.symbol in used and s.symbol not in form.params]
+    lines = [f"const {config.real_type} {n} = {v};" for n, v in loads]
+    if loads and spec.nonfinite_input:
+        lines += [f"if ({any_nonfinite([n for n, _ in loads], config)}) {{",
+                  f"    return {spec.nonfinite_input};", "}"]
+    ok = config.status_codes[0].name
+    state = [a.name for a in spec.inputs if a.kind != "params"]
+    params = next(a.name for a in spec.inputs if a.kind == "params")
+    call = ", ".join([f"&{PREPARED_ARG}", *state, *(a.name for a in spec.outputs)])
+    return [*lines,
+            f"{api.ctype} {PREPARED_ARG};",
+            f"const {config.status_type} {status} = {api.prepare}({params}, &{PREPARED_ARG});",
+            f"if ({status} != {ok}) {{",
+            f"    return {status};",
+            "}",
+            f"return {api.function}_prepared({call});"]

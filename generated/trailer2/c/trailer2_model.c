@@ -6,33 +6,335 @@
  */
 #include "trailer2_model.h"
 
+/* trailer2_staged_quantities: The quantities minimal_bias_forces, minimal_forward_dynamics,
+   linearization, wheel_contact_forces all read.
+   Each caller's documented operations include these:
+   operations after CSE: 116 add, 186 mul, 4 div, 4 sin/cos, 0 sqrt */
+static void trailer2_staged_quantities(const trailer2_params_t *p, const trailer2_real_t *q,
+    const trailer2_real_t *wheel_rates, trailer2_real_t *shared_quantities)
+{
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t _t0 = -theta_tractor;
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t _t1 = _t0 + theta_cart;
+    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
+    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
+    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t _t5 = _t0 + theta_cart2;
+    const trailer2_real_t _t6 = TRAILER2_SIN(_t5);
+    const trailer2_real_t _t7 = TRAILER2_COS(_t5);
+    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t6;
+    const trailer2_real_t _t12 = -TRAILER2_LIT(0.85)*_t2*_t6 - _t3*_t9;
+    const trailer2_real_t _t13 = -TRAILER2_LIT(1.6666666666666667)*_t2;
+    const trailer2_real_t _t14 = _t12*_t13;
+    const trailer2_real_t _t15 = _t14 - _t6;
+    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
+    const trailer2_real_t _t17 = _t12*_t16;
+    const trailer2_real_t _t18 = _t17 - _t8;
+    const trailer2_real_t _t19 = TRAILER2_LIT(0.2)*_t13;
+    const trailer2_real_t _t20 = TRAILER2_LIT(0.2)*_t16;
+    const trailer2_real_t _t21 = TRAILER2_LIT(1.6666666666666667)*_t15;
+    const trailer2_real_t _t22 = TRAILER2_LIT(0.2)*_t21;
+    const trailer2_real_t _t23 = -_t2*_t9 + TRAILER2_LIT(0.85)*_t3*_t6;
+    const trailer2_real_t _t24 = _t13*_t23;
+    const trailer2_real_t _t25 = -_t24 + _t7;
+    const trailer2_real_t _t26 = TRAILER2_LIT(1.6666666666666667)*_t18;
+    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*_t26;
+    const trailer2_real_t _t28 = _t16*_t23;
+    const trailer2_real_t _t29 = _t11 + _t28;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t _t30 = K_theta_cart2_x_tractor*_t6;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t31 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t _t32 = K_theta_cart_x_tractor*_t3;
+    const trailer2_real_t _t33 = K_theta_cart2_x_tractor*_t7;
+    const trailer2_real_t _t34 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t35 = TRAILER2_LIT(0.85)*_t3;
+    const trailer2_real_t _t36 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t thetadot_right = wheel_rates[0];
+    const trailer2_real_t thetadot_left = wheel_rates[1];
+    const trailer2_real_t _t39 = _t37*thetadot_right + _t38*thetadot_left;
+    const trailer2_real_t _t40 = _t39*_t39;
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t42 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t43 = _t41*thetadot_right + _t42*thetadot_left;
+    const trailer2_real_t _t44 = _t21*_t43 + _t26*_t39;
+    const trailer2_real_t _t45 = _t44*_t44;
+    const trailer2_real_t _t46 = _t33*_t45;
+    const trailer2_real_t _t47 = _t13*_t43 + _t16*_t39;
+    const trailer2_real_t _t48 = _t47*_t47;
+    const trailer2_real_t _t49 = _t36*_t45;
+    const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t11;
+    const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer2_real_t _t52 = K_theta_cart_x_tractor*_t10;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t53 = K_theta_cart_x_tractor_2*_t4;
+    const trailer2_real_t _t54 = _t35*_t45;
+    const trailer2_real_t _t55 = _t34*_t48;
+    const trailer2_real_t _t56 = _t35*_t48;
+    const trailer2_real_t _t57 = TRAILER2_LIT(1.6666666666666667)*_t3;
+    const trailer2_real_t _t58 = _t12*_t57;
+    const trailer2_real_t _t59 = -TRAILER2_LIT(1.6666666666666667)*_t10;
+    const trailer2_real_t _t60 = _t12*_t59;
+    const trailer2_real_t _t61 = TRAILER2_LIT(0.2)*_t57;
+    const trailer2_real_t _t62 = TRAILER2_LIT(0.2)*_t59;
+    const trailer2_real_t _t63 = -_t58 - _t7;
+    const trailer2_real_t _t64 = -TRAILER2_LIT(1.6666666666666667)*_t63;
+    const trailer2_real_t _t65 = TRAILER2_LIT(0.2)*_t64;
+    const trailer2_real_t _t66 = _t23*_t57;
+    const trailer2_real_t _t67 = -_t6 + _t66;
+    const trailer2_real_t _t68 = _t11 - _t60;
+    const trailer2_real_t _t69 = -TRAILER2_LIT(1.6666666666666667)*_t68;
+    const trailer2_real_t _t70 = TRAILER2_LIT(0.2)*_t69;
+    const trailer2_real_t _t71 = _t23*_t59;
+    const trailer2_real_t _t72 = _t71 - _t8;
+    const trailer2_real_t _t73 = _t24 + _t58;
+    const trailer2_real_t _t74 = -TRAILER2_LIT(1.6666666666666667)*_t73;
+    const trailer2_real_t _t75 = TRAILER2_LIT(0.2)*_t74;
+    const trailer2_real_t _t76 = _t28 + _t60;
+    const trailer2_real_t _t77 = -TRAILER2_LIT(1.6666666666666667)*_t76;
+    const trailer2_real_t _t78 = TRAILER2_LIT(0.2)*_t77;
+    const trailer2_real_t _t79 = -TRAILER2_LIT(1.6666666666666667)*_t25;
+    const trailer2_real_t _t80 = TRAILER2_LIT(0.2)*_t79;
+    const trailer2_real_t _t81 = TRAILER2_LIT(1.6666666666666667)*_t29;
+    const trailer2_real_t _t82 = TRAILER2_LIT(0.2)*_t81;
+    const trailer2_real_t _t83 = _t39*_t43;
+    const trailer2_real_t _t84 = _t43*_t47;
+    const trailer2_real_t _t85 = _t39*_t47;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t _t86 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t87 = -_t65 - _t67;
+    const trailer2_real_t _t88 = _t86*_t87;
+    const trailer2_real_t _t89 = -_t70 - _t72;
+    const trailer2_real_t _t90 = _t86*_t89;
+    const trailer2_real_t _t91 = -_t14 + _t66 - _t75;
+    const trailer2_real_t _t92 = _t86*_t91;
+    const trailer2_real_t _t93 = -_t17 + _t71 - _t78;
+    const trailer2_real_t _t94 = _t86*_t93;
+    const trailer2_real_t _t95 = _t15 - _t80;
+    const trailer2_real_t _t96 = _t86*_t95;
+    const trailer2_real_t _t97 = _t18 - _t82;
+    const trailer2_real_t _t98 = _t86*_t97;
+    const trailer2_real_t _t99 = _t43*_t44;
+    const trailer2_real_t _t100 = _t39*_t44;
+    const trailer2_real_t _t101 = _t100*_t98 + _t40*_t90 + _t83*_t88 + _t84*_t92 + _t85*_t94
+            + _t96*_t99;
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t _t102 = J_theta_cart2_left*_t101;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t103 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t104 = _t65 - _t67;
+    const trailer2_real_t _t105 = _t103*_t104;
+    const trailer2_real_t _t106 = _t70 - _t72;
+    const trailer2_real_t _t107 = _t103*_t106;
+    const trailer2_real_t _t108 = -_t14 + _t66 + _t75;
+    const trailer2_real_t _t109 = _t103*_t108;
+    const trailer2_real_t _t110 = -_t17 + _t71 + _t78;
+    const trailer2_real_t _t111 = _t103*_t110;
+    const trailer2_real_t _t112 = _t15 + _t80;
+    const trailer2_real_t _t113 = _t103*_t112;
+    const trailer2_real_t _t114 = _t18 + _t82;
+    const trailer2_real_t _t115 = _t103*_t114;
+    const trailer2_real_t _t116 = _t100*_t115 + _t105*_t83 + _t107*_t40 + _t109*_t84 + _t111*_t85
+            + _t113*_t99;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t _t117 = J_theta_cart2_right*_t116;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t _t118 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t119 = _t2 - _t61;
+    const trailer2_real_t _t120 = _t118*_t119;
+    const trailer2_real_t _t121 = _t4 - _t62;
+    const trailer2_real_t _t122 = _t118*_t121;
+    const trailer2_real_t _t123 = _t83 - _t84;
+    const trailer2_real_t _t124 = _t40 - _t85;
+    const trailer2_real_t _t125 = _t120*_t123 + _t122*_t124;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t126 = J_theta_cart_left*_t125;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t127 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t128 = _t2 + _t61;
+    const trailer2_real_t _t129 = _t127*_t128;
+    const trailer2_real_t _t130 = _t4 + _t62;
+    const trailer2_real_t _t131 = _t127*_t130;
+    const trailer2_real_t _t132 = _t123*_t129 + _t124*_t131;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t _t133 = J_theta_cart_right*_t132;
+    const trailer2_real_t _t134 = K_theta_cart_x_tractor_2*_t2 - _t32;
+    const trailer2_real_t _t135 = _t30*_t34 + _t31*_t34 + _t33*_t35 - _t35*_t36;
+    const trailer2_real_t _t136 = -_t30*_t54 - _t31*_t54 + _t34*_t46 - _t34*_t49 + _t40*_t52
+            + _t40*_t53;
+    const trailer2_real_t _t137 = _t123*_t57 + _t124*_t59;
+    const trailer2_real_t _t138 = _t100*_t81 + _t40*_t69 + _t64*_t83 + _t74*_t84 + _t77*_t85
+            + _t79*_t99;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t139 = J_theta_cart*_t137 + _t134*_t83 + _t135*_t138 + _t136;
+    const trailer2_real_t _t140 = K_theta_cart2_x_tractor_2*_t6 - _t33;
+    const trailer2_real_t _t141 = _t30*_t56 + _t31*_t56 - _t33*_t55 + _t36*_t55 + _t40*_t50
+            + _t40*_t51;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t142 = J_theta_cart2*_t138 + _t135*_t137 + _t140*_t83 + _t141;
+    const trailer2_real_t _t143 = _t19 + _t3;
+    const trailer2_real_t _t144 = -_t10 + _t20;
+    const trailer2_real_t _t145 = _t127*_t143;
+    const trailer2_real_t _t146 = _t127*_t144;
+    const trailer2_real_t _t147 = -_t19 + _t3;
+    const trailer2_real_t _t148 = -_t10 - _t20;
+    const trailer2_real_t _t149 = _t118*_t147;
+    const trailer2_real_t _t150 = _t118*_t148;
+    const trailer2_real_t _t151 = _t22 + _t25;
+    const trailer2_real_t _t152 = _t27 - _t29;
+    const trailer2_real_t _t153 = _t103*_t151;
+    const trailer2_real_t _t154 = _t103*_t152;
+    const trailer2_real_t _t155 = -_t22 - _t24 + _t7;
+    const trailer2_real_t _t156 = -_t27 - _t29;
+    const trailer2_real_t _t157 = _t155*_t86;
+    const trailer2_real_t _t158 = _t156*_t86;
+    const trailer2_real_t _t159 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t160 = _t30 + _t31;
+    const trailer2_real_t _t161 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10;
+    const trailer2_real_t _t162 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11;
+    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer2_real_t _t163 = -K_theta_cart_x_tractor_2*_t2*_t48
+            + K_theta_tractor_x_tractor*_t40 + _t32*_t48 + _t46 - _t49;
+    const trailer2_real_t _t164 = -_t45*_t50 - _t45*_t51 - _t48*_t52 - _t48*_t53;
+    const trailer2_real_t _t165 = _t102*_t157 + _t117*_t153 + _t126*_t149 + _t13*_t139 + _t133*_t145
+            + _t137*_t159 + _t138*_t160 + _t142*_t21 + _t163;
+    const trailer2_real_t _t166 = -K_theta_tractor_x_tractor*_t83 + _t102*_t158 + _t117*_t154
+            + _t126*_t150 + _t133*_t146 + _t137*_t161 + _t138*_t162 + _t139*_t16 + _t142*_t26
+            + _t164;
+    shared_quantities[0] = _t37;
+    shared_quantities[1] = _t38;
+    shared_quantities[2] = _t127;
+    shared_quantities[3] = _t118;
+    shared_quantities[4] = _t103;
+    shared_quantities[5] = _t86;
+    shared_quantities[6] = -_t2;
+    shared_quantities[7] = _t3;
+    shared_quantities[8] = -_t4;
+    shared_quantities[9] = -_t6;
+    shared_quantities[10] = _t7;
+    shared_quantities[11] = -_t8;
+    shared_quantities[12] = _t12;
+    shared_quantities[13] = _t10;
+    shared_quantities[14] = _t11;
+    shared_quantities[15] = _t23;
+    shared_quantities[16] = _t41;
+    shared_quantities[17] = _t42;
+    shared_quantities[18] = _t13;
+    shared_quantities[19] = _t16;
+    shared_quantities[20] = -_t15;
+    shared_quantities[21] = -_t18;
+    shared_quantities[22] = _t21;
+    shared_quantities[23] = _t26;
+    shared_quantities[24] = _t143;
+    shared_quantities[25] = _t144;
+    shared_quantities[26] = _t145;
+    shared_quantities[27] = _t146;
+    shared_quantities[28] = _t147;
+    shared_quantities[29] = _t148;
+    shared_quantities[30] = _t149;
+    shared_quantities[31] = _t150;
+    shared_quantities[32] = _t151;
+    shared_quantities[33] = _t152;
+    shared_quantities[34] = _t153;
+    shared_quantities[35] = _t154;
+    shared_quantities[36] = _t155;
+    shared_quantities[37] = _t156;
+    shared_quantities[38] = _t157;
+    shared_quantities[39] = _t158;
+    shared_quantities[40] = _t43;
+    shared_quantities[41] = _t39;
+    shared_quantities[42] = _t47;
+    shared_quantities[43] = _t44;
+    shared_quantities[44] = _t159;
+    shared_quantities[45] = _t160;
+    shared_quantities[46] = _t134;
+    shared_quantities[47] = _t140;
+    shared_quantities[48] = _t161;
+    shared_quantities[49] = _t162;
+    shared_quantities[50] = _t135;
+    shared_quantities[51] = _t163;
+    shared_quantities[52] = _t164;
+    shared_quantities[53] = _t136;
+    shared_quantities[54] = _t141;
+    shared_quantities[55] = _t57;
+    shared_quantities[56] = _t59;
+    shared_quantities[57] = _t63;
+    shared_quantities[58] = _t64;
+    shared_quantities[59] = _t68;
+    shared_quantities[60] = _t69;
+    shared_quantities[61] = _t73;
+    shared_quantities[62] = _t74;
+    shared_quantities[63] = _t76;
+    shared_quantities[64] = _t77;
+    shared_quantities[65] = _t25;
+    shared_quantities[66] = _t79;
+    shared_quantities[67] = -_t29;
+    shared_quantities[68] = _t81;
+    shared_quantities[69] = _t128;
+    shared_quantities[70] = _t129;
+    shared_quantities[71] = _t130;
+    shared_quantities[72] = _t131;
+    shared_quantities[73] = _t119;
+    shared_quantities[74] = _t120;
+    shared_quantities[75] = _t121;
+    shared_quantities[76] = _t122;
+    shared_quantities[77] = _t104;
+    shared_quantities[78] = _t105;
+    shared_quantities[79] = _t106;
+    shared_quantities[80] = _t107;
+    shared_quantities[81] = _t108;
+    shared_quantities[82] = _t109;
+    shared_quantities[83] = _t110;
+    shared_quantities[84] = _t111;
+    shared_quantities[85] = _t112;
+    shared_quantities[86] = _t113;
+    shared_quantities[87] = _t114;
+    shared_quantities[88] = _t115;
+    shared_quantities[89] = _t87;
+    shared_quantities[90] = _t88;
+    shared_quantities[91] = _t89;
+    shared_quantities[92] = _t90;
+    shared_quantities[93] = _t91;
+    shared_quantities[94] = _t92;
+    shared_quantities[95] = _t93;
+    shared_quantities[96] = _t94;
+    shared_quantities[97] = _t95;
+    shared_quantities[98] = _t96;
+    shared_quantities[99] = _t97;
+    shared_quantities[100] = _t98;
+    shared_quantities[101] = _t123;
+    shared_quantities[102] = _t124;
+    shared_quantities[103] = _t137;
+    shared_quantities[104] = _t83;
+    shared_quantities[105] = _t40;
+    shared_quantities[106] = _t84;
+    shared_quantities[107] = _t85;
+    shared_quantities[108] = _t99;
+    shared_quantities[109] = _t100;
+    shared_quantities[110] = _t138;
+    shared_quantities[111] = _t132;
+    shared_quantities[112] = _t125;
+    shared_quantities[113] = _t116;
+    shared_quantities[114] = _t101;
+    shared_quantities[115] = _t165;
+    shared_quantities[116] = _t166;
+}
+
 /* trailer2_forward_dynamics: documented in trailer2_model.h.
    operations after CSE: 177 add, 255 mul, 7 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *tau, trailer2_real_t *qddot)
 {
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t radius_right = p->radius_right;
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t theta_cart = q[3];
     const trailer2_real_t theta_cart2 = q[4];
@@ -40,329 +342,18 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
     const trailer2_real_t thetadot_left = qdot[6];
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    if (((trailer2_exp_carry(J_theta_cart) | trailer2_exp_carry(J_theta_cart2)
-            | trailer2_exp_carry(J_theta_cart2_left) | trailer2_exp_carry(J_theta_cart2_right)
-            | trailer2_exp_carry(J_theta_cart_left) | trailer2_exp_carry(J_theta_cart_right)
-            | trailer2_exp_carry(J_theta_left) | trailer2_exp_carry(J_theta_right)
-            | trailer2_exp_carry(J_theta_tractor) | trailer2_exp_carry(J_x_tractor)
-            | trailer2_exp_carry(K_theta_cart_x_tractor)
-            | trailer2_exp_carry(K_theta_cart_x_tractor_2)
-            | trailer2_exp_carry(K_theta_cart2_x_tractor)
-            | trailer2_exp_carry(K_theta_cart2_x_tractor_2)
-            | trailer2_exp_carry(K_theta_tractor_x_tractor)
-            | trailer2_exp_carry(K_theta_tractor_x_tractor_2)
-            | trailer2_exp_carry(radius_cart2_left) | trailer2_exp_carry(radius_cart2_right)
-            | trailer2_exp_carry(radius_cart_left) | trailer2_exp_carry(radius_cart_right)
-            | trailer2_exp_carry(radius_left) | trailer2_exp_carry(radius_right)
-            | trailer2_exp_carry(theta_tractor) | trailer2_exp_carry(theta_cart)
+    if (((trailer2_exp_carry(theta_tractor) | trailer2_exp_carry(theta_cart)
             | trailer2_exp_carry(theta_cart2) | trailer2_exp_carry(thetadot_right)
             | trailer2_exp_carry(thetadot_left) | trailer2_exp_carry(tau_right)
             | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t1 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t2 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t3 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t4 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t6 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t7 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t8 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t9 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t10 = J_theta_right*_t8;
-    const trailer2_real_t _t11 = J_theta_left*_t9;
-    const trailer2_real_t _t12 = _t10*_t8 + _t11*_t9;
-    const trailer2_real_t _t13 = TRAILER2_LIT(0.207)*_t8;
-    const trailer2_real_t _t14 = J_theta_right*_t13;
-    const trailer2_real_t _t15 = -TRAILER2_LIT(0.207)*_t9;
-    const trailer2_real_t _t16 = J_theta_left*_t15;
-    const trailer2_real_t _t17 = _t14*_t8 + _t16*_t9;
-    const trailer2_real_t _t18 = _t13*_t14 + _t15*_t16;
-    if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
+    trailer2_model_prepared_t prepared;
+    const trailer2_status_t prepare_status = trailer2_model_prepare(p, &prepared);
+    if (prepare_status != TRAILER2_OK) {
+        return prepare_status;
     }
-    if (!(radius_cart2_right > TRAILER2_LIT(0.0))) { /* radius_cart2_right > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart_left > TRAILER2_LIT(0.0))) { /* radius_cart_left > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart_right > TRAILER2_LIT(0.0))) { /* radius_cart_right > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(radius_left > TRAILER2_LIT(0.0))) { /* radius_left > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(radius_right > TRAILER2_LIT(0.0))) { /* radius_right > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart > TRAILER2_LIT(0.0))) { /* J_theta_cart > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2 > TRAILER2_LIT(0.0))) { /* J_theta_cart2 > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2_left > TRAILER2_LIT(0.0))) { /* J_theta_cart2_left > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2_right > TRAILER2_LIT(0.0))) { /* J_theta_cart2_right > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_left > TRAILER2_LIT(0.0))) { /* J_theta_cart_left > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_right > TRAILER2_LIT(0.0))) { /* J_theta_cart_right > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_left > TRAILER2_LIT(0.0))) { /* J_theta_left > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_right > TRAILER2_LIT(0.0))) { /* J_theta_right > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_tractor > TRAILER2_LIT(0.0))) { /* J_theta_tractor > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    const trailer2_real_t _t19 = -theta_tractor;
-    const trailer2_real_t _t20 = _t19 + theta_cart;
-    const trailer2_real_t _t21 = TRAILER2_SIN(_t20);
-    const trailer2_real_t _t22 = TRAILER2_COS(_t20);
-    const trailer2_real_t _t23 = TRAILER2_LIT(0.3)*_t22;
-    const trailer2_real_t _t24 = _t19 + theta_cart2;
-    const trailer2_real_t _t25 = TRAILER2_SIN(_t24);
-    const trailer2_real_t _t26 = TRAILER2_COS(_t24);
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.3)*_t26;
-    const trailer2_real_t _t28 = TRAILER2_LIT(0.85)*_t26;
-    const trailer2_real_t _t29 = TRAILER2_LIT(0.3)*_t21;
-    const trailer2_real_t _t30 = TRAILER2_LIT(0.3)*_t25;
-    const trailer2_real_t _t31 = -TRAILER2_LIT(0.85)*_t21*_t25 - _t22*_t28;
-    const trailer2_real_t _t32 = -TRAILER2_LIT(1.6666666666666667)*_t21;
-    const trailer2_real_t _t33 = _t31*_t32;
-    const trailer2_real_t _t34 = -_t25 + _t33;
-    const trailer2_real_t _t35 = -TRAILER2_LIT(1.6666666666666667)*_t23;
-    const trailer2_real_t _t36 = _t31*_t35;
-    const trailer2_real_t _t37 = -_t27 + _t36;
-    const trailer2_real_t _t38 = TRAILER2_LIT(0.2)*_t32;
-    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t35;
-    const trailer2_real_t _t40 = TRAILER2_LIT(1.6666666666666667)*_t34;
-    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*_t40;
-    const trailer2_real_t _t42 = -_t21*_t28 + TRAILER2_LIT(0.85)*_t22*_t25;
-    const trailer2_real_t _t43 = _t32*_t42;
-    const trailer2_real_t _t44 = _t26 - _t43;
-    const trailer2_real_t _t45 = TRAILER2_LIT(1.6666666666666667)*_t37;
-    const trailer2_real_t _t46 = TRAILER2_LIT(0.2)*_t45;
-    const trailer2_real_t _t47 = _t35*_t42;
-    const trailer2_real_t _t48 = _t30 + _t47;
-    const trailer2_real_t _t49 = K_theta_cart2_x_tractor*_t25;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor_2*_t26;
-    const trailer2_real_t _t51 = K_theta_cart_x_tractor*_t22;
-    const trailer2_real_t _t52 = K_theta_cart2_x_tractor*_t26;
-    const trailer2_real_t _t53 = TRAILER2_LIT(0.85)*_t21;
-    const trailer2_real_t _t54 = TRAILER2_LIT(0.85)*_t22;
-    const trailer2_real_t _t55 = K_theta_cart2_x_tractor_2*_t25;
-    const trailer2_real_t _t56 = _t0*thetadot_right + _t1*thetadot_left;
-    const trailer2_real_t _t57 = _t56*_t56;
-    const trailer2_real_t _t58 = _t2*thetadot_right + _t3*thetadot_left;
-    const trailer2_real_t _t59 = _t40*_t58 + _t45*_t56;
-    const trailer2_real_t _t60 = _t59*_t59;
-    const trailer2_real_t _t61 = _t52*_t60;
-    const trailer2_real_t _t62 = _t32*_t58 + _t35*_t56;
-    const trailer2_real_t _t63 = _t62*_t62;
-    const trailer2_real_t _t64 = _t55*_t60;
-    const trailer2_real_t _t65 = K_theta_cart2_x_tractor*_t30;
-    const trailer2_real_t _t66 = K_theta_cart2_x_tractor_2*_t27;
-    const trailer2_real_t _t67 = K_theta_cart_x_tractor*_t29;
-    const trailer2_real_t _t68 = K_theta_cart_x_tractor_2*_t23;
-    const trailer2_real_t _t69 = _t54*_t60;
-    const trailer2_real_t _t70 = _t53*_t63;
-    const trailer2_real_t _t71 = _t54*_t63;
-    const trailer2_real_t _t72 = TRAILER2_LIT(1.6666666666666667)*_t22;
-    const trailer2_real_t _t73 = _t31*_t72;
-    const trailer2_real_t _t74 = -TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t75 = _t31*_t74;
-    const trailer2_real_t _t76 = TRAILER2_LIT(0.2)*_t72;
-    const trailer2_real_t _t77 = TRAILER2_LIT(0.2)*_t74;
-    const trailer2_real_t _t78 = -_t26 - _t73;
-    const trailer2_real_t _t79 = -TRAILER2_LIT(1.6666666666666667)*_t78;
-    const trailer2_real_t _t80 = TRAILER2_LIT(0.2)*_t79;
-    const trailer2_real_t _t81 = _t42*_t72;
-    const trailer2_real_t _t82 = -_t25 + _t81;
-    const trailer2_real_t _t83 = _t30 - _t75;
-    const trailer2_real_t _t84 = -TRAILER2_LIT(1.6666666666666667)*_t83;
-    const trailer2_real_t _t85 = TRAILER2_LIT(0.2)*_t84;
-    const trailer2_real_t _t86 = _t42*_t74;
-    const trailer2_real_t _t87 = -_t27 + _t86;
-    const trailer2_real_t _t88 = _t43 + _t73;
-    const trailer2_real_t _t89 = -TRAILER2_LIT(1.6666666666666667)*_t88;
-    const trailer2_real_t _t90 = TRAILER2_LIT(0.2)*_t89;
-    const trailer2_real_t _t91 = _t47 + _t75;
-    const trailer2_real_t _t92 = -TRAILER2_LIT(1.6666666666666667)*_t91;
-    const trailer2_real_t _t93 = TRAILER2_LIT(0.2)*_t92;
-    const trailer2_real_t _t94 = -TRAILER2_LIT(1.6666666666666667)*_t44;
-    const trailer2_real_t _t95 = TRAILER2_LIT(0.2)*_t94;
-    const trailer2_real_t _t96 = TRAILER2_LIT(1.6666666666666667)*_t48;
-    const trailer2_real_t _t97 = TRAILER2_LIT(0.2)*_t96;
-    const trailer2_real_t _t98 = _t56*_t58;
-    const trailer2_real_t _t99 = _t58*_t62;
-    const trailer2_real_t _t100 = _t56*_t62;
-    const trailer2_real_t _t101 = _t22 + _t38;
-    const trailer2_real_t _t102 = _t101*_t4;
-    const trailer2_real_t _t103 = J_theta_cart_right*_t102;
-    const trailer2_real_t _t104 = -_t29 + _t39;
-    const trailer2_real_t _t105 = _t104*_t4;
-    const trailer2_real_t _t106 = J_theta_cart_right*_t105;
-    const trailer2_real_t _t107 = _t22 - _t38;
-    const trailer2_real_t _t108 = _t107*_t5;
-    const trailer2_real_t _t109 = J_theta_cart_left*_t108;
-    const trailer2_real_t _t110 = -_t29 - _t39;
-    const trailer2_real_t _t111 = _t110*_t5;
-    const trailer2_real_t _t112 = J_theta_cart_left*_t111;
-    const trailer2_real_t _t113 = _t41 + _t44;
-    const trailer2_real_t _t114 = _t113*_t6;
-    const trailer2_real_t _t115 = J_theta_cart2_right*_t114;
-    const trailer2_real_t _t116 = _t46 - _t48;
-    const trailer2_real_t _t117 = _t116*_t6;
-    const trailer2_real_t _t118 = J_theta_cart2_right*_t117;
-    const trailer2_real_t _t119 = _t26 - _t41 - _t43;
-    const trailer2_real_t _t120 = _t119*_t7;
-    const trailer2_real_t _t121 = J_theta_cart2_left*_t120;
-    const trailer2_real_t _t122 = -_t46 - _t48;
-    const trailer2_real_t _t123 = _t122*_t7;
-    const trailer2_real_t _t124 = J_theta_cart2_left*_t123;
-    const trailer2_real_t _t125 = K_theta_cart_x_tractor_2*_t21 - _t51;
-    const trailer2_real_t _t126 = _t53*(_t49 + _t50) + _t54*(_t52 - _t55);
-    const trailer2_real_t _t127 = _t53*(_t61 - _t64) + _t57*(_t67 + _t68) + _t69*(-_t49 - _t50);
-    const trailer2_real_t _t128 = _t98 - _t99;
-    const trailer2_real_t _t129 = -_t100 + _t57;
-    const trailer2_real_t _t130 = _t128*_t72 + _t129*_t74;
-    const trailer2_real_t _t131 = _t58*_t59;
-    const trailer2_real_t _t132 = _t56*_t59;
-    const trailer2_real_t _t133 = _t100*_t92 + _t131*_t94 + _t132*_t96 + _t57*_t84 + _t79*_t98
-            + _t89*_t99;
-    const trailer2_real_t _t134 = J_theta_cart*_t130 + _t125*_t98 + _t126*_t133 + _t127;
-    const trailer2_real_t _t135 = K_theta_cart2_x_tractor_2*_t25 - _t52;
-    const trailer2_real_t _t136 = _t57*(_t65 + _t66) + _t70*(-_t52 + _t55) + _t71*(_t49 + _t50);
-    const trailer2_real_t _t137 = J_theta_cart2*_t133 + _t126*_t130 + _t135*_t98 + _t136;
-    const trailer2_real_t _t138 = K_theta_cart_x_tractor*_t21 + K_theta_cart_x_tractor_2*_t22;
-    const trailer2_real_t _t139 = _t49 + _t50;
-    const trailer2_real_t _t140 = J_x_tractor + _t138*_t32 + _t139*_t40;
-    const trailer2_real_t _t141 = J_theta_cart*_t32 + _t126*_t40 + _t138;
-    const trailer2_real_t _t142 = J_theta_cart2*_t40 + _t126*_t32 + _t139;
-    const trailer2_real_t _t143 = _t102*_t103 + _t108*_t109 + _t114*_t115 + _t12 + _t120*_t121
-            + _t140 + _t141*_t32 + _t142*_t40;
-    const trailer2_real_t _t144 = K_theta_tractor_x_tractor_2 + _t138*_t35 + _t139*_t45;
-    const trailer2_real_t _t145 = K_theta_cart_x_tractor*_t23 - K_theta_cart_x_tractor_2*_t29;
-    const trailer2_real_t _t146 = J_theta_cart*_t35 + _t126*_t45 + _t145;
-    const trailer2_real_t _t147 = K_theta_cart2_x_tractor*_t27 - K_theta_cart2_x_tractor_2*_t30;
-    const trailer2_real_t _t148 = J_theta_cart2*_t45 + _t126*_t35 + _t147;
-    const trailer2_real_t _t149 = _t102*_t106 + _t108*_t112 + _t114*_t118 + _t120*_t124 + _t144
-            + _t146*_t32 + _t148*_t40 + _t17;
-    const trailer2_real_t _t150 = J_theta_tractor + _t145*_t35 + _t147*_t45;
-    const trailer2_real_t _t151 = _t105*_t106 + _t111*_t112 + _t117*_t118 + _t123*_t124 + _t146*_t35
-            + _t148*_t45 + _t150 + _t18;
-    const trailer2_real_t _t152 = _t143*_t151 - _t149*_t149;
-    const trailer2_real_t _t153 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t154 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t155 = K_theta_tractor_x_tractor*_t57 + _t61
-            + _t63*(-K_theta_cart_x_tractor_2*_t21 + _t51) - _t64;
-    const trailer2_real_t _t156 = _t60*(-_t65 - _t66) + _t63*(-_t67 - _t68);
-    const trailer2_real_t _t157 = _t21 + _t76;
-    const trailer2_real_t _t158 = _t157*_t4;
-    const trailer2_real_t _t159 = _t23 + _t77;
-    const trailer2_real_t _t160 = _t159*_t4;
-    const trailer2_real_t _t161 = _t21 - _t76;
-    const trailer2_real_t _t162 = _t161*_t5;
-    const trailer2_real_t _t163 = _t23 - _t77;
-    const trailer2_real_t _t164 = _t163*_t5;
-    const trailer2_real_t _t165 = _t80 - _t82;
-    const trailer2_real_t _t166 = _t165*_t6;
-    const trailer2_real_t _t167 = _t85 - _t87;
-    const trailer2_real_t _t168 = _t167*_t6;
-    const trailer2_real_t _t169 = -_t33 + _t81 + _t90;
-    const trailer2_real_t _t170 = _t169*_t6;
-    const trailer2_real_t _t171 = -_t36 + _t86 + _t93;
-    const trailer2_real_t _t172 = _t171*_t6;
-    const trailer2_real_t _t173 = _t34 + _t95;
-    const trailer2_real_t _t174 = _t173*_t6;
-    const trailer2_real_t _t175 = _t37 + _t97;
-    const trailer2_real_t _t176 = _t175*_t6;
-    const trailer2_real_t _t177 = -_t80 - _t82;
-    const trailer2_real_t _t178 = _t177*_t7;
-    const trailer2_real_t _t179 = -_t85 - _t87;
-    const trailer2_real_t _t180 = _t179*_t7;
-    const trailer2_real_t _t181 = -_t33 + _t81 - _t90;
-    const trailer2_real_t _t182 = _t181*_t7;
-    const trailer2_real_t _t183 = -_t36 + _t86 - _t93;
-    const trailer2_real_t _t184 = _t183*_t7;
-    const trailer2_real_t _t185 = _t34 - _t95;
-    const trailer2_real_t _t186 = _t185*_t7;
-    const trailer2_real_t _t187 = _t37 - _t97;
-    const trailer2_real_t _t188 = _t187*_t7;
-    const trailer2_real_t _t189 = _t128*_t158 + _t129*_t160;
-    const trailer2_real_t _t190 = _t128*_t162 + _t129*_t164;
-    const trailer2_real_t _t191 = _t100*_t172 + _t131*_t174 + _t132*_t176 + _t166*_t98 + _t168*_t57
-            + _t170*_t99;
-    const trailer2_real_t _t192 = _t100*_t184 + _t131*_t186 + _t132*_t188 + _t178*_t98 + _t180*_t57
-            + _t182*_t99;
-    const trailer2_real_t _t193 = _t103*_t189 + _t109*_t190 + _t115*_t191 + _t121*_t192
-            + _t130*_t138 + _t133*_t139 + _t134*_t32 + _t137*_t40 + _t155;
-    const trailer2_real_t _t194 = -K_theta_tractor_x_tractor*_t98 + _t106*_t189 + _t112*_t190
-            + _t118*_t191 + _t124*_t192 + _t130*_t145 + _t133*_t147 + _t134*_t35 + _t137*_t45
-            + _t156;
-    const trailer2_real_t _t195 = -_t193 + _t8*tau_right + _t9*tau_left;
-    const trailer2_real_t _t196 = _t13*tau_right + _t15*tau_left - _t194;
-    const trailer2_real_t _t197 = TRAILER2_LIT(1.0)/_t152;
-    const trailer2_real_t _t198 = _t197*(-_t149*_t196 + _t151*_t195);
-    const trailer2_real_t _t199 = _t197*(_t143*_t196 - _t149*_t195);
-    const trailer2_real_t _t200 = _t130 + _t198*_t32 + _t199*_t35;
-    const trailer2_real_t _t201 = _t133 + _t198*_t40 + _t199*_t45;
-    const trailer2_real_t _t202 = _t13*_t199 + _t198*_t8;
-    const trailer2_real_t _t203 = _t15*_t199 + _t198*_t9;
-    const trailer2_real_t _t204 = _t102*_t198 + _t105*_t199 + _t189;
-    const trailer2_real_t _t205 = _t108*_t198 + _t111*_t199 + _t190;
-    const trailer2_real_t _t206 = _t114*_t198 + _t117*_t199 + _t191;
-    const trailer2_real_t _t207 = _t120*_t198 + _t123*_t199 + _t192;
-    const trailer2_real_t _t208 = -_t153*_t98 + _t154*_t198;
-    const trailer2_real_t _t209 = _t153*_t198 + _t154*_t98;
-    if (!(_t143 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    if (!(_t152 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
-        return TRAILER2_ERR_BAD_PARAMS;
-    }
-    const trailer2_real_t r_0 = _t208;
-    const trailer2_real_t r_1 = _t209;
-    const trailer2_real_t r_2 = _t199;
-    const trailer2_real_t r_3 = _t200;
-    const trailer2_real_t r_4 = _t201;
-    const trailer2_real_t r_5 = _t202;
-    const trailer2_real_t r_6 = _t203;
-    const trailer2_real_t r_7 = _t204;
-    const trailer2_real_t r_8 = _t205;
-    const trailer2_real_t r_9 = _t206;
-    const trailer2_real_t r_10 = _t207;
-    if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
-            | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4) | trailer2_exp_carry(r_5)
-            | trailer2_exp_carry(r_6) | trailer2_exp_carry(r_7) | trailer2_exp_carry(r_8)
-            | trailer2_exp_carry(r_9) | trailer2_exp_carry(r_10)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
-        return TRAILER2_ERR_NONFINITE_OUTPUT;
-    }
-    qddot[0] = r_0;
-    qddot[1] = r_1;
-    qddot[2] = r_2;
-    qddot[3] = r_3;
-    qddot[4] = r_4;
-    qddot[5] = r_5;
-    qddot[6] = r_6;
-    qddot[7] = r_7;
-    qddot[8] = r_8;
-    qddot[9] = r_9;
-    qddot[10] = r_10;
-    return TRAILER2_OK;
+    return trailer2_forward_dynamics_prepared(&prepared, q, qdot, tau, qddot);
 }
 
 /* trailer2_model_prepare: documented in trailer2_model.h.
@@ -1025,212 +1016,22 @@ void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_rea
 void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *H)
 {
-    const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t0 = -theta_tractor;
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t1 = _t0 + theta_cart;
-    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
-    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
-    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t5 = _t0 + theta_cart2;
-    const trailer2_real_t _t6 = TRAILER2_SIN(_t5);
-    const trailer2_real_t _t7 = TRAILER2_COS(_t5);
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t7;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t6;
-    const trailer2_real_t _t12 = -TRAILER2_LIT(0.85)*_t2*_t6 - _t3*_t9;
-    const trailer2_real_t _t13 = -TRAILER2_LIT(1.6666666666666667)*_t2;
-    const trailer2_real_t _t14 = _t12*_t13;
-    const trailer2_real_t _t15 = _t14 - _t6;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
-    const trailer2_real_t _t17 = _t12*_t16;
-    const trailer2_real_t _t18 = _t17 - _t8;
-    const trailer2_real_t _t19 = TRAILER2_LIT(0.2)*_t13;
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.2)*_t16;
-    const trailer2_real_t _t21 = TRAILER2_LIT(1.6666666666666667)*_t15;
-    const trailer2_real_t _t22 = TRAILER2_LIT(0.2)*_t21;
-    const trailer2_real_t _t23 = -_t2*_t9 + TRAILER2_LIT(0.85)*_t3*_t6;
-    const trailer2_real_t _t24 = _t13*_t23;
-    const trailer2_real_t _t25 = -_t24 + _t7;
-    const trailer2_real_t _t26 = TRAILER2_LIT(1.6666666666666667)*_t18;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*_t26;
-    const trailer2_real_t _t28 = _t16*_t23;
-    const trailer2_real_t _t29 = _t11 + _t28;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t30 = K_theta_cart2_x_tractor*_t6;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t31 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t _t32 = K_theta_cart_x_tractor*_t3;
-    const trailer2_real_t _t33 = K_theta_cart2_x_tractor*_t7;
-    const trailer2_real_t _t34 = TRAILER2_LIT(0.85)*_t2;
-    const trailer2_real_t _t35 = TRAILER2_LIT(0.85)*_t3;
-    const trailer2_real_t _t36 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t thetadot_right = wheel_rates[0];
-    const trailer2_real_t thetadot_left = wheel_rates[1];
-    const trailer2_real_t _t39 = _t37*thetadot_right + _t38*thetadot_left;
-    const trailer2_real_t _t40 = _t39*_t39;
-    const trailer2_real_t _t41 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t42 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t43 = _t41*thetadot_right + _t42*thetadot_left;
-    const trailer2_real_t _t44 = _t21*_t43 + _t26*_t39;
-    const trailer2_real_t _t45 = _t44*_t44;
-    const trailer2_real_t _t46 = _t33*_t45;
-    const trailer2_real_t _t47 = _t13*_t43 + _t16*_t39;
-    const trailer2_real_t _t48 = _t47*_t47;
-    const trailer2_real_t _t49 = _t36*_t45;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t11;
-    const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer2_real_t _t52 = K_theta_cart_x_tractor*_t10;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t53 = K_theta_cart_x_tractor_2*_t4;
-    const trailer2_real_t _t54 = _t35*_t45;
-    const trailer2_real_t _t55 = _t34*_t48;
-    const trailer2_real_t _t56 = _t35*_t48;
-    const trailer2_real_t _t57 = TRAILER2_LIT(1.6666666666666667)*_t3;
-    const trailer2_real_t _t58 = _t12*_t57;
-    const trailer2_real_t _t59 = -TRAILER2_LIT(1.6666666666666667)*_t10;
-    const trailer2_real_t _t60 = _t12*_t59;
-    const trailer2_real_t _t61 = TRAILER2_LIT(0.2)*_t57;
-    const trailer2_real_t _t62 = TRAILER2_LIT(0.2)*_t59;
-    const trailer2_real_t _t63 = -_t58 - _t7;
-    const trailer2_real_t _t64 = -TRAILER2_LIT(1.6666666666666667)*_t63;
-    const trailer2_real_t _t65 = TRAILER2_LIT(0.2)*_t64;
-    const trailer2_real_t _t66 = _t23*_t57;
-    const trailer2_real_t _t67 = -_t6 + _t66;
-    const trailer2_real_t _t68 = _t11 - _t60;
-    const trailer2_real_t _t69 = -TRAILER2_LIT(1.6666666666666667)*_t68;
-    const trailer2_real_t _t70 = TRAILER2_LIT(0.2)*_t69;
-    const trailer2_real_t _t71 = _t23*_t59;
-    const trailer2_real_t _t72 = _t71 - _t8;
-    const trailer2_real_t _t73 = _t24 + _t58;
-    const trailer2_real_t _t74 = -TRAILER2_LIT(1.6666666666666667)*_t73;
-    const trailer2_real_t _t75 = TRAILER2_LIT(0.2)*_t74;
-    const trailer2_real_t _t76 = _t28 + _t60;
-    const trailer2_real_t _t77 = -TRAILER2_LIT(1.6666666666666667)*_t76;
-    const trailer2_real_t _t78 = TRAILER2_LIT(0.2)*_t77;
-    const trailer2_real_t _t79 = -TRAILER2_LIT(1.6666666666666667)*_t25;
-    const trailer2_real_t _t80 = TRAILER2_LIT(0.2)*_t79;
-    const trailer2_real_t _t81 = TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t82 = TRAILER2_LIT(0.2)*_t81;
-    const trailer2_real_t _t83 = _t39*_t43;
-    const trailer2_real_t _t84 = _t43*_t47;
-    const trailer2_real_t _t85 = _t39*_t47;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t86 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t87 = -_t65 - _t67;
-    const trailer2_real_t _t88 = _t86*_t87;
-    const trailer2_real_t _t89 = -_t70 - _t72;
-    const trailer2_real_t _t90 = _t86*_t89;
-    const trailer2_real_t _t91 = -_t14 + _t66 - _t75;
-    const trailer2_real_t _t92 = _t86*_t91;
-    const trailer2_real_t _t93 = -_t17 + _t71 - _t78;
-    const trailer2_real_t _t94 = _t86*_t93;
-    const trailer2_real_t _t95 = _t15 - _t80;
-    const trailer2_real_t _t96 = _t86*_t95;
-    const trailer2_real_t _t97 = _t18 - _t82;
-    const trailer2_real_t _t98 = _t86*_t97;
-    const trailer2_real_t _t99 = _t43*_t44;
-    const trailer2_real_t _t100 = _t39*_t44;
-    const trailer2_real_t _t101 = _t100*_t98 + _t40*_t90 + _t83*_t88 + _t84*_t92 + _t85*_t94
-            + _t96*_t99;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t102 = J_theta_cart2_left*_t101;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t103 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t104 = _t65 - _t67;
-    const trailer2_real_t _t105 = _t103*_t104;
-    const trailer2_real_t _t106 = _t70 - _t72;
-    const trailer2_real_t _t107 = _t103*_t106;
-    const trailer2_real_t _t108 = -_t14 + _t66 + _t75;
-    const trailer2_real_t _t109 = _t103*_t108;
-    const trailer2_real_t _t110 = -_t17 + _t71 + _t78;
-    const trailer2_real_t _t111 = _t103*_t110;
-    const trailer2_real_t _t112 = _t15 + _t80;
-    const trailer2_real_t _t113 = _t103*_t112;
-    const trailer2_real_t _t114 = _t18 + _t82;
-    const trailer2_real_t _t115 = _t103*_t114;
-    const trailer2_real_t _t116 = _t100*_t115 + _t105*_t83 + _t107*_t40 + _t109*_t84 + _t111*_t85
-            + _t113*_t99;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t117 = J_theta_cart2_right*_t116;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t118 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t119 = _t2 - _t61;
-    const trailer2_real_t _t120 = _t118*_t119;
-    const trailer2_real_t _t121 = _t4 - _t62;
-    const trailer2_real_t _t122 = _t118*_t121;
-    const trailer2_real_t _t123 = _t83 - _t84;
-    const trailer2_real_t _t124 = _t40 - _t85;
-    const trailer2_real_t _t125 = _t120*_t123 + _t122*_t124;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t126 = J_theta_cart_left*_t125;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t127 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t128 = _t2 + _t61;
-    const trailer2_real_t _t129 = _t127*_t128;
-    const trailer2_real_t _t130 = _t4 + _t62;
-    const trailer2_real_t _t131 = _t127*_t130;
-    const trailer2_real_t _t132 = _t123*_t129 + _t124*_t131;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t133 = J_theta_cart_right*_t132;
-    const trailer2_real_t _t134 = K_theta_cart_x_tractor_2*_t2 - _t32;
-    const trailer2_real_t _t135 = _t30*_t34 + _t31*_t34 + _t33*_t35 - _t35*_t36;
-    const trailer2_real_t _t136 = -_t30*_t54 - _t31*_t54 + _t34*_t46 - _t34*_t49 + _t40*_t52
-            + _t40*_t53;
-    const trailer2_real_t _t137 = _t123*_t57 + _t124*_t59;
-    const trailer2_real_t _t138 = _t100*_t81 + _t40*_t69 + _t64*_t83 + _t74*_t84 + _t77*_t85
-            + _t79*_t99;
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t139 = J_theta_cart*_t137 + _t134*_t83 + _t135*_t138 + _t136;
-    const trailer2_real_t _t140 = K_theta_cart2_x_tractor_2*_t6 - _t33;
-    const trailer2_real_t _t141 = _t30*_t56 + _t31*_t56 - _t33*_t55 + _t36*_t55 + _t40*_t50
-            + _t40*_t51;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t142 = J_theta_cart2*_t138 + _t135*_t137 + _t140*_t83 + _t141;
-    const trailer2_real_t _t143 = _t19 + _t3;
-    const trailer2_real_t _t144 = -_t10 + _t20;
-    const trailer2_real_t _t145 = _t127*_t143;
-    const trailer2_real_t _t146 = _t127*_t144;
-    const trailer2_real_t _t147 = -_t19 + _t3;
-    const trailer2_real_t _t148 = -_t10 - _t20;
-    const trailer2_real_t _t149 = _t118*_t147;
-    const trailer2_real_t _t150 = _t118*_t148;
-    const trailer2_real_t _t151 = _t22 + _t25;
-    const trailer2_real_t _t152 = _t27 - _t29;
-    const trailer2_real_t _t153 = _t103*_t151;
-    const trailer2_real_t _t154 = _t103*_t152;
-    const trailer2_real_t _t155 = -_t22 - _t24 + _t7;
-    const trailer2_real_t _t156 = -_t27 - _t29;
-    const trailer2_real_t _t157 = _t155*_t86;
-    const trailer2_real_t _t158 = _t156*_t86;
-    const trailer2_real_t _t159 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t160 = _t30 + _t31;
-    const trailer2_real_t _t161 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10;
-    const trailer2_real_t _t162 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11;
-    const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t _t163 = -K_theta_cart_x_tractor_2*_t2*_t48
-            + K_theta_tractor_x_tractor*_t40 + _t32*_t48 + _t46 - _t49;
-    const trailer2_real_t _t164 = -_t45*_t50 - _t45*_t51 - _t48*_t52 - _t48*_t53;
-    const trailer2_real_t _t165 = _t102*_t157 + _t117*_t153 + _t126*_t149 + _t13*_t139 + _t133*_t145
-            + _t137*_t159 + _t138*_t160 + _t142*_t21 + _t163;
-    const trailer2_real_t _t166 = -K_theta_tractor_x_tractor*_t83 + _t102*_t158 + _t117*_t154
-            + _t126*_t150 + _t133*_t146 + _t137*_t161 + _t138*_t162 + _t139*_t16 + _t142*_t26
-            + _t164;
-    const trailer2_real_t _t167 = _t165*_t41 + _t166*_t37;
-    const trailer2_real_t _t168 = _t165*_t42 + _t166*_t38;
-    H[0] = _t167;
-    H[1] = _t168;
+    trailer2_real_t _shared[117];
+    trailer2_staged_quantities(p, q, wheel_rates, _shared);
+    const trailer2_real_t _ms18 = _shared[0];
+    const trailer2_real_t _ms19 = _shared[1];
+    const trailer2_real_t _ms60 = _shared[16];
+    const trailer2_real_t _ms61 = _shared[17];
+    const trailer2_real_t _ms219 = _shared[115];
+    const trailer2_real_t _ms220 = _shared[116];
+    const trailer2_real_t _t0 = _ms18*_ms220 + _ms219*_ms60;
+    const trailer2_real_t _t1 = _ms19*_ms220 + _ms219*_ms61;
+    H[0] = _t0;
+    H[1] = _t1;
 }
 
 /* trailer2_minimal_forward_dynamics: documented in trailer2_model.h.
-   operations after CSE: 163 add, 250 mul, 7 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 163 add, 254 mul, 7 div, 4 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *wheel_accels)
@@ -1284,214 +1085,74 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
             | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = -theta_tractor;
-    const trailer2_real_t _t1 = _t0 + theta_cart;
-    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
-    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
-    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t _t5 = _t0 + theta_cart2;
-    const trailer2_real_t _t6 = TRAILER2_SIN(_t5);
-    const trailer2_real_t _t7 = TRAILER2_COS(_t5);
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t7;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t6;
-    const trailer2_real_t _t12 = -TRAILER2_LIT(0.85)*_t2*_t6 - _t3*_t9;
-    const trailer2_real_t _t13 = -TRAILER2_LIT(1.6666666666666667)*_t2;
-    const trailer2_real_t _t14 = _t12*_t13;
-    const trailer2_real_t _t15 = _t14 - _t6;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
-    const trailer2_real_t _t17 = _t12*_t16;
-    const trailer2_real_t _t18 = _t17 - _t8;
-    const trailer2_real_t _t19 = TRAILER2_LIT(0.2)*_t13;
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.2)*_t16;
-    const trailer2_real_t _t21 = TRAILER2_LIT(1.6666666666666667)*_t15;
-    const trailer2_real_t _t22 = TRAILER2_LIT(0.2)*_t21;
-    const trailer2_real_t _t23 = -_t2*_t9 + TRAILER2_LIT(0.85)*_t3*_t6;
-    const trailer2_real_t _t24 = _t13*_t23;
-    const trailer2_real_t _t25 = -_t24 + _t7;
-    const trailer2_real_t _t26 = TRAILER2_LIT(1.6666666666666667)*_t18;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*_t26;
-    const trailer2_real_t _t28 = _t16*_t23;
-    const trailer2_real_t _t29 = _t11 + _t28;
-    const trailer2_real_t _t30 = K_theta_cart2_x_tractor*_t6;
-    const trailer2_real_t _t31 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t32 = K_theta_cart_x_tractor*_t3;
-    const trailer2_real_t _t33 = K_theta_cart2_x_tractor*_t7;
-    const trailer2_real_t _t34 = TRAILER2_LIT(0.85)*_t2;
-    const trailer2_real_t _t35 = TRAILER2_LIT(0.85)*_t3;
-    const trailer2_real_t _t36 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t39 = _t37*thetadot_right + _t38*thetadot_left;
-    const trailer2_real_t _t40 = _t39*_t39;
-    const trailer2_real_t _t41 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t42 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t43 = _t41*thetadot_right + _t42*thetadot_left;
-    const trailer2_real_t _t44 = _t21*_t43 + _t26*_t39;
-    const trailer2_real_t _t45 = _t44*_t44;
-    const trailer2_real_t _t46 = _t33*_t45;
-    const trailer2_real_t _t47 = _t13*_t43 + _t16*_t39;
-    const trailer2_real_t _t48 = _t47*_t47;
-    const trailer2_real_t _t49 = _t36*_t45;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t11;
-    const trailer2_real_t _t51 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer2_real_t _t52 = K_theta_cart_x_tractor*_t10;
-    const trailer2_real_t _t53 = K_theta_cart_x_tractor_2*_t4;
-    const trailer2_real_t _t54 = _t35*_t45;
-    const trailer2_real_t _t55 = _t34*_t48;
-    const trailer2_real_t _t56 = _t35*_t48;
-    const trailer2_real_t _t57 = TRAILER2_LIT(1.6666666666666667)*_t3;
-    const trailer2_real_t _t58 = _t12*_t57;
-    const trailer2_real_t _t59 = -TRAILER2_LIT(1.6666666666666667)*_t10;
-    const trailer2_real_t _t60 = _t12*_t59;
-    const trailer2_real_t _t61 = TRAILER2_LIT(0.2)*_t57;
-    const trailer2_real_t _t62 = TRAILER2_LIT(0.2)*_t59;
-    const trailer2_real_t _t63 = -_t58 - _t7;
-    const trailer2_real_t _t64 = -TRAILER2_LIT(1.6666666666666667)*_t63;
-    const trailer2_real_t _t65 = TRAILER2_LIT(0.2)*_t64;
-    const trailer2_real_t _t66 = _t23*_t57;
-    const trailer2_real_t _t67 = -_t6 + _t66;
-    const trailer2_real_t _t68 = _t11 - _t60;
-    const trailer2_real_t _t69 = -TRAILER2_LIT(1.6666666666666667)*_t68;
-    const trailer2_real_t _t70 = TRAILER2_LIT(0.2)*_t69;
-    const trailer2_real_t _t71 = _t23*_t59;
-    const trailer2_real_t _t72 = _t71 - _t8;
-    const trailer2_real_t _t73 = _t24 + _t58;
-    const trailer2_real_t _t74 = -TRAILER2_LIT(1.6666666666666667)*_t73;
-    const trailer2_real_t _t75 = TRAILER2_LIT(0.2)*_t74;
-    const trailer2_real_t _t76 = _t28 + _t60;
-    const trailer2_real_t _t77 = -TRAILER2_LIT(1.6666666666666667)*_t76;
-    const trailer2_real_t _t78 = TRAILER2_LIT(0.2)*_t77;
-    const trailer2_real_t _t79 = -TRAILER2_LIT(1.6666666666666667)*_t25;
-    const trailer2_real_t _t80 = TRAILER2_LIT(0.2)*_t79;
-    const trailer2_real_t _t81 = TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t82 = TRAILER2_LIT(0.2)*_t81;
-    const trailer2_real_t _t83 = _t39*_t43;
-    const trailer2_real_t _t84 = _t43*_t47;
-    const trailer2_real_t _t85 = _t39*_t47;
-    const trailer2_real_t _t86 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t87 = _t19 + _t3;
-    const trailer2_real_t _t88 = _t86*_t87;
-    const trailer2_real_t _t89 = J_theta_cart_right*_t88;
-    const trailer2_real_t _t90 = -_t10 + _t20;
-    const trailer2_real_t _t91 = _t86*_t90;
-    const trailer2_real_t _t92 = J_theta_cart_right*_t91;
-    const trailer2_real_t _t93 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t94 = -_t19 + _t3;
-    const trailer2_real_t _t95 = _t93*_t94;
-    const trailer2_real_t _t96 = J_theta_cart_left*_t95;
-    const trailer2_real_t _t97 = -_t10 - _t20;
-    const trailer2_real_t _t98 = _t93*_t97;
-    const trailer2_real_t _t99 = J_theta_cart_left*_t98;
-    const trailer2_real_t _t100 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t101 = _t22 + _t25;
-    const trailer2_real_t _t102 = _t100*_t101;
-    const trailer2_real_t _t103 = J_theta_cart2_right*_t102;
-    const trailer2_real_t _t104 = _t27 - _t29;
-    const trailer2_real_t _t105 = _t100*_t104;
-    const trailer2_real_t _t106 = J_theta_cart2_right*_t105;
-    const trailer2_real_t _t107 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t108 = -_t22 - _t24 + _t7;
-    const trailer2_real_t _t109 = _t107*_t108;
-    const trailer2_real_t _t110 = J_theta_cart2_left*_t109;
-    const trailer2_real_t _t111 = -_t27 - _t29;
-    const trailer2_real_t _t112 = _t107*_t111;
-    const trailer2_real_t _t113 = J_theta_cart2_left*_t112;
-    const trailer2_real_t _t114 = K_theta_cart_x_tractor_2*_t2 - _t32;
-    const trailer2_real_t _t115 = _t30*_t34 + _t31*_t34 + _t33*_t35 - _t35*_t36;
-    const trailer2_real_t _t116 = -_t30*_t54 - _t31*_t54 + _t34*_t46 - _t34*_t49 + _t40*_t52
-            + _t40*_t53;
-    const trailer2_real_t _t117 = _t83 - _t84;
-    const trailer2_real_t _t118 = _t40 - _t85;
-    const trailer2_real_t _t119 = _t117*_t57 + _t118*_t59;
-    const trailer2_real_t _t120 = _t43*_t44;
-    const trailer2_real_t _t121 = _t39*_t44;
-    const trailer2_real_t _t122 = _t120*_t79 + _t121*_t81 + _t40*_t69 + _t64*_t83 + _t74*_t84
-            + _t77*_t85;
-    const trailer2_real_t _t123 = J_theta_cart*_t119 + _t114*_t83 + _t115*_t122 + _t116;
-    const trailer2_real_t _t124 = K_theta_cart2_x_tractor_2*_t6 - _t33;
-    const trailer2_real_t _t125 = _t30*_t56 + _t31*_t56 - _t33*_t55 + _t36*_t55 + _t40*_t50
-            + _t40*_t51;
-    const trailer2_real_t _t126 = J_theta_cart2*_t122 + _t115*_t119 + _t124*_t83 + _t125;
-    const trailer2_real_t _t127 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t128 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t129 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t130 = _t30 + _t31;
-    const trailer2_real_t _t131 = J_x_tractor + _t129*_t13 + _t130*_t21;
-    const trailer2_real_t _t132 = J_theta_cart*_t13 + _t115*_t21 + _t129;
-    const trailer2_real_t _t133 = J_theta_cart2*_t21 + _t115*_t13 + _t130;
-    const trailer2_real_t _t134 = J_theta_right*_t127;
-    const trailer2_real_t _t135 = J_theta_left*_t128;
-    const trailer2_real_t _t136 = _t102*_t103 + _t109*_t110 + _t127*_t134 + _t128*_t135 + _t13*_t132
-            + _t131 + _t133*_t21 + _t88*_t89 + _t95*_t96;
-    const trailer2_real_t _t137 = K_theta_tractor_x_tractor_2 + _t129*_t16 + _t130*_t26;
-    const trailer2_real_t _t138 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t10;
-    const trailer2_real_t _t139 = J_theta_cart*_t16 + _t115*_t26 + _t138;
-    const trailer2_real_t _t140 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t11;
-    const trailer2_real_t _t141 = J_theta_cart2*_t26 + _t115*_t16 + _t140;
-    const trailer2_real_t _t142 = TRAILER2_LIT(0.207)*_t127;
-    const trailer2_real_t _t143 = J_theta_right*_t142;
-    const trailer2_real_t _t144 = -TRAILER2_LIT(0.207)*_t128;
-    const trailer2_real_t _t145 = J_theta_left*_t144;
-    const trailer2_real_t _t146 = _t102*_t106 + _t109*_t113 + _t127*_t143 + _t128*_t145 + _t13*_t139
-            + _t137 + _t141*_t21 + _t88*_t92 + _t95*_t99;
-    const trailer2_real_t _t147 = J_theta_tractor + _t138*_t16 + _t140*_t26;
-    const trailer2_real_t _t148 = _t105*_t106 + _t112*_t113 + _t139*_t16 + _t141*_t26 + _t142*_t143
-            + _t144*_t145 + _t147 + _t91*_t92 + _t98*_t99;
-    const trailer2_real_t _t149 = _t136*_t148 - _t146*_t146;
-    const trailer2_real_t _t150 = -K_theta_cart_x_tractor_2*_t2*_t48
-            + K_theta_tractor_x_tractor*_t40 + _t32*_t48 + _t46 - _t49;
-    const trailer2_real_t _t151 = -_t45*_t50 - _t45*_t51 - _t48*_t52 - _t48*_t53;
-    const trailer2_real_t _t152 = _t2 + _t61;
-    const trailer2_real_t _t153 = _t152*_t86;
-    const trailer2_real_t _t154 = _t4 + _t62;
-    const trailer2_real_t _t155 = _t154*_t86;
-    const trailer2_real_t _t156 = _t2 - _t61;
-    const trailer2_real_t _t157 = _t156*_t93;
-    const trailer2_real_t _t158 = _t4 - _t62;
-    const trailer2_real_t _t159 = _t158*_t93;
-    const trailer2_real_t _t160 = _t65 - _t67;
-    const trailer2_real_t _t161 = _t100*_t160;
-    const trailer2_real_t _t162 = _t70 - _t72;
-    const trailer2_real_t _t163 = _t100*_t162;
-    const trailer2_real_t _t164 = -_t14 + _t66 + _t75;
-    const trailer2_real_t _t165 = _t100*_t164;
-    const trailer2_real_t _t166 = -_t17 + _t71 + _t78;
-    const trailer2_real_t _t167 = _t100*_t166;
-    const trailer2_real_t _t168 = _t15 + _t80;
-    const trailer2_real_t _t169 = _t100*_t168;
-    const trailer2_real_t _t170 = _t18 + _t82;
-    const trailer2_real_t _t171 = _t100*_t170;
-    const trailer2_real_t _t172 = -_t65 - _t67;
-    const trailer2_real_t _t173 = _t107*_t172;
-    const trailer2_real_t _t174 = -_t70 - _t72;
-    const trailer2_real_t _t175 = _t107*_t174;
-    const trailer2_real_t _t176 = -_t14 + _t66 - _t75;
-    const trailer2_real_t _t177 = _t107*_t176;
-    const trailer2_real_t _t178 = -_t17 + _t71 - _t78;
-    const trailer2_real_t _t179 = _t107*_t178;
-    const trailer2_real_t _t180 = _t15 - _t80;
-    const trailer2_real_t _t181 = _t107*_t180;
-    const trailer2_real_t _t182 = _t18 - _t82;
-    const trailer2_real_t _t183 = _t107*_t182;
-    const trailer2_real_t _t184 = _t117*_t153 + _t118*_t155;
-    const trailer2_real_t _t185 = _t117*_t157 + _t118*_t159;
-    const trailer2_real_t _t186 = _t120*_t169 + _t121*_t171 + _t161*_t83 + _t163*_t40 + _t165*_t84
-            + _t167*_t85;
-    const trailer2_real_t _t187 = _t120*_t181 + _t121*_t183 + _t173*_t83 + _t175*_t40 + _t177*_t84
-            + _t179*_t85;
-    const trailer2_real_t _t188 = _t103*_t186 + _t110*_t187 + _t119*_t129 + _t122*_t130 + _t123*_t13
-            + _t126*_t21 + _t150 + _t184*_t89 + _t185*_t96;
-    const trailer2_real_t _t189 = -K_theta_tractor_x_tractor*_t83 + _t106*_t186 + _t113*_t187
-            + _t119*_t138 + _t122*_t140 + _t123*_t16 + _t126*_t26 + _t151 + _t184*_t92 + _t185*_t99;
-    const trailer2_real_t _t190 = _t127*tau_right + _t128*tau_left - _t188;
-    const trailer2_real_t _t191 = _t142*tau_right + _t144*tau_left - _t189;
-    const trailer2_real_t _t192 = TRAILER2_LIT(1.0)/_t149;
-    const trailer2_real_t _t193 = _t192*(-_t146*_t191 + _t148*_t190);
-    const trailer2_real_t _t194 = _t192*(_t136*_t191 - _t146*_t190);
-    const trailer2_real_t _t195 = _t127*_t193 + _t142*_t194;
-    const trailer2_real_t _t196 = _t128*_t193 + _t144*_t194;
+    (void)K_theta_cart2_x_tractor;
+    (void)K_theta_cart2_x_tractor_2;
+    (void)K_theta_cart_x_tractor;
+    (void)K_theta_cart_x_tractor_2;
+    (void)K_theta_tractor_x_tractor;
+    (void)theta_cart;
+    (void)theta_cart2;
+    (void)theta_tractor;
+    (void)thetadot_left;
+    (void)thetadot_right;
+    trailer2_real_t _shared[117];
+    trailer2_staged_quantities(p, q, wheel_rates, _shared);
+    const trailer2_real_t _ms86 = _shared[18];
+    const trailer2_real_t _ms87 = _shared[19];
+    const trailer2_real_t _ms90 = _shared[22];
+    const trailer2_real_t _ms91 = _shared[23];
+    const trailer2_real_t _ms98 = _shared[26];
+    const trailer2_real_t _ms99 = _shared[27];
+    const trailer2_real_t _ms102 = _shared[30];
+    const trailer2_real_t _ms103 = _shared[31];
+    const trailer2_real_t _ms106 = _shared[34];
+    const trailer2_real_t _ms107 = _shared[35];
+    const trailer2_real_t _ms110 = _shared[38];
+    const trailer2_real_t _ms111 = _shared[39];
+    const trailer2_real_t _ms122 = _shared[44];
+    const trailer2_real_t _ms123 = _shared[45];
+    const trailer2_real_t _ms126 = _shared[48];
+    const trailer2_real_t _ms127 = _shared[49];
+    const trailer2_real_t _ms128 = _shared[50];
+    const trailer2_real_t _ms219 = _shared[115];
+    const trailer2_real_t _ms220 = _shared[116];
+    const trailer2_real_t _t0 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t1 = TRAILER2_LIT(1.0)/radius_left;
+    const trailer2_real_t _t2 = J_x_tractor + _ms122*_ms86 + _ms123*_ms90;
+    const trailer2_real_t _t3 = J_theta_cart*_ms86 + _ms122 + _ms128*_ms90;
+    const trailer2_real_t _t4 = J_theta_cart2*_ms90 + _ms123 + _ms128*_ms86;
+    const trailer2_real_t _t5 = J_theta_right*_t0;
+    const trailer2_real_t _t6 = J_theta_left*_t1;
+    const trailer2_real_t _t7 = J_theta_cart_right*_ms98;
+    const trailer2_real_t _t8 = J_theta_cart_left*_ms102;
+    const trailer2_real_t _t9 = J_theta_cart2_right*_ms106;
+    const trailer2_real_t _t10 = J_theta_cart2_left*_ms110;
+    const trailer2_real_t _t11 = _ms102*_t8 + _ms106*_t9 + _ms110*_t10 + _ms86*_t3 + _ms90*_t4
+            + _ms98*_t7 + _t0*_t5 + _t1*_t6 + _t2;
+    const trailer2_real_t _t12 = K_theta_tractor_x_tractor_2 + _ms122*_ms87 + _ms123*_ms91;
+    const trailer2_real_t _t13 = J_theta_cart*_ms87 + _ms126 + _ms128*_ms91;
+    const trailer2_real_t _t14 = J_theta_cart2*_ms91 + _ms127 + _ms128*_ms87;
+    const trailer2_real_t _t15 = TRAILER2_LIT(0.207)*_t0;
+    const trailer2_real_t _t16 = J_theta_right*_t15;
+    const trailer2_real_t _t17 = -TRAILER2_LIT(0.207)*_t1;
+    const trailer2_real_t _t18 = J_theta_left*_t17;
+    const trailer2_real_t _t19 = J_theta_cart_right*_ms99;
+    const trailer2_real_t _t20 = J_theta_cart_left*_ms103;
+    const trailer2_real_t _t21 = J_theta_cart2_right*_ms107;
+    const trailer2_real_t _t22 = J_theta_cart2_left*_ms111;
+    const trailer2_real_t _t23 = _ms102*_t20 + _ms106*_t21 + _ms110*_t22 + _ms86*_t13 + _ms90*_t14
+            + _ms98*_t19 + _t0*_t16 + _t1*_t18 + _t12;
+    const trailer2_real_t _t24 = J_theta_tractor + _ms126*_ms87 + _ms127*_ms91;
+    const trailer2_real_t _t25 = _ms103*_t20 + _ms107*_t21 + _ms111*_t22 + _ms87*_t13 + _ms91*_t14
+            + _ms99*_t19 + _t15*_t16 + _t17*_t18 + _t24;
+    const trailer2_real_t _t26 = _t11*_t25 - _t23*_t23;
+    const trailer2_real_t _t27 = -_ms219 + _t0*tau_right + _t1*tau_left;
+    const trailer2_real_t _t28 = -_ms220 + _t15*tau_right + _t17*tau_left;
+    const trailer2_real_t _t29 = TRAILER2_LIT(1.0)/_t26;
+    const trailer2_real_t _t30 = _t29*(-_t23*_t28 + _t25*_t27);
+    const trailer2_real_t _t31 = _t29*(_t11*_t28 - _t23*_t27);
+    const trailer2_real_t _t32 = _t0*_t30 + _t15*_t31;
+    const trailer2_real_t _t33 = _t1*_t30 + _t17*_t31;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -1540,14 +1201,14 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t136 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t11 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t149 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t26 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t195;
-    const trailer2_real_t r_1 = _t196;
+    const trailer2_real_t r_0 = _t32;
+    const trailer2_real_t r_1 = _t33;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
@@ -1557,664 +1218,593 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
 }
 
 /* trailer2_linearization: documented in trailer2_model.h.
-   operations after CSE: 715 add, 931 mul, 7 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 731 add, 975 mul, 7 div, 10 sin/cos, 0 sqrt */
 void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, trailer2_real_t *A,
     trailer2_real_t *B)
 {
-    const trailer2_real_t theta_tractor = q[2];
-    const trailer2_real_t _t0 = -theta_tractor;
-    const trailer2_real_t theta_cart = q[3];
-    const trailer2_real_t _t1 = _t0 + theta_cart;
-    const trailer2_real_t _t2 = TRAILER2_SIN(_t1);
-    const trailer2_real_t _t3 = TRAILER2_COS(_t1);
-    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t5 = _t0 + theta_cart2;
-    const trailer2_real_t _t6 = TRAILER2_SIN(_t5);
-    const trailer2_real_t _t7 = TRAILER2_COS(_t5);
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t7;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t6;
-    const trailer2_real_t _t12 = -TRAILER2_LIT(0.85)*_t2*_t6 - _t3*_t9;
-    const trailer2_real_t _t13 = -TRAILER2_LIT(1.6666666666666667)*_t2;
-    const trailer2_real_t _t14 = _t12*_t13;
-    const trailer2_real_t _t15 = _t14 - _t6;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
-    const trailer2_real_t _t17 = _t12*_t16;
-    const trailer2_real_t _t18 = _t17 - _t8;
-    const trailer2_real_t _t19 = TRAILER2_LIT(0.2)*_t13;
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.2)*_t16;
-    const trailer2_real_t _t21 = TRAILER2_LIT(1.6666666666666667)*_t15;
-    const trailer2_real_t _t22 = TRAILER2_LIT(0.2)*_t21;
-    const trailer2_real_t _t23 = -_t2*_t9 + TRAILER2_LIT(0.85)*_t3*_t6;
-    const trailer2_real_t _t24 = _t13*_t23;
-    const trailer2_real_t _t25 = -_t24 + _t7;
-    const trailer2_real_t _t26 = TRAILER2_LIT(1.6666666666666667)*_t18;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*_t26;
-    const trailer2_real_t _t28 = _t16*_t23;
-    const trailer2_real_t _t29 = _t11 + _t28;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t _t30 = K_theta_cart_x_tractor*_t2;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t31 = K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t32 = K_theta_cart2_x_tractor*_t6;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t33 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t34 = K_theta_cart_x_tractor*_t3;
-    const trailer2_real_t _t35 = K_theta_cart2_x_tractor*_t7;
-    const trailer2_real_t _t36 = K_theta_cart_x_tractor*_t4;
-    const trailer2_real_t _t37 = K_theta_cart_x_tractor_2*_t10;
-    const trailer2_real_t _t38 = K_theta_cart2_x_tractor*_t8;
-    const trailer2_real_t _t39 = K_theta_cart2_x_tractor_2*_t11;
-    const trailer2_real_t _t40 = TRAILER2_LIT(0.85)*_t2;
-    const trailer2_real_t _t41 = _t32*_t40;
-    const trailer2_real_t _t42 = TRAILER2_LIT(0.85)*_t3;
-    const trailer2_real_t _t43 = _t35*_t42;
-    const trailer2_real_t _t44 = _t33*_t40;
-    const trailer2_real_t _t45 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer2_real_t _t46 = _t42*_t45;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t47 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t48 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t thetadot_right = wheel_rates[0];
-    const trailer2_real_t thetadot_left = wheel_rates[1];
-    const trailer2_real_t _t49 = _t47*thetadot_right + _t48*thetadot_left;
-    const trailer2_real_t _t50 = _t49*_t49;
-    const trailer2_real_t _t51 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t52 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t53 = _t51*thetadot_right + _t52*thetadot_left;
-    const trailer2_real_t _t54 = _t21*_t53 + _t26*_t49;
-    const trailer2_real_t _t55 = _t54*_t54;
-    const trailer2_real_t _t56 = _t35*_t55;
-    const trailer2_real_t _t57 = _t13*_t53 + _t16*_t49;
-    const trailer2_real_t _t58 = _t57*_t57;
-    const trailer2_real_t _t59 = _t45*_t55;
-    const trailer2_real_t _t60 = K_theta_cart_x_tractor_2*_t2;
-    const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t11;
-    const trailer2_real_t _t62 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer2_real_t _t63 = K_theta_cart_x_tractor*_t10;
-    const trailer2_real_t _t64 = K_theta_cart_x_tractor_2*_t4;
-    const trailer2_real_t _t65 = _t32*_t55;
-    const trailer2_real_t _t66 = _t33*_t55;
-    const trailer2_real_t _t67 = _t35*_t40;
-    const trailer2_real_t _t68 = _t32*_t42;
-    const trailer2_real_t _t69 = _t40*_t45;
-    const trailer2_real_t _t70 = _t33*_t42;
-    const trailer2_real_t _t71 = TRAILER2_LIT(1.6666666666666667)*_t3;
-    const trailer2_real_t _t72 = _t12*_t71;
-    const trailer2_real_t _t73 = _t7 + _t72;
-    const trailer2_real_t _t74 = -TRAILER2_LIT(1.6666666666666667)*_t10;
-    const trailer2_real_t _t75 = _t12*_t74;
-    const trailer2_real_t _t76 = -_t11 + _t75;
-    const trailer2_real_t _t77 = _t24 + _t72;
-    const trailer2_real_t _t78 = _t28 + _t75;
-    const trailer2_real_t _t79 = TRAILER2_LIT(0.2)*_t71;
-    const trailer2_real_t _t80 = TRAILER2_LIT(0.2)*_t74;
-    const trailer2_real_t _t81 = TRAILER2_LIT(1.6666666666666667)*_t73;
-    const trailer2_real_t _t82 = TRAILER2_LIT(0.2)*_t81;
-    const trailer2_real_t _t83 = _t23*_t71;
-    const trailer2_real_t _t84 = -_t6 + _t83;
-    const trailer2_real_t _t85 = TRAILER2_LIT(1.6666666666666667)*_t76;
-    const trailer2_real_t _t86 = TRAILER2_LIT(0.2)*_t85;
-    const trailer2_real_t _t87 = _t23*_t74;
-    const trailer2_real_t _t88 = -_t8 + _t87;
-    const trailer2_real_t _t89 = -TRAILER2_LIT(1.6666666666666667)*_t77;
-    const trailer2_real_t _t90 = TRAILER2_LIT(0.2)*_t89;
-    const trailer2_real_t _t91 = -_t14 + _t83;
-    const trailer2_real_t _t92 = -TRAILER2_LIT(1.6666666666666667)*_t78;
-    const trailer2_real_t _t93 = TRAILER2_LIT(0.2)*_t92;
-    const trailer2_real_t _t94 = -_t17 + _t87;
-    const trailer2_real_t _t95 = -TRAILER2_LIT(1.6666666666666667)*_t25;
-    const trailer2_real_t _t96 = TRAILER2_LIT(0.2)*_t95;
-    const trailer2_real_t _t97 = TRAILER2_LIT(1.6666666666666667)*_t29;
-    const trailer2_real_t _t98 = TRAILER2_LIT(0.2)*_t97;
-    const trailer2_real_t _t99 = _t49*_t53;
-    const trailer2_real_t _t100 = _t53*_t57;
-    const trailer2_real_t _t101 = _t49*_t57;
-    const trailer2_real_t _t102 = _t30 + _t31;
-    const trailer2_real_t _t103 = _t102*_t13;
-    const trailer2_real_t _t104 = _t32 + _t33;
-    const trailer2_real_t _t105 = _t104*_t21;
-    const trailer2_real_t _t106 = _t102*_t16;
-    const trailer2_real_t _t107 = _t104*_t26;
-    const trailer2_real_t _t108 = _t41 + _t43 + _t44 - _t46;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t109 = J_theta_cart*_t13 + _t102 + _t108*_t21;
-    const trailer2_real_t _t110 = _t36 - _t37;
-    const trailer2_real_t _t111 = J_theta_cart*_t16 + _t108*_t26 + _t110;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t112 = J_theta_cart2*_t21 + _t104 + _t108*_t13;
-    const trailer2_real_t _t113 = _t38 - _t39;
-    const trailer2_real_t _t114 = J_theta_cart2*_t26 + _t108*_t16 + _t113;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t115 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t116 = _t19 + _t3;
-    const trailer2_real_t _t117 = _t115*_t116;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t118 = J_theta_cart_right*_t117;
-    const trailer2_real_t _t119 = -_t10 + _t20;
-    const trailer2_real_t _t120 = _t115*_t119;
-    const trailer2_real_t _t121 = J_theta_cart_right*_t120;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t122 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t123 = -_t19 + _t3;
-    const trailer2_real_t _t124 = _t122*_t123;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t125 = J_theta_cart_left*_t124;
-    const trailer2_real_t _t126 = -_t10 - _t20;
-    const trailer2_real_t _t127 = _t122*_t126;
-    const trailer2_real_t _t128 = J_theta_cart_left*_t127;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t129 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t130 = _t22 + _t25;
-    const trailer2_real_t _t131 = _t129*_t130;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t132 = J_theta_cart2_right*_t131;
-    const trailer2_real_t _t133 = _t27 - _t29;
-    const trailer2_real_t _t134 = _t129*_t133;
-    const trailer2_real_t _t135 = J_theta_cart2_right*_t134;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t136 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t137 = -_t22 - _t24 + _t7;
-    const trailer2_real_t _t138 = _t136*_t137;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t139 = J_theta_cart2_left*_t138;
-    const trailer2_real_t _t140 = -_t27 - _t29;
-    const trailer2_real_t _t141 = _t136*_t140;
-    const trailer2_real_t _t142 = J_theta_cart2_left*_t141;
-    const trailer2_real_t _t143 = K_theta_cart_x_tractor_2*_t2 - _t34;
-    const trailer2_real_t _t144 = _t40*_t56 - _t40*_t59 - _t42*_t65 - _t42*_t66 + _t50*_t63
-            + _t50*_t64;
-    const trailer2_real_t _t145 = -_t100 + _t99;
-    const trailer2_real_t _t146 = -_t101 + _t50;
-    const trailer2_real_t _t147 = _t145*_t71 + _t146*_t74;
-    const trailer2_real_t _t148 = _t53*_t54;
-    const trailer2_real_t _t149 = _t49*_t54;
-    const trailer2_real_t _t150 = _t100*_t89 + _t101*_t92 + _t148*_t95 + _t149*_t97 + _t50*_t85
-            + _t81*_t99;
-    const trailer2_real_t _t151 = J_theta_cart*_t147 + _t108*_t150 + _t143*_t99 + _t144;
-    const trailer2_real_t _t152 = K_theta_cart2_x_tractor_2*_t6 - _t35;
-    const trailer2_real_t _t153 = _t50*_t61 + _t50*_t62 - _t58*_t67 + _t58*_t68 + _t58*_t69
-            + _t58*_t70;
-    const trailer2_real_t _t154 = J_theta_cart2*_t150 + _t108*_t147 + _t152*_t99 + _t153;
-    const trailer2_real_t _t155 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t156 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t157 = _t152*_t26;
-    const trailer2_real_t _t158 = _t143*_t16;
-    const trailer2_real_t _t159 = _t102*_t74 + _t158;
-    const trailer2_real_t _t160 = _t63 + _t64;
-    const trailer2_real_t _t161 = J_theta_cart*_t74 + _t160;
-    const trailer2_real_t _t162 = _t108*_t74;
-    const trailer2_real_t _t163 = _t4 + _t80;
-    const trailer2_real_t _t164 = _t115*_t163;
-    const trailer2_real_t _t165 = J_theta_cart_right*_t164;
-    const trailer2_real_t _t166 = _t4 - _t80;
-    const trailer2_real_t _t167 = _t122*_t166;
-    const trailer2_real_t _t168 = J_theta_cart_left*_t167;
-    const trailer2_real_t _t169 = _t86 - _t88;
-    const trailer2_real_t _t170 = _t129*_t169;
-    const trailer2_real_t _t171 = J_theta_cart2_right*_t170;
-    const trailer2_real_t _t172 = -_t86 - _t88;
-    const trailer2_real_t _t173 = _t136*_t172;
-    const trailer2_real_t _t174 = J_theta_cart2_left*_t173;
-    const trailer2_real_t _t175 = _t124*_t168;
-    const trailer2_real_t _t176 = _t111*_t71;
-    const trailer2_real_t _t177 = _t2 + _t79;
-    const trailer2_real_t _t178 = _t115*_t177;
-    const trailer2_real_t _t179 = _t121*_t178;
-    const trailer2_real_t _t180 = _t2 - _t79;
-    const trailer2_real_t _t181 = _t122*_t180;
-    const trailer2_real_t _t182 = _t128*_t181;
-    const trailer2_real_t _t183 = _t117*_t165;
-    const trailer2_real_t _t184 = _t61 + _t62;
-    const trailer2_real_t _t185 = _t184*_t26;
-    const trailer2_real_t _t186 = _t110*_t74 + _t16*_t160;
-    const trailer2_real_t _t187 = _t127*_t168;
-    const trailer2_real_t _t188 = _t111*_t74;
-    const trailer2_real_t _t189 = _t121*_t164;
-    const trailer2_real_t _t190 = _t128*_t167;
-    const trailer2_real_t _t191 = _t120*_t165;
-    const trailer2_real_t _t192 = TRAILER2_LIT(2.0)*_t54;
-    const trailer2_real_t _t193 = _t192*_t35 - _t192*_t45;
-    const trailer2_real_t _t194 = _t65 + _t66;
-    const trailer2_real_t _t195 = TRAILER2_LIT(2.0)*_t57;
-    const trailer2_real_t _t196 = _t195*_t34 - _t195*_t60;
-    const trailer2_real_t _t197 = _t49*_t74 + _t53*_t71;
-    const trailer2_real_t _t198 = _t196*_t197 + _t30*_t58 + _t31*_t58;
-    const trailer2_real_t _t199 = _t36*_t50;
-    const trailer2_real_t _t200 = _t37*_t50;
-    const trailer2_real_t _t201 = TRAILER2_LIT(1.7)*_t54;
-    const trailer2_real_t _t202 = _t201*_t3;
-    const trailer2_real_t _t203 = TRAILER2_LIT(1.7)*K_theta_cart2_x_tractor*_t2*_t54*_t7
-            - _t2*_t201*_t45 - _t202*_t32 - _t202*_t33;
-    const trailer2_real_t _t204 = _t38*_t50;
-    const trailer2_real_t _t205 = _t39*_t50;
-    const trailer2_real_t _t206 = TRAILER2_LIT(1.7)*_t57;
-    const trailer2_real_t _t207 = _t2*_t206;
-    const trailer2_real_t _t208 = _t206*_t3;
-    const trailer2_real_t _t209 = -_t207*_t35 + _t207*_t45 + _t208*_t32 + _t208*_t33;
-    const trailer2_real_t _t210 = _t197*_t209;
-    const trailer2_real_t _t211 = -_t197*_t53;
-    const trailer2_real_t _t212 = _t211*_t89;
-    const trailer2_real_t _t213 = -_t197*_t49;
-    const trailer2_real_t _t214 = _t213*_t92;
-    const trailer2_real_t _t215 = -TRAILER2_LIT(1.6666666666666667)*_t91;
-    const trailer2_real_t _t216 = -TRAILER2_LIT(1.6666666666666667)*_t94;
-    const trailer2_real_t _t217 = _t100*_t215 + _t101*_t216;
-    const trailer2_real_t _t218 = TRAILER2_LIT(0.2)*_t215;
-    const trailer2_real_t _t219 = TRAILER2_LIT(0.2)*_t216;
-    const trailer2_real_t _t220 = TRAILER2_LIT(1.6666666666666667)*_t84;
-    const trailer2_real_t _t221 = TRAILER2_LIT(0.2)*_t220;
-    const trailer2_real_t _t222 = TRAILER2_LIT(1.6666666666666667)*_t88;
-    const trailer2_real_t _t223 = TRAILER2_LIT(0.2)*_t222;
-    const trailer2_real_t _t224 = _t90 + _t91;
-    const trailer2_real_t _t225 = _t129*_t224;
-    const trailer2_real_t _t226 = _t211*_t225;
-    const trailer2_real_t _t227 = _t93 + _t94;
-    const trailer2_real_t _t228 = _t129*_t227;
-    const trailer2_real_t _t229 = _t213*_t228;
-    const trailer2_real_t _t230 = _t218 - _t77;
-    const trailer2_real_t _t231 = _t129*_t230;
-    const trailer2_real_t _t232 = _t219 - _t78;
-    const trailer2_real_t _t233 = _t129*_t232;
-    const trailer2_real_t _t234 = _t100*_t231 + _t101*_t233;
-    const trailer2_real_t _t235 = -_t14 + _t83 - _t90;
-    const trailer2_real_t _t236 = _t136*_t235;
-    const trailer2_real_t _t237 = _t211*_t236;
-    const trailer2_real_t _t238 = -_t17 + _t87 - _t93;
-    const trailer2_real_t _t239 = _t136*_t238;
-    const trailer2_real_t _t240 = _t213*_t239;
-    const trailer2_real_t _t241 = -_t218 - _t77;
-    const trailer2_real_t _t242 = _t136*_t241;
-    const trailer2_real_t _t243 = -_t219 - _t78;
-    const trailer2_real_t _t244 = _t136*_t243;
-    const trailer2_real_t _t245 = _t100*_t242 + _t101*_t244;
-    const trailer2_real_t _t246 = _t143*_t147;
-    const trailer2_real_t _t247 = _t150*_t152;
-    const trailer2_real_t _t248 = -_t82 - _t84;
-    const trailer2_real_t _t249 = _t136*_t248;
-    const trailer2_real_t _t250 = J_theta_cart2_left*_t249;
-    const trailer2_real_t _t251 = _t82 - _t84;
-    const trailer2_real_t _t252 = _t129*_t251;
-    const trailer2_real_t _t253 = J_theta_cart2_right*_t252;
-    const trailer2_real_t _t254 = -_t124*_t145 - _t127*_t146 + _t167*_t213 + _t181*_t211;
-    const trailer2_real_t _t255 = _t125*_t254;
-    const trailer2_real_t _t256 = J_theta_cart_left*_t181;
-    const trailer2_real_t _t257 = _t145*_t181 + _t146*_t167;
-    const trailer2_real_t _t258 = _t256*_t257;
-    const trailer2_real_t _t259 = J_theta_cart_right*_t178;
-    const trailer2_real_t _t260 = _t145*_t178 + _t146*_t164;
-    const trailer2_real_t _t261 = _t259*_t260;
-    const trailer2_real_t _t262 = -_t117*_t145 - _t120*_t146 + _t164*_t213 + _t178*_t211;
-    const trailer2_real_t _t263 = _t118*_t262;
-    const trailer2_real_t _t264 = _t103*_t99;
-    const trailer2_real_t _t265 = _t105*_t99;
-    const trailer2_real_t _t266 = -_t13*_t145 - _t146*_t16 + _t211*_t71 + _t213*_t74;
-    const trailer2_real_t _t267 = _t109*_t266;
-    const trailer2_real_t _t268 = _t151*_t71;
-    const trailer2_real_t _t269 = TRAILER2_LIT(0.6)*_t54;
-    const trailer2_real_t _t270 = -_t269*_t32 - _t269*_t33;
-    const trailer2_real_t _t271 = _t39*_t55;
-    const trailer2_real_t _t272 = _t38*_t55;
-    const trailer2_real_t _t273 = TRAILER2_LIT(0.6)*_t57;
-    const trailer2_real_t _t274 = -_t273*_t30 - _t273*_t31;
-    const trailer2_real_t _t275 = _t197*_t274 + _t36*_t58 - _t37*_t58;
-    const trailer2_real_t _t276 = _t147*_t160;
-    const trailer2_real_t _t277 = _t150*_t184;
-    const trailer2_real_t _t278 = _t128*_t254;
-    const trailer2_real_t _t279 = _t168*_t257;
-    const trailer2_real_t _t280 = _t165*_t260;
-    const trailer2_real_t _t281 = _t121*_t262;
-    const trailer2_real_t _t282 = _t106*_t99;
-    const trailer2_real_t _t283 = _t107*_t99;
-    const trailer2_real_t _t284 = _t111*_t266;
-    const trailer2_real_t _t285 = _t151*_t74;
-    const trailer2_real_t _t286 = _t102*_t71;
-    const trailer2_real_t _t287 = _t13*_t143;
-    const trailer2_real_t _t288 = _t152*_t21;
-    const trailer2_real_t _t289 = _t287 + _t288;
-    const trailer2_real_t _t290 = J_theta_cart*_t71 + _t143;
-    const trailer2_real_t _t291 = _t108*_t71;
-    const trailer2_real_t _t292 = _t124*_t256;
-    const trailer2_real_t _t293 = _t109*_t71;
-    const trailer2_real_t _t294 = _t118*_t178;
-    const trailer2_real_t _t295 = _t125*_t181;
-    const trailer2_real_t _t296 = _t117*_t259;
-    const trailer2_real_t _t297 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t298 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t299 = K_theta_tractor_x_tractor_2 + _t106 + _t107;
-    const trailer2_real_t _t300 = TRAILER2_LIT(0.207)*_t297;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t301 = J_theta_right*_t300;
-    const trailer2_real_t _t302 = -TRAILER2_LIT(0.207)*_t298;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t303 = J_theta_left*_t302;
-    const trailer2_real_t _t304 = _t111*_t13 + _t114*_t21 + _t117*_t121 + _t124*_t128 + _t131*_t135
-            + _t138*_t142 + _t297*_t301 + _t298*_t303 + _t299;
-    const trailer2_real_t _t305 = TRAILER2_LIT(2.0)*_t304;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t306 = J_x_tractor + _t103 + _t105;
-    const trailer2_real_t _t307 = J_theta_right*_t297;
-    const trailer2_real_t _t308 = J_theta_left*_t298;
-    const trailer2_real_t _t309 = _t109*_t13 + _t112*_t21 + _t117*_t118 + _t124*_t125 + _t131*_t132
-            + _t138*_t139 + _t297*_t307 + _t298*_t308 + _t306;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t310 = J_theta_tractor + _t110*_t16 + _t113*_t26;
-    const trailer2_real_t _t311 = _t111*_t16 + _t114*_t26 + _t120*_t121 + _t127*_t128 + _t134*_t135
-            + _t141*_t142 + _t300*_t301 + _t302*_t303 + _t310;
-    const trailer2_real_t _t312 = -_t304*_t304 + _t309*_t311;
-    const trailer2_real_t _t313 = TRAILER2_LIT(1.0)/_t312;
-    const trailer2_real_t _t314 = _t313*_t313;
-    const trailer2_real_t _t315 = _t313;
-    const trailer2_real_t _t316 = _t304*_t315;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
     const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t _t317 = K_theta_tractor_x_tractor*_t50 + _t34*_t58 + _t56 - _t58*_t60
-            - _t59;
-    const trailer2_real_t _t318 = _t15 + _t96;
-    const trailer2_real_t _t319 = _t129*_t318;
-    const trailer2_real_t _t320 = _t18 + _t98;
-    const trailer2_real_t _t321 = _t129*_t320;
-    const trailer2_real_t _t322 = _t100*_t225 + _t101*_t228 + _t148*_t319 + _t149*_t321 + _t170*_t50
-            + _t252*_t99;
-    const trailer2_real_t _t323 = _t15 - _t96;
-    const trailer2_real_t _t324 = _t136*_t323;
-    const trailer2_real_t _t325 = _t18 - _t98;
-    const trailer2_real_t _t326 = _t136*_t325;
-    const trailer2_real_t _t327 = _t100*_t236 + _t101*_t239 + _t148*_t324 + _t149*_t326 + _t173*_t50
-            + _t249*_t99;
-    const trailer2_real_t _t328 = _t102*_t147 + _t104*_t150 + _t118*_t260 + _t125*_t257 + _t13*_t151
-            + _t132*_t322 + _t139*_t327 + _t154*_t21 + _t317;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t theta_tractor = q[2];
+    const trailer2_real_t theta_cart = q[3];
+    const trailer2_real_t theta_cart2 = q[4];
+    trailer2_real_t _shared[117];
+    trailer2_staged_quantities(p, q, wheel_rates, _shared);
+    const trailer2_real_t _ms18 = _shared[0];
+    const trailer2_real_t _ms19 = _shared[1];
+    const trailer2_real_t _ms42 = _shared[4];
+    const trailer2_real_t _ms47 = _shared[5];
+    const trailer2_real_t _ms53 = _shared[9];
+    const trailer2_real_t _ms54 = _shared[10];
+    const trailer2_real_t _ms55 = _shared[11];
+    const trailer2_real_t _ms56 = _shared[12];
+    const trailer2_real_t _ms58 = _shared[14];
+    const trailer2_real_t _ms59 = _shared[15];
+    const trailer2_real_t _ms60 = _shared[16];
+    const trailer2_real_t _ms61 = _shared[17];
+    const trailer2_real_t _ms86 = _shared[18];
+    const trailer2_real_t _ms87 = _shared[19];
+    const trailer2_real_t _ms90 = _shared[22];
+    const trailer2_real_t _ms91 = _shared[23];
+    const trailer2_real_t _ms98 = _shared[26];
+    const trailer2_real_t _ms99 = _shared[27];
+    const trailer2_real_t _ms102 = _shared[30];
+    const trailer2_real_t _ms103 = _shared[31];
+    const trailer2_real_t _ms106 = _shared[34];
+    const trailer2_real_t _ms107 = _shared[35];
+    const trailer2_real_t _ms110 = _shared[38];
+    const trailer2_real_t _ms111 = _shared[39];
+    const trailer2_real_t _ms112 = _shared[40];
+    const trailer2_real_t _ms113 = _shared[41];
+    const trailer2_real_t _ms114 = _shared[42];
+    const trailer2_real_t _ms115 = _shared[43];
+    const trailer2_real_t _ms122 = _shared[44];
+    const trailer2_real_t _ms123 = _shared[45];
+    const trailer2_real_t _ms124 = _shared[46];
+    const trailer2_real_t _ms125 = _shared[47];
+    const trailer2_real_t _ms126 = _shared[48];
+    const trailer2_real_t _ms127 = _shared[49];
+    const trailer2_real_t _ms128 = _shared[50];
+    const trailer2_real_t _ms132 = _shared[53];
+    const trailer2_real_t _ms133 = _shared[54];
+    const trailer2_real_t _ms134 = _shared[55];
+    const trailer2_real_t _ms135 = _shared[56];
+    const trailer2_real_t _ms137 = _shared[58];
+    const trailer2_real_t _ms139 = _shared[60];
+    const trailer2_real_t _ms141 = _shared[62];
+    const trailer2_real_t _ms143 = _shared[64];
+    const trailer2_real_t _ms145 = _shared[66];
+    const trailer2_real_t _ms147 = _shared[68];
+    const trailer2_real_t _ms149 = _shared[70];
+    const trailer2_real_t _ms151 = _shared[72];
+    const trailer2_real_t _ms153 = _shared[74];
+    const trailer2_real_t _ms155 = _shared[76];
+    const trailer2_real_t _ms157 = _shared[78];
+    const trailer2_real_t _ms159 = _shared[80];
+    const trailer2_real_t _ms161 = _shared[82];
+    const trailer2_real_t _ms163 = _shared[84];
+    const trailer2_real_t _ms165 = _shared[86];
+    const trailer2_real_t _ms167 = _shared[88];
+    const trailer2_real_t _ms169 = _shared[90];
+    const trailer2_real_t _ms171 = _shared[92];
+    const trailer2_real_t _ms173 = _shared[94];
+    const trailer2_real_t _ms175 = _shared[96];
+    const trailer2_real_t _ms177 = _shared[98];
+    const trailer2_real_t _ms179 = _shared[100];
+    const trailer2_real_t _ms180 = _shared[101];
+    const trailer2_real_t _ms181 = _shared[102];
+    const trailer2_real_t _ms182 = _shared[103];
+    const trailer2_real_t _ms183 = _shared[104];
+    const trailer2_real_t _ms184 = _shared[105];
+    const trailer2_real_t _ms185 = _shared[106];
+    const trailer2_real_t _ms186 = _shared[107];
+    const trailer2_real_t _ms187 = _shared[108];
+    const trailer2_real_t _ms188 = _shared[109];
+    const trailer2_real_t _ms189 = _shared[110];
+    const trailer2_real_t _ms190 = _shared[111];
+    const trailer2_real_t _ms191 = _shared[112];
+    const trailer2_real_t _ms192 = _shared[113];
+    const trailer2_real_t _ms193 = _shared[114];
+    const trailer2_real_t _ms219 = _shared[115];
+    const trailer2_real_t _ms220 = _shared[116];
+    const trailer2_real_t _t0 = _ms122*_ms86;
+    const trailer2_real_t _t1 = _ms123*_ms90;
+    const trailer2_real_t _t2 = _ms122*_ms87;
+    const trailer2_real_t _t3 = _ms123*_ms91;
+    const trailer2_real_t _t4 = J_theta_cart*_ms86 + _ms122 + _ms128*_ms90;
+    const trailer2_real_t _t5 = J_theta_cart*_ms87 + _ms126 + _ms128*_ms91;
+    const trailer2_real_t _t6 = J_theta_cart2*_ms90 + _ms123 + _ms128*_ms86;
+    const trailer2_real_t _t7 = J_theta_cart2*_ms91 + _ms127 + _ms128*_ms87;
+    const trailer2_real_t _t8 = J_theta_cart_right*_ms98;
+    const trailer2_real_t _t9 = J_theta_cart_right*_ms99;
+    const trailer2_real_t _t10 = J_theta_cart_left*_ms102;
+    const trailer2_real_t _t11 = J_theta_cart_left*_ms103;
+    const trailer2_real_t _t12 = J_theta_cart2_right*_ms106;
+    const trailer2_real_t _t13 = J_theta_cart2_right*_ms107;
+    const trailer2_real_t _t14 = J_theta_cart2_left*_ms110;
+    const trailer2_real_t _t15 = J_theta_cart2_left*_ms111;
+    const trailer2_real_t _t16 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t17 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t18 = _ms125*_ms91;
+    const trailer2_real_t _t19 = _ms124*_ms87;
+    const trailer2_real_t _t20 = _ms122*_ms135 + _t19;
+    const trailer2_real_t _t21 = -theta_tractor;
+    const trailer2_real_t _t22 = _t21 + theta_cart;
+    const trailer2_real_t _t23 = TRAILER2_SIN(_t22);
+    const trailer2_real_t _t24 = K_theta_cart_x_tractor*_t23;
+    const trailer2_real_t _t25 = TRAILER2_COS(_t22);
+    const trailer2_real_t _t26 = K_theta_cart_x_tractor_2*_t25;
+    const trailer2_real_t _t27 = TRAILER2_LIT(0.3)*_t24 + TRAILER2_LIT(0.3)*_t26;
+    const trailer2_real_t _t28 = J_theta_cart*_ms135 + _t27;
+    const trailer2_real_t _t29 = _t21 + theta_cart2;
+    const trailer2_real_t _t30 = TRAILER2_SIN(_t29);
+    const trailer2_real_t _t31 = K_theta_cart2_x_tractor*_t30;
+    const trailer2_real_t _t32 = TRAILER2_COS(_t29);
+    const trailer2_real_t _t33 = K_theta_cart2_x_tractor_2*_t32;
+    const trailer2_real_t _t34 = _ms128*_ms135;
+    const trailer2_real_t _t35 = J_theta_cart_right*_ms151;
+    const trailer2_real_t _t36 = J_theta_cart_left*_ms155;
+    const trailer2_real_t _t37 = J_theta_cart2_right*_ms159;
+    const trailer2_real_t _t38 = J_theta_cart2_left*_ms171;
+    const trailer2_real_t _t39 = _ms102*_t36;
+    const trailer2_real_t _t40 = _ms134*_t5;
+    const trailer2_real_t _t41 = _ms149*_t9;
+    const trailer2_real_t _t42 = _ms153*_t11;
+    const trailer2_real_t _t43 = _ms98*_t35;
+    const trailer2_real_t _t44 = TRAILER2_LIT(0.3)*_t31 + TRAILER2_LIT(0.3)*_t33;
+    const trailer2_real_t _t45 = _ms91*_t44;
+    const trailer2_real_t _t46 = _ms126*_ms135 + _ms87*_t27;
+    const trailer2_real_t _t47 = _ms103*_t36;
+    const trailer2_real_t _t48 = _ms135*_t5;
+    const trailer2_real_t _t49 = _ms151*_t9;
+    const trailer2_real_t _t50 = _ms155*_t11;
+    const trailer2_real_t _t51 = _ms99*_t35;
+    const trailer2_real_t _t52 = TRAILER2_LIT(2.0)*_ms115;
+    const trailer2_real_t _t53 = K_theta_cart2_x_tractor*_t32;
+    const trailer2_real_t _t54 = K_theta_cart2_x_tractor_2*_t30;
+    const trailer2_real_t _t55 = _t52*_t53 - _t52*_t54;
+    const trailer2_real_t _t56 = _ms115*_ms115;
+    const trailer2_real_t _t57 = _t31*_t56;
+    const trailer2_real_t _t58 = _t33*_t56;
+    const trailer2_real_t _t59 = _t57 + _t58;
+    const trailer2_real_t _t60 = TRAILER2_LIT(2.0)*_ms114;
+    const trailer2_real_t _t61 = K_theta_cart_x_tractor*_t25;
+    const trailer2_real_t _t62 = K_theta_cart_x_tractor_2*_t23;
+    const trailer2_real_t _t63 = _t60*_t61 - _t60*_t62;
+    const trailer2_real_t _t64 = _ms114*_ms114;
+    const trailer2_real_t _t65 = _ms112*_ms134 + _ms113*_ms135;
+    const trailer2_real_t _t66 = _t24*_t64 + _t26*_t64 + _t63*_t65;
+    const trailer2_real_t _t67 = TRAILER2_LIT(0.3)*_ms113*_ms113;
+    const trailer2_real_t _t68 = _t61*_t67;
+    const trailer2_real_t _t69 = _t62*_t67;
+    const trailer2_real_t _t70 = TRAILER2_LIT(1.7)*_ms115;
+    const trailer2_real_t _t71 = _t25*_t70;
+    const trailer2_real_t _t72 = TRAILER2_LIT(1.7)*K_theta_cart2_x_tractor*_ms115*_t23*_t32
+            - _t23*_t54*_t70 - _t31*_t71 - _t33*_t71;
+    const trailer2_real_t _t73 = _t53*_t67;
+    const trailer2_real_t _t74 = _t54*_t67;
+    const trailer2_real_t _t75 = TRAILER2_LIT(1.7)*_ms114;
+    const trailer2_real_t _t76 = _t23*_t75;
+    const trailer2_real_t _t77 = _t25*_t75;
+    const trailer2_real_t _t78 = _t31*_t77 + _t33*_t77 - _t53*_t76 + _t54*_t76;
+    const trailer2_real_t _t79 = _t65*_t78;
+    const trailer2_real_t _t80 = _ms134*_ms59;
+    const trailer2_real_t _t81 = _ms135*_ms59;
+    const trailer2_real_t _t82 = -_ms112*_t65;
+    const trailer2_real_t _t83 = _ms141*_t82;
+    const trailer2_real_t _t84 = -_ms113*_t65;
+    const trailer2_real_t _t85 = _ms143*_t84;
+    const trailer2_real_t _t86 = -_ms56*_ms86 + _t80;
+    const trailer2_real_t _t87 = -TRAILER2_LIT(1.6666666666666667)*_t86;
+    const trailer2_real_t _t88 = -_ms56*_ms87 + _t81;
+    const trailer2_real_t _t89 = -TRAILER2_LIT(1.6666666666666667)*_t88;
+    const trailer2_real_t _t90 = _ms185*_t87 + _ms186*_t89;
+    const trailer2_real_t _t91 = TRAILER2_LIT(0.2)*_t87;
+    const trailer2_real_t _t92 = _ms134*_ms56;
+    const trailer2_real_t _t93 = _ms59*_ms86;
+    const trailer2_real_t _t94 = _t92 + _t93;
+    const trailer2_real_t _t95 = TRAILER2_LIT(0.2)*_t89;
+    const trailer2_real_t _t96 = _ms135*_ms56;
+    const trailer2_real_t _t97 = _ms59*_ms87;
+    const trailer2_real_t _t98 = _t96 + _t97;
+    const trailer2_real_t _t99 = -_ms53 - _t80;
+    const trailer2_real_t _t100 = -TRAILER2_LIT(1.6666666666666667)*_t99;
+    const trailer2_real_t _t101 = TRAILER2_LIT(0.2)*_t100;
+    const trailer2_real_t _t102 = _ms54 + _t92;
+    const trailer2_real_t _t103 = -_ms55 - _t81;
+    const trailer2_real_t _t104 = -TRAILER2_LIT(1.6666666666666667)*_t103;
+    const trailer2_real_t _t105 = TRAILER2_LIT(0.2)*_t104;
+    const trailer2_real_t _t106 = _ms161*_t82;
+    const trailer2_real_t _t107 = _ms163*_t84;
+    const trailer2_real_t _t108 = _t91 - _t94;
+    const trailer2_real_t _t109 = _ms42*_t108;
+    const trailer2_real_t _t110 = _t95 - _t98;
+    const trailer2_real_t _t111 = _ms42*_t110;
+    const trailer2_real_t _t112 = _ms185*_t109 + _ms186*_t111;
+    const trailer2_real_t _t113 = _ms173*_t82;
+    const trailer2_real_t _t114 = _ms175*_t84;
+    const trailer2_real_t _t115 = -_t91 - _t94;
+    const trailer2_real_t _t116 = _ms47*_t115;
+    const trailer2_real_t _t117 = -_t95 - _t98;
+    const trailer2_real_t _t118 = _ms47*_t117;
+    const trailer2_real_t _t119 = _ms185*_t116 + _ms186*_t118;
+    const trailer2_real_t _t120 = _ms124*_ms182;
+    const trailer2_real_t _t121 = _ms125*_ms189;
+    const trailer2_real_t _t122 = J_theta_cart2_left*_ms169;
+    const trailer2_real_t _t123 = J_theta_cart2_right*_ms157;
+    const trailer2_real_t _t124 = -_ms102*_ms180 - _ms103*_ms181 + _ms153*_t82 + _ms155*_t84;
+    const trailer2_real_t _t125 = _t10*_t124;
+    const trailer2_real_t _t126 = J_theta_cart_left*_ms153;
+    const trailer2_real_t _t127 = _ms191*_t126;
+    const trailer2_real_t _t128 = J_theta_cart_right*_ms149;
+    const trailer2_real_t _t129 = _ms190*_t128;
+    const trailer2_real_t _t130 = _ms149*_t82 + _ms151*_t84 - _ms180*_ms98 - _ms181*_ms99;
+    const trailer2_real_t _t131 = _t130*_t8;
+    const trailer2_real_t _t132 = _ms183*_t0;
+    const trailer2_real_t _t133 = _ms183*_t1;
+    const trailer2_real_t _t134 = _ms134*_t82 + _ms135*_t84 - _ms180*_ms86 - _ms181*_ms87;
+    const trailer2_real_t _t135 = _t134*_t4;
+    const trailer2_real_t _t136 = J_theta_cart*_ms182 + _ms124*_ms183 + _ms128*_ms189 + _ms132;
+    const trailer2_real_t _t137 = _ms134*_t136;
+    const trailer2_real_t _t138 = J_theta_cart2*_ms189 + _ms125*_ms183 + _ms128*_ms182 + _ms133;
+    const trailer2_real_t _t139 = TRAILER2_LIT(0.6)*_ms115;
+    const trailer2_real_t _t140 = -_t139*_t31 - _t139*_t33;
+    const trailer2_real_t _t141 = TRAILER2_LIT(0.3)*_t56;
+    const trailer2_real_t _t142 = _t141*_t54;
+    const trailer2_real_t _t143 = _t141*_t53;
+    const trailer2_real_t _t144 = TRAILER2_LIT(0.6)*_ms114;
+    const trailer2_real_t _t145 = -_t144*_t24 - _t144*_t26;
+    const trailer2_real_t _t146 = TRAILER2_LIT(0.3)*_t64;
+    const trailer2_real_t _t147 = _t145*_t65 + _t146*_t61 - _t146*_t62;
+    const trailer2_real_t _t148 = _ms182*_t27;
+    const trailer2_real_t _t149 = _ms189*_t44;
+    const trailer2_real_t _t150 = _t11*_t124;
+    const trailer2_real_t _t151 = _ms191*_t36;
+    const trailer2_real_t _t152 = _ms190*_t35;
+    const trailer2_real_t _t153 = _t130*_t9;
+    const trailer2_real_t _t154 = _ms183*_t2;
+    const trailer2_real_t _t155 = _ms183*_t3;
+    const trailer2_real_t _t156 = _t134*_t5;
+    const trailer2_real_t _t157 = _ms135*_t136;
+    const trailer2_real_t _t158 = _ms122*_ms134;
+    const trailer2_real_t _t159 = _ms124*_ms86;
+    const trailer2_real_t _t160 = _ms125*_ms90;
+    const trailer2_real_t _t161 = _t159 + _t160;
+    const trailer2_real_t _t162 = J_theta_cart*_ms134 + _ms124;
+    const trailer2_real_t _t163 = _ms128*_ms134;
+    const trailer2_real_t _t164 = _ms102*_t126;
+    const trailer2_real_t _t165 = _ms134*_t4;
+    const trailer2_real_t _t166 = _ms149*_t8;
+    const trailer2_real_t _t167 = _ms153*_t10;
+    const trailer2_real_t _t168 = _ms98*_t128;
+    const trailer2_real_t _t169 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t170 = TRAILER2_LIT(1.0)/radius_left;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t171 = K_theta_tractor_x_tractor_2 + _t2 + _t3;
+    const trailer2_real_t _t172 = TRAILER2_LIT(0.207)*_t169;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t _t173 = J_theta_right*_t172;
+    const trailer2_real_t _t174 = -TRAILER2_LIT(0.207)*_t170;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t _t175 = J_theta_left*_t174;
+    const trailer2_real_t _t176 = _ms102*_t11 + _ms106*_t13 + _ms110*_t15 + _ms86*_t5 + _ms90*_t7
+            + _ms98*_t9 + _t169*_t173 + _t170*_t175 + _t171;
+    const trailer2_real_t _t177 = TRAILER2_LIT(2.0)*_t176;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t178 = J_x_tractor + _t0 + _t1;
+    const trailer2_real_t _t179 = J_theta_right*_t169;
+    const trailer2_real_t _t180 = J_theta_left*_t170;
+    const trailer2_real_t _t181 = _ms102*_t10 + _ms106*_t12 + _ms110*_t14 + _ms86*_t4 + _ms90*_t6
+            + _ms98*_t8 + _t169*_t179 + _t170*_t180 + _t178;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t182 = J_theta_tractor + _ms126*_ms87 + _ms127*_ms91;
+    const trailer2_real_t _t183 = _ms103*_t11 + _ms107*_t13 + _ms111*_t15 + _ms87*_t5 + _ms91*_t7
+            + _ms99*_t9 + _t172*_t173 + _t174*_t175 + _t182;
+    const trailer2_real_t _t184 = -_t176*_t176 + _t181*_t183;
+    const trailer2_real_t _t185 = TRAILER2_LIT(1.0)/_t184;
+    const trailer2_real_t _t186 = _t185*_t185;
+    const trailer2_real_t _t187 = _t185;
+    const trailer2_real_t _t188 = _t176*_t187;
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    const trailer2_real_t _t329 = _t297*tau_right + _t298*tau_left - _t328;
-    const trailer2_real_t _t330 = _t315*_t329;
-    const trailer2_real_t _t331 = _t311*_t315;
-    const trailer2_real_t _t332 = -_t55*_t61 - _t55*_t62 - _t58*_t63 - _t58*_t64;
-    const trailer2_real_t _t333 = -K_theta_tractor_x_tractor*_t99 + _t110*_t147 + _t113*_t150
-            + _t121*_t260 + _t128*_t257 + _t135*_t322 + _t142*_t327 + _t151*_t16 + _t154*_t26
-            + _t332;
-    const trailer2_real_t _t334 = _t300*tau_right + _t302*tau_left - _t333;
-    const trailer2_real_t _t335 = _t315*_t334;
-    const trailer2_real_t _t336 = -_t304*_t334 + _t311*_t329;
-    const trailer2_real_t _t337 = _t309*_t315;
-    const trailer2_real_t _t338 = -_t304*_t329 + _t309*_t334;
-    const trailer2_real_t _t339 = -_t67 + _t68 + _t69 + _t70;
-    const trailer2_real_t _t340 = -_t26*_t339;
-    const trailer2_real_t _t341 = _t16*_t339;
-    const trailer2_real_t _t342 = J_theta_cart2_right*_t228;
-    const trailer2_real_t _t343 = J_theta_cart2_left*_t239;
-    const trailer2_real_t _t344 = _t40*_t65 + _t40*_t66 + _t42*_t56 - _t42*_t59;
-    const trailer2_real_t _t345 = _t41*_t58 + _t43*_t58 + _t44*_t58 - _t46*_t58;
-    const trailer2_real_t _t346 = TRAILER2_LIT(2.0)*_t12*_t13 - TRAILER2_LIT(2.0)*_t83;
-    const trailer2_real_t _t347 = -TRAILER2_LIT(1.6666666666666667)*_t346;
-    const trailer2_real_t _t348 = TRAILER2_LIT(0.2)*_t347;
-    const trailer2_real_t _t349 = TRAILER2_LIT(2.0)*_t24 + TRAILER2_LIT(2.0)*_t72;
-    const trailer2_real_t _t350 = TRAILER2_LIT(2.0)*_t12*_t16 - TRAILER2_LIT(2.0)*_t87;
-    const trailer2_real_t _t351 = -TRAILER2_LIT(1.6666666666666667)*_t350;
-    const trailer2_real_t _t352 = TRAILER2_LIT(0.2)*_t351;
-    const trailer2_real_t _t353 = TRAILER2_LIT(2.0)*_t28 + TRAILER2_LIT(2.0)*_t75;
-    const trailer2_real_t _t354 = J_theta_cart2_left*_t236;
-    const trailer2_real_t _t355 = J_theta_cart2_right*_t225;
-    const trailer2_real_t _t356 = _t339*(_t13*_t150 + _t147*_t21);
-    const trailer2_real_t _t357 = _t339*(_t147*_t26 + _t150*_t16);
-    const trailer2_real_t _t358 = -_t21*_t339;
-    const trailer2_real_t _t359 = _t13*_t339;
-    const trailer2_real_t _t360 = J_theta_cart2_right*_t321;
-    const trailer2_real_t _t361 = J_theta_cart2_left*_t326;
-    const trailer2_real_t _t362 = J_theta_cart2_left*_t324;
-    const trailer2_real_t _t363 = J_theta_cart2_right*_t319;
-    const trailer2_real_t _t364 = TRAILER2_LIT(2.0)*_t49;
-    const trailer2_real_t _t365 = _t364*_t47;
-    const trailer2_real_t _t366 = TRAILER2_LIT(0.6)*_t49;
-    const trailer2_real_t _t367 = _t30*_t366 + _t31*_t366;
-    const trailer2_real_t _t368 = _t32*_t366 + _t33*_t366;
-    const trailer2_real_t _t369 = _t47*_t53;
-    const trailer2_real_t _t370 = _t13*_t51 + _t16*_t47;
-    const trailer2_real_t _t371 = _t370*_t53;
-    const trailer2_real_t _t372 = -_t57;
-    const trailer2_real_t _t373 = _t372 + _t49;
-    const trailer2_real_t _t374 = _t370*_t49;
-    const trailer2_real_t _t375 = _t364 + _t372;
-    const trailer2_real_t _t376 = -K_theta_tractor_x_tractor + _t157 + _t158;
-    const trailer2_real_t _t377 = _t364*_t48;
-    const trailer2_real_t _t378 = _t48*_t53;
-    const trailer2_real_t _t379 = _t13*_t52 + _t16*_t48;
-    const trailer2_real_t _t380 = _t379*_t53;
-    const trailer2_real_t _t381 = _t379*_t49;
-    const trailer2_real_t _t382 = _t297*_t51 + _t300*_t47;
-    const trailer2_real_t _t383 = _t298*_t51 + _t302*_t47;
-    const trailer2_real_t _t384 = _t297*_t52 + _t300*_t48;
-    const trailer2_real_t _t385 = _t298*_t52 + _t302*_t48;
-    const trailer2_real_t _t386 = _t155*_t53;
-    const trailer2_real_t _t387 = _t156*_t53;
-    const trailer2_real_t _t388 = _t155*_t51;
-    const trailer2_real_t _t389 = _t155*_t52;
-    const trailer2_real_t _t390 = _t156*_t51;
-    const trailer2_real_t _t391 = _t156*_t52;
-    const trailer2_real_t _t392 = _t49*_t85 + _t53*_t81;
-    const trailer2_real_t _t393 = _t49*_t92 + _t53*_t89;
-    const trailer2_real_t _t394 = _t49*_t97 + _t53*_t95;
-    const trailer2_real_t _t395 = _t21*_t51 + _t26*_t47;
-    const trailer2_real_t _t396 = _t21*_t52 + _t26*_t48;
-    const trailer2_real_t _t397 = _t164*_t49 + _t178*_t53;
-    const trailer2_real_t _t398 = _t117*_t51 + _t120*_t47;
-    const trailer2_real_t _t399 = _t117*_t52 + _t120*_t48;
-    const trailer2_real_t _t400 = _t167*_t49 + _t181*_t53;
-    const trailer2_real_t _t401 = _t124*_t51 + _t127*_t47;
-    const trailer2_real_t _t402 = _t124*_t52 + _t127*_t48;
-    const trailer2_real_t _t403 = _t170*_t49 + _t252*_t53;
-    const trailer2_real_t _t404 = _t225*_t53 + _t228*_t49;
-    const trailer2_real_t _t405 = _t319*_t53 + _t321*_t49;
-    const trailer2_real_t _t406 = _t131*_t51 + _t134*_t47;
-    const trailer2_real_t _t407 = _t131*_t52 + _t134*_t48;
-    const trailer2_real_t _t408 = _t173*_t49 + _t249*_t53;
-    const trailer2_real_t _t409 = _t236*_t53 + _t239*_t49;
-    const trailer2_real_t _t410 = _t324*_t53 + _t326*_t49;
-    const trailer2_real_t _t411 = _t138*_t51 + _t141*_t47;
-    const trailer2_real_t _t412 = _t138*_t52 + _t141*_t48;
-    const trailer2_real_t _t413 = _t104*_t85 + _t157 + _t159;
-    const trailer2_real_t _t414 = _t108*_t85 + _t161;
-    const trailer2_real_t _t415 = J_theta_cart2*_t85 + _t162 + _t184;
-    const trailer2_real_t _t416 = _t114*_t81 + _t13*_t414 + _t131*_t171 + _t135*_t252 + _t138*_t174
-            + _t142*_t249 + _t175 + _t176 + _t179 + _t182 + _t183 + _t21*_t415 + _t413;
-    const trailer2_real_t _t417 = _t113*_t85 + _t185 + _t186;
-    const trailer2_real_t _t418 = _t114*_t85 + _t134*_t171 + _t135*_t170 + _t141*_t174 + _t142*_t173
-            + _t16*_t414 + _t187 + _t188 + _t189 + _t190 + _t191 + _t26*_t415 + _t417;
-    const trailer2_real_t _t419 = _t193*_t392 + _t194 + _t198;
-    const trailer2_real_t _t420 = -_t199 + _t200 + _t203*_t392;
-    const trailer2_real_t _t421 = -_t204 + _t205 + _t210;
-    const trailer2_real_t _t422 = _t392*_t53;
-    const trailer2_real_t _t423 = _t392*_t49;
-    const trailer2_real_t _t424 = _t148*_t220 + _t149*_t222 - _t21*_t99 - _t212 - _t214 + _t217
-            - _t26*_t50 + _t422*_t95 + _t423*_t97;
-    const trailer2_real_t _t425 = _t221 + _t73;
-    const trailer2_real_t _t426 = _t129*_t425;
-    const trailer2_real_t _t427 = _t223 + _t76;
-    const trailer2_real_t _t428 = _t129*_t427;
-    const trailer2_real_t _t429 = -_t131*_t99 - _t134*_t50 + _t148*_t426 + _t149*_t428 - _t226
-            - _t229 + _t234 + _t319*_t422 + _t321*_t423;
-    const trailer2_real_t _t430 = -_t221 + _t73;
-    const trailer2_real_t _t431 = _t136*_t430;
-    const trailer2_real_t _t432 = -_t11 - _t223 + _t75;
-    const trailer2_real_t _t433 = _t136*_t432;
-    const trailer2_real_t _t434 = -_t138*_t99 - _t141*_t50 + _t148*_t431 + _t149*_t433 - _t237
-            - _t240 + _t245 + _t324*_t422 + _t326*_t423;
-    const trailer2_real_t _t435 = _t112*_t424 + _t13*_t420 + _t132*_t429 + _t139*_t434 + _t154*_t81
-            + _t21*_t421 + _t246 + _t247 + _t250*_t327 + _t253*_t322 + _t255 + _t258 + _t261 + _t263
-            - _t264 - _t265 + _t267 + _t268 + _t419;
-    const trailer2_real_t _t436 = _t270*_t392 - _t271 + _t272 + _t275;
-    const trailer2_real_t _t437 = _t114*_t424 + _t135*_t429 + _t142*_t434 + _t154*_t85 + _t16*_t420
-            + _t171*_t322 + _t174*_t327 + _t26*_t421 + _t276 + _t277 + _t278 + _t279 + _t280 + _t281
-            - _t282 - _t283 + _t284 + _t285 + _t436;
-    const trailer2_real_t _t438 = _t104*_t81 + _t286 + _t289;
-    const trailer2_real_t _t439 = _t108*_t81 + _t290;
-    const trailer2_real_t _t440 = J_theta_cart2*_t81 + _t152 + _t291;
-    const trailer2_real_t _t441 = _t112*_t81 + _t13*_t439 + _t131*_t253 + _t132*_t252 + _t138*_t250
-            + _t139*_t249 + _t21*_t440 + _t292 + _t293 + _t294 + _t295 + _t296 + _t438;
-    const trailer2_real_t _t442 = -_t305*_t416 + _t309*_t418 + _t311*_t441;
-    const trailer2_real_t _t443 = -_t314*_t442;
-    const trailer2_real_t _t444 = _t316*_t437 + _t330*_t418 - _t331*_t435 - _t335*_t416
-            + _t336*_t443;
-    const trailer2_real_t _t445 = _t316*_t435 - _t330*_t416 + _t335*_t441 - _t337*_t437
-            + _t338*_t443;
-    const trailer2_real_t _t446 = _t297*_t444 + _t300*_t445;
-    const trailer2_real_t _t447 = _t104*_t92 - _t159;
-    const trailer2_real_t _t448 = _t108*_t92 - _t161 - _t340;
-    const trailer2_real_t _t449 = J_theta_cart2*_t92 - _t162 + _t341;
-    const trailer2_real_t _t450 = _t114*_t89 + _t13*_t448 + _t131*_t342 + _t135*_t225 + _t138*_t343
-            + _t142*_t236 - _t175 - _t176 - _t179 - _t182 - _t183 + _t21*_t449 + _t447;
-    const trailer2_real_t _t451 = _t113*_t92 - _t186;
-    const trailer2_real_t _t452 = _t114*_t92 + _t134*_t342 + _t135*_t228 + _t141*_t343 + _t142*_t239
-            + _t16*_t448 - _t187 - _t188 - _t189 - _t190 - _t191 + _t26*_t449 + _t451;
-    const trailer2_real_t _t453 = _t193*_t393 - _t198;
-    const trailer2_real_t _t454 = _t199 - _t200 + _t203*_t393 + _t344;
-    const trailer2_real_t _t455 = -_t210 - _t345;
-    const trailer2_real_t _t456 = _t393*_t53;
-    const trailer2_real_t _t457 = _t393*_t49;
-    const trailer2_real_t _t458 = _t100*_t347 + _t101*_t351 + _t148*_t215 + _t149*_t216 + _t212
-            + _t214 + _t215*_t99 + _t216*_t50 + _t456*_t95 + _t457*_t97;
-    const trailer2_real_t _t459 = _t348 + _t349;
-    const trailer2_real_t _t460 = _t129*_t459;
-    const trailer2_real_t _t461 = _t352 + _t353;
-    const trailer2_real_t _t462 = _t129*_t461;
-    const trailer2_real_t _t463 = _t100*_t460 + _t101*_t462 + _t148*_t231 + _t149*_t233 + _t226
-            + _t229 + _t231*_t99 + _t233*_t50 + _t319*_t456 + _t321*_t457;
-    const trailer2_real_t _t464 = -_t348 + _t349;
-    const trailer2_real_t _t465 = _t136*_t464;
-    const trailer2_real_t _t466 = -_t352 + _t353;
-    const trailer2_real_t _t467 = _t136*_t466;
-    const trailer2_real_t _t468 = _t100*_t465 + _t101*_t467 + _t148*_t242 + _t149*_t244 + _t237
-            + _t240 + _t242*_t99 + _t244*_t50 + _t324*_t456 + _t326*_t457;
-    const trailer2_real_t _t469 = _t112*_t458 + _t13*_t454 + _t132*_t463 + _t139*_t468 + _t154*_t89
-            + _t21*_t455 - _t246 - _t255 - _t258 - _t261 - _t263 + _t264 - _t267 - _t268
-            + _t322*_t355 + _t327*_t354 + _t356 + _t453;
-    const trailer2_real_t _t470 = _t270*_t393 - _t275;
-    const trailer2_real_t _t471 = _t114*_t458 + _t135*_t463 + _t142*_t468 + _t154*_t92 + _t16*_t454
-            + _t26*_t455 - _t276 - _t278 - _t279 - _t280 - _t281 + _t282 - _t284 - _t285
-            + _t322*_t342 + _t327*_t343 + _t357 + _t470;
-    const trailer2_real_t _t472 = _t104*_t89 - _t286 - _t287;
-    const trailer2_real_t _t473 = _t108*_t89 - _t290 - _t358;
-    const trailer2_real_t _t474 = J_theta_cart2*_t89 - _t291 + _t359;
-    const trailer2_real_t _t475 = _t112*_t89 + _t13*_t473 + _t131*_t355 + _t132*_t225 + _t138*_t354
-            + _t139*_t236 + _t21*_t474 - _t292 - _t293 - _t294 - _t295 - _t296 + _t472;
-    const trailer2_real_t _t476 = -_t305*_t450 + _t309*_t452 + _t311*_t475;
-    const trailer2_real_t _t477 = -_t314*_t476;
-    const trailer2_real_t _t478 = _t316*_t471 + _t330*_t452 - _t331*_t469 - _t335*_t450
-            + _t336*_t477;
-    const trailer2_real_t _t479 = _t316*_t469 - _t330*_t450 + _t335*_t475 - _t337*_t471
-            + _t338*_t477;
-    const trailer2_real_t _t480 = _t297*_t478 + _t300*_t479;
-    const trailer2_real_t _t481 = _t104*_t97 - _t157;
-    const trailer2_real_t _t482 = _t108*_t97 + _t340;
-    const trailer2_real_t _t483 = J_theta_cart2*_t97 - _t184 - _t341;
-    const trailer2_real_t _t484 = _t114*_t95 + _t13*_t482 + _t131*_t360 + _t135*_t319 + _t138*_t361
-            + _t142*_t324 + _t21*_t483 + _t481;
-    const trailer2_real_t _t485 = _t113*_t97 - _t185;
-    const trailer2_real_t _t486 = _t114*_t97 + _t134*_t360 + _t135*_t321 + _t141*_t361 + _t142*_t326
-            + _t16*_t482 + _t26*_t483 + _t485;
-    const trailer2_real_t _t487 = _t193*_t394 - _t194;
-    const trailer2_real_t _t488 = _t203*_t394 - _t344;
-    const trailer2_real_t _t489 = _t204 - _t205 + _t345;
-    const trailer2_real_t _t490 = _t394*_t53;
-    const trailer2_real_t _t491 = _t394*_t49;
-    const trailer2_real_t _t492 = -_t148*_t21 - _t149*_t26 + _t217 + _t220*_t99 + _t222*_t50
-            + _t490*_t95 + _t491*_t97;
-    const trailer2_real_t _t493 = -_t131*_t148 - _t134*_t149 + _t234 + _t319*_t490 + _t321*_t491
-            + _t426*_t99 + _t428*_t50;
-    const trailer2_real_t _t494 = -_t138*_t148 - _t141*_t149 + _t245 + _t324*_t490 + _t326*_t491
-            + _t431*_t99 + _t433*_t50;
-    const trailer2_real_t _t495 = _t112*_t492 + _t13*_t488 + _t132*_t493 + _t139*_t494 + _t154*_t95
-            + _t21*_t489 - _t247 + _t265 + _t322*_t363 + _t327*_t362 - _t356 + _t487;
-    const trailer2_real_t _t496 = _t270*_t394 + _t271 - _t272;
-    const trailer2_real_t _t497 = _t114*_t492 + _t135*_t493 + _t142*_t494 + _t154*_t97 + _t16*_t488
-            + _t26*_t489 - _t277 + _t283 + _t322*_t360 + _t327*_t361 - _t357 + _t496;
-    const trailer2_real_t _t498 = _t104*_t95 - _t288;
-    const trailer2_real_t _t499 = _t108*_t95 + _t358;
-    const trailer2_real_t _t500 = J_theta_cart2*_t95 - _t152 - _t359;
-    const trailer2_real_t _t501 = _t112*_t95 + _t13*_t499 + _t131*_t363 + _t132*_t319 + _t138*_t362
-            + _t139*_t324 + _t21*_t500 + _t498;
-    const trailer2_real_t _t502 = -_t305*_t484 + _t309*_t486 + _t311*_t501;
-    const trailer2_real_t _t503 = -_t314*_t502;
-    const trailer2_real_t _t504 = _t316*_t497 + _t330*_t486 - _t331*_t495 - _t335*_t484
-            + _t336*_t503;
-    const trailer2_real_t _t505 = _t316*_t495 - _t330*_t484 + _t335*_t501 - _t337*_t497
-            + _t338*_t503;
-    const trailer2_real_t _t506 = _t297*_t504 + _t300*_t505;
-    const trailer2_real_t _t507 = K_theta_tractor_x_tractor*_t365 + _t193*_t395 + _t196*_t370;
-    const trailer2_real_t _t508 = _t203*_t395 + _t367*_t47;
-    const trailer2_real_t _t509 = _t209*_t370 + _t368*_t47;
-    const trailer2_real_t _t510 = _t369 - _t371 + _t373*_t51;
-    const trailer2_real_t _t511 = -_t374 + _t375*_t47;
-    const trailer2_real_t _t512 = _t510*_t71 + _t511*_t74;
-    const trailer2_real_t _t513 = _t369 + _t49*_t51;
-    const trailer2_real_t _t514 = _t371 + _t51*_t57;
-    const trailer2_real_t _t515 = _t374 + _t47*_t57;
-    const trailer2_real_t _t516 = _t395*_t53 + _t51*_t54;
-    const trailer2_real_t _t517 = _t395*_t49 + _t47*_t54;
-    const trailer2_real_t _t518 = _t365*_t85 + _t513*_t81 + _t514*_t89 + _t515*_t92 + _t516*_t95
-            + _t517*_t97;
-    const trailer2_real_t _t519 = _t164*_t511 + _t178*_t510;
-    const trailer2_real_t _t520 = _t167*_t511 + _t181*_t510;
-    const trailer2_real_t _t521 = _t170*_t365 + _t225*_t514 + _t228*_t515 + _t252*_t513
-            + _t319*_t516 + _t321*_t517;
-    const trailer2_real_t _t522 = _t173*_t365 + _t236*_t514 + _t239*_t515 + _t249*_t513
-            + _t324*_t516 + _t326*_t517;
-    const trailer2_real_t _t523 = _t109*_t512 + _t112*_t518 + _t118*_t519 + _t125*_t520 + _t13*_t508
-            + _t132*_t521 + _t139*_t522 + _t21*_t509 + _t289*_t513 + _t507;
-    const trailer2_real_t _t524 = _t270*_t395 + _t274*_t370;
-    const trailer2_real_t _t525 = _t111*_t512 + _t114*_t518 + _t121*_t519 + _t128*_t520
-            + _t135*_t521 + _t142*_t522 + _t16*_t508 + _t26*_t509 + _t376*_t513 + _t524;
-    const trailer2_real_t _t526 = _t316*_t525 - _t331*_t523;
-    const trailer2_real_t _t527 = _t304*_t315*_t523 - _t337*_t525;
-    const trailer2_real_t _t528 = _t297*_t526 + _t300*_t527;
-    const trailer2_real_t _t529 = K_theta_tractor_x_tractor*_t377 + _t193*_t396 + _t196*_t379;
-    const trailer2_real_t _t530 = _t203*_t396 + _t367*_t48;
-    const trailer2_real_t _t531 = _t209*_t379 + _t368*_t48;
-    const trailer2_real_t _t532 = _t373*_t52 + _t378 - _t380;
-    const trailer2_real_t _t533 = _t375*_t48 - _t381;
-    const trailer2_real_t _t534 = _t532*_t71 + _t533*_t74;
-    const trailer2_real_t _t535 = _t378 + _t49*_t52;
-    const trailer2_real_t _t536 = _t380 + _t52*_t57;
-    const trailer2_real_t _t537 = _t381 + _t48*_t57;
-    const trailer2_real_t _t538 = _t396*_t53 + _t52*_t54;
-    const trailer2_real_t _t539 = _t396*_t49 + _t48*_t54;
-    const trailer2_real_t _t540 = _t377*_t85 + _t535*_t81 + _t536*_t89 + _t537*_t92 + _t538*_t95
-            + _t539*_t97;
-    const trailer2_real_t _t541 = _t164*_t533 + _t178*_t532;
-    const trailer2_real_t _t542 = _t167*_t533 + _t181*_t532;
-    const trailer2_real_t _t543 = _t170*_t377 + _t225*_t536 + _t228*_t537 + _t252*_t535
-            + _t319*_t538 + _t321*_t539;
-    const trailer2_real_t _t544 = _t173*_t377 + _t236*_t536 + _t239*_t537 + _t249*_t535
-            + _t324*_t538 + _t326*_t539;
-    const trailer2_real_t _t545 = _t109*_t534 + _t112*_t540 + _t118*_t541 + _t125*_t542 + _t13*_t530
-            + _t132*_t543 + _t139*_t544 + _t21*_t531 + _t289*_t535 + _t529;
-    const trailer2_real_t _t546 = _t270*_t396 + _t274*_t379;
-    const trailer2_real_t _t547 = _t111*_t534 + _t114*_t540 + _t121*_t541 + _t128*_t542
-            + _t135*_t543 + _t142*_t544 + _t16*_t530 + _t26*_t531 + _t376*_t535 + _t546;
-    const trailer2_real_t _t548 = _t316*_t547 - _t331*_t545;
-    const trailer2_real_t _t549 = _t304*_t315*_t545 - _t337*_t547;
-    const trailer2_real_t _t550 = _t297*_t548 + _t300*_t549;
-    const trailer2_real_t _t551 = _t298*_t444 + _t302*_t445;
-    const trailer2_real_t _t552 = _t298*_t478 + _t302*_t479;
-    const trailer2_real_t _t553 = _t298*_t504 + _t302*_t505;
-    const trailer2_real_t _t554 = _t298*_t526 + _t302*_t527;
-    const trailer2_real_t _t555 = _t298*_t548 + _t302*_t549;
-    const trailer2_real_t _t556 = _t297*_t311*_t315 - _t300*_t316;
-    const trailer2_real_t _t557 = -_t297*_t316 + _t300*_t337;
-    const trailer2_real_t _t558 = _t297*_t556 + _t300*_t557;
-    const trailer2_real_t _t559 = _t298*_t311*_t315 - _t302*_t316;
-    const trailer2_real_t _t560 = -_t298*_t316 + _t302*_t337;
-    const trailer2_real_t _t561 = _t297*_t559 + _t300*_t560;
-    const trailer2_real_t _t562 = _t298*_t556 + _t302*_t557;
-    const trailer2_real_t _t563 = _t298*_t559 + _t302*_t560;
+    const trailer2_real_t _t189 = -_ms219 + _t169*tau_right + _t170*tau_left;
+    const trailer2_real_t _t190 = _t187*_t189;
+    const trailer2_real_t _t191 = _t183*_t187;
+    const trailer2_real_t _t192 = -_ms220 + _t172*tau_right + _t174*tau_left;
+    const trailer2_real_t _t193 = _t187*_t192;
+    const trailer2_real_t _t194 = -_t176*_t192 + _t183*_t189;
+    const trailer2_real_t _t195 = _t181*_t187;
+    const trailer2_real_t _t196 = -_t176*_t189 + _t181*_t192;
+    const trailer2_real_t _t197 = TRAILER2_LIT(0.85)*_t23;
+    const trailer2_real_t _t198 = TRAILER2_LIT(0.85)*_t25;
+    const trailer2_real_t _t199 = -_t197*_t53 + _t197*_t54 + _t198*_t31 + _t198*_t33;
+    const trailer2_real_t _t200 = -_ms91*_t199;
+    const trailer2_real_t _t201 = _ms87*_t199;
+    const trailer2_real_t _t202 = J_theta_cart2_right*_ms163;
+    const trailer2_real_t _t203 = J_theta_cart2_left*_ms175;
+    const trailer2_real_t _t204 = _t198*_t56;
+    const trailer2_real_t _t205 = _t197*_t57 + _t197*_t58 + _t204*_t53 - _t204*_t54;
+    const trailer2_real_t _t206 = _t198*_t64;
+    const trailer2_real_t _t207 = _t197*_t64;
+    const trailer2_real_t _t208 = _t206*_t53 - _t206*_t54 + _t207*_t31 + _t207*_t33;
+    const trailer2_real_t _t209 = TRAILER2_LIT(2.0)*_ms56*_ms86 - TRAILER2_LIT(2.0)*_t80;
+    const trailer2_real_t _t210 = -TRAILER2_LIT(1.6666666666666667)*_t209;
+    const trailer2_real_t _t211 = TRAILER2_LIT(0.2)*_t210;
+    const trailer2_real_t _t212 = TRAILER2_LIT(2.0)*_t92 + TRAILER2_LIT(2.0)*_t93;
+    const trailer2_real_t _t213 = TRAILER2_LIT(2.0)*_ms56*_ms87 - TRAILER2_LIT(2.0)*_t81;
+    const trailer2_real_t _t214 = -TRAILER2_LIT(1.6666666666666667)*_t213;
+    const trailer2_real_t _t215 = TRAILER2_LIT(0.2)*_t214;
+    const trailer2_real_t _t216 = TRAILER2_LIT(2.0)*_t96 + TRAILER2_LIT(2.0)*_t97;
+    const trailer2_real_t _t217 = J_theta_cart2_left*_ms173;
+    const trailer2_real_t _t218 = J_theta_cart2_right*_ms161;
+    const trailer2_real_t _t219 = _t199*(_ms182*_ms90 + _ms189*_ms86);
+    const trailer2_real_t _t220 = _t199*(_ms182*_ms91 + _ms189*_ms87);
+    const trailer2_real_t _t221 = -_ms90*_t199;
+    const trailer2_real_t _t222 = _ms86*_t199;
+    const trailer2_real_t _t223 = J_theta_cart2_right*_ms167;
+    const trailer2_real_t _t224 = J_theta_cart2_left*_ms179;
+    const trailer2_real_t _t225 = J_theta_cart2_left*_ms177;
+    const trailer2_real_t _t226 = J_theta_cart2_right*_ms165;
+    const trailer2_real_t _t227 = TRAILER2_LIT(2.0)*_ms113;
+    const trailer2_real_t _t228 = _ms18*_t227;
+    const trailer2_real_t _t229 = TRAILER2_LIT(0.6)*_ms113;
+    const trailer2_real_t _t230 = _t229*_t24 + _t229*_t26;
+    const trailer2_real_t _t231 = _t229*_t31 + _t229*_t33;
+    const trailer2_real_t _t232 = _ms112*_ms18;
+    const trailer2_real_t _t233 = _ms18*_ms87 + _ms60*_ms86;
+    const trailer2_real_t _t234 = _ms112*_t233;
+    const trailer2_real_t _t235 = -_ms114;
+    const trailer2_real_t _t236 = _ms113 + _t235;
+    const trailer2_real_t _t237 = _ms113*_t233;
+    const trailer2_real_t _t238 = _t227 + _t235;
+    const trailer2_real_t _t239 = -K_theta_tractor_x_tractor + _t18 + _t19;
+    const trailer2_real_t _t240 = _ms19*_t227;
+    const trailer2_real_t _t241 = _ms112*_ms19;
+    const trailer2_real_t _t242 = _ms19*_ms87 + _ms61*_ms86;
+    const trailer2_real_t _t243 = _ms112*_t242;
+    const trailer2_real_t _t244 = _ms113*_t242;
+    const trailer2_real_t _t245 = _ms18*_t172 + _ms60*_t169;
+    const trailer2_real_t _t246 = _ms18*_t174 + _ms60*_t170;
+    const trailer2_real_t _t247 = _ms19*_t172 + _ms61*_t169;
+    const trailer2_real_t _t248 = _ms19*_t174 + _ms61*_t170;
+    const trailer2_real_t _t249 = _ms112*_t16;
+    const trailer2_real_t _t250 = _ms112*_t17;
+    const trailer2_real_t _t251 = _ms60*_t16;
+    const trailer2_real_t _t252 = _ms61*_t16;
+    const trailer2_real_t _t253 = _ms60*_t17;
+    const trailer2_real_t _t254 = _ms61*_t17;
+    const trailer2_real_t _t255 = _ms112*_ms137 + _ms113*_ms139;
+    const trailer2_real_t _t256 = _ms112*_ms141 + _ms113*_ms143;
+    const trailer2_real_t _t257 = _ms112*_ms145 + _ms113*_ms147;
+    const trailer2_real_t _t258 = _ms18*_ms91 + _ms60*_ms90;
+    const trailer2_real_t _t259 = _ms19*_ms91 + _ms61*_ms90;
+    const trailer2_real_t _t260 = _ms112*_ms149 + _ms113*_ms151;
+    const trailer2_real_t _t261 = _ms18*_ms99 + _ms60*_ms98;
+    const trailer2_real_t _t262 = _ms19*_ms99 + _ms61*_ms98;
+    const trailer2_real_t _t263 = _ms112*_ms153 + _ms113*_ms155;
+    const trailer2_real_t _t264 = _ms102*_ms60 + _ms103*_ms18;
+    const trailer2_real_t _t265 = _ms102*_ms61 + _ms103*_ms19;
+    const trailer2_real_t _t266 = _ms112*_ms157 + _ms113*_ms159;
+    const trailer2_real_t _t267 = _ms112*_ms161 + _ms113*_ms163;
+    const trailer2_real_t _t268 = _ms112*_ms165 + _ms113*_ms167;
+    const trailer2_real_t _t269 = _ms106*_ms60 + _ms107*_ms18;
+    const trailer2_real_t _t270 = _ms106*_ms61 + _ms107*_ms19;
+    const trailer2_real_t _t271 = _ms112*_ms169 + _ms113*_ms171;
+    const trailer2_real_t _t272 = _ms112*_ms173 + _ms113*_ms175;
+    const trailer2_real_t _t273 = _ms112*_ms177 + _ms113*_ms179;
+    const trailer2_real_t _t274 = _ms110*_ms60 + _ms111*_ms18;
+    const trailer2_real_t _t275 = _ms110*_ms61 + _ms111*_ms19;
+    const trailer2_real_t _t276 = _ms123*_ms139 + _t18 + _t20;
+    const trailer2_real_t _t277 = _ms128*_ms139 + _t28;
+    const trailer2_real_t _t278 = J_theta_cart2*_ms139 + _t34 + _t44;
+    const trailer2_real_t _t279 = _ms106*_t37 + _ms110*_t38 + _ms137*_t7 + _ms157*_t13 + _ms169*_t15
+            + _ms86*_t277 + _ms90*_t278 + _t276 + _t39 + _t40 + _t41 + _t42 + _t43;
+    const trailer2_real_t _t280 = _ms127*_ms139 + _t45 + _t46;
+    const trailer2_real_t _t281 = _ms107*_t37 + _ms111*_t38 + _ms139*_t7 + _ms159*_t13 + _ms171*_t15
+            + _ms87*_t277 + _ms91*_t278 + _t280 + _t47 + _t48 + _t49 + _t50 + _t51;
+    const trailer2_real_t _t282 = _t255*_t55 + _t59 + _t66;
+    const trailer2_real_t _t283 = _t255*_t72 - _t68 + _t69;
+    const trailer2_real_t _t284 = -_t73 + _t74 + _t79;
+    const trailer2_real_t _t285 = _ms112*_t255;
+    const trailer2_real_t _t286 = _ms113*_t255;
+    const trailer2_real_t _t287 = _ms145*_t285 + _ms147*_t286 - _ms183*_ms90 - _ms184*_ms91
+            + _ms187*_t100 + _ms188*_t104 - _t83 - _t85 + _t90;
+    const trailer2_real_t _t288 = _t101 + _t102;
+    const trailer2_real_t _t289 = _ms42*_t288;
+    const trailer2_real_t _t290 = -_ms58 + _t105 + _t96;
+    const trailer2_real_t _t291 = _ms42*_t290;
+    const trailer2_real_t _t292 = -_ms106*_ms183 - _ms107*_ms184 + _ms165*_t285 + _ms167*_t286
+            + _ms187*_t289 + _ms188*_t291 - _t106 - _t107 + _t112;
+    const trailer2_real_t _t293 = -_t101 + _t102;
+    const trailer2_real_t _t294 = _ms47*_t293;
+    const trailer2_real_t _t295 = -_ms58 - _t105 + _t96;
+    const trailer2_real_t _t296 = _ms47*_t295;
+    const trailer2_real_t _t297 = -_ms110*_ms183 - _ms111*_ms184 + _ms177*_t285 + _ms179*_t286
+            + _ms187*_t294 + _ms188*_t296 - _t113 - _t114 + _t119;
+    const trailer2_real_t _t298 = _ms137*_t138 + _ms192*_t123 + _ms193*_t122 + _ms86*_t283
+            + _ms90*_t284 + _t12*_t292 + _t120 + _t121 + _t125 + _t127 + _t129 + _t131 - _t132
+            - _t133 + _t135 + _t137 + _t14*_t297 + _t282 + _t287*_t6;
+    const trailer2_real_t _t299 = _t140*_t255 - _t142 + _t143 + _t147;
+    const trailer2_real_t _t300 = _ms139*_t138 + _ms192*_t37 + _ms193*_t38 + _ms87*_t283
+            + _ms91*_t284 + _t13*_t292 + _t148 + _t149 + _t15*_t297 + _t150 + _t151 + _t152 + _t153
+            - _t154 - _t155 + _t156 + _t157 + _t287*_t7 + _t299;
+    const trailer2_real_t _t301 = _ms123*_ms137 + _t158 + _t161;
+    const trailer2_real_t _t302 = _ms128*_ms137 + _t162;
+    const trailer2_real_t _t303 = J_theta_cart2*_ms137 + _ms125 + _t163;
+    const trailer2_real_t _t304 = _ms106*_t123 + _ms110*_t122 + _ms137*_t6 + _ms157*_t12
+            + _ms169*_t14 + _ms86*_t302 + _ms90*_t303 + _t164 + _t165 + _t166 + _t167 + _t168
+            + _t301;
+    const trailer2_real_t _t305 = -_t177*_t279 + _t181*_t281 + _t183*_t304;
+    const trailer2_real_t _t306 = -_t186*_t305;
+    const trailer2_real_t _t307 = _t188*_t300 + _t190*_t281 - _t191*_t298 - _t193*_t279
+            + _t194*_t306;
+    const trailer2_real_t _t308 = _t188*_t298 - _t190*_t279 + _t193*_t304 - _t195*_t300
+            + _t196*_t306;
+    const trailer2_real_t _t309 = _t169*_t307 + _t172*_t308;
+    const trailer2_real_t _t310 = _ms123*_ms143 - _t20;
+    const trailer2_real_t _t311 = _ms128*_ms143 - _t200 - _t28;
+    const trailer2_real_t _t312 = J_theta_cart2*_ms143 + _t201 - _t34;
+    const trailer2_real_t _t313 = _ms106*_t202 + _ms110*_t203 + _ms141*_t7 + _ms161*_t13
+            + _ms173*_t15 + _ms86*_t311 + _ms90*_t312 + _t310 - _t39 - _t40 - _t41 - _t42 - _t43;
+    const trailer2_real_t _t314 = _ms127*_ms143 - _t46;
+    const trailer2_real_t _t315 = _ms107*_t202 + _ms111*_t203 + _ms143*_t7 + _ms163*_t13
+            + _ms175*_t15 + _ms87*_t311 + _ms91*_t312 + _t314 - _t47 - _t48 - _t49 - _t50 - _t51;
+    const trailer2_real_t _t316 = _t256*_t55 - _t66;
+    const trailer2_real_t _t317 = _t205 + _t256*_t72 + _t68 - _t69;
+    const trailer2_real_t _t318 = -_t208 - _t79;
+    const trailer2_real_t _t319 = _ms112*_t256;
+    const trailer2_real_t _t320 = _ms113*_t256;
+    const trailer2_real_t _t321 = _ms145*_t319 + _ms147*_t320 + _ms183*_t87 + _ms184*_t89
+            + _ms185*_t210 + _ms186*_t214 + _ms187*_t87 + _ms188*_t89 + _t83 + _t85;
+    const trailer2_real_t _t322 = _t211 + _t212;
+    const trailer2_real_t _t323 = _ms42*_t322;
+    const trailer2_real_t _t324 = _t215 + _t216;
+    const trailer2_real_t _t325 = _ms42*_t324;
+    const trailer2_real_t _t326 = _ms165*_t319 + _ms167*_t320 + _ms183*_t109 + _ms184*_t111
+            + _ms185*_t323 + _ms186*_t325 + _ms187*_t109 + _ms188*_t111 + _t106 + _t107;
+    const trailer2_real_t _t327 = -_t211 + _t212;
+    const trailer2_real_t _t328 = _ms47*_t327;
+    const trailer2_real_t _t329 = -_t215 + _t216;
+    const trailer2_real_t _t330 = _ms47*_t329;
+    const trailer2_real_t _t331 = _ms177*_t319 + _ms179*_t320 + _ms183*_t116 + _ms184*_t118
+            + _ms185*_t328 + _ms186*_t330 + _ms187*_t116 + _ms188*_t118 + _t113 + _t114;
+    const trailer2_real_t _t332 = _ms141*_t138 + _ms192*_t218 + _ms193*_t217 + _ms86*_t317
+            + _ms90*_t318 + _t12*_t326 - _t120 - _t125 - _t127 - _t129 - _t131 + _t132 - _t135
+            - _t137 + _t14*_t331 + _t219 + _t316 + _t321*_t6;
+    const trailer2_real_t _t333 = _t140*_t256 - _t147;
+    const trailer2_real_t _t334 = _ms143*_t138 + _ms192*_t202 + _ms193*_t203 + _ms87*_t317
+            + _ms91*_t318 + _t13*_t326 - _t148 + _t15*_t331 - _t150 - _t151 - _t152 - _t153 + _t154
+            - _t156 - _t157 + _t220 + _t321*_t7 + _t333;
+    const trailer2_real_t _t335 = _ms123*_ms141 - _t158 - _t159;
+    const trailer2_real_t _t336 = _ms128*_ms141 - _t162 - _t221;
+    const trailer2_real_t _t337 = J_theta_cart2*_ms141 - _t163 + _t222;
+    const trailer2_real_t _t338 = _ms106*_t218 + _ms110*_t217 + _ms141*_t6 + _ms161*_t12
+            + _ms173*_t14 + _ms86*_t336 + _ms90*_t337 - _t164 - _t165 - _t166 - _t167 - _t168
+            + _t335;
+    const trailer2_real_t _t339 = -_t177*_t313 + _t181*_t315 + _t183*_t338;
+    const trailer2_real_t _t340 = -_t186*_t339;
+    const trailer2_real_t _t341 = _t188*_t334 + _t190*_t315 - _t191*_t332 - _t193*_t313
+            + _t194*_t340;
+    const trailer2_real_t _t342 = _t188*_t332 - _t190*_t313 + _t193*_t338 - _t195*_t334
+            + _t196*_t340;
+    const trailer2_real_t _t343 = _t169*_t341 + _t172*_t342;
+    const trailer2_real_t _t344 = _ms123*_ms147 - _t18;
+    const trailer2_real_t _t345 = _ms128*_ms147 + _t200;
+    const trailer2_real_t _t346 = J_theta_cart2*_ms147 - _t201 - _t44;
+    const trailer2_real_t _t347 = _ms106*_t223 + _ms110*_t224 + _ms145*_t7 + _ms165*_t13
+            + _ms177*_t15 + _ms86*_t345 + _ms90*_t346 + _t344;
+    const trailer2_real_t _t348 = _ms127*_ms147 - _t45;
+    const trailer2_real_t _t349 = _ms107*_t223 + _ms111*_t224 + _ms147*_t7 + _ms167*_t13
+            + _ms179*_t15 + _ms87*_t345 + _ms91*_t346 + _t348;
+    const trailer2_real_t _t350 = _t257*_t55 - _t59;
+    const trailer2_real_t _t351 = -_t205 + _t257*_t72;
+    const trailer2_real_t _t352 = _t208 + _t73 - _t74;
+    const trailer2_real_t _t353 = _ms112*_t257;
+    const trailer2_real_t _t354 = _ms113*_t257;
+    const trailer2_real_t _t355 = _ms145*_t353 + _ms147*_t354 + _ms183*_t100 + _ms184*_t104
+            - _ms187*_ms90 - _ms188*_ms91 + _t90;
+    const trailer2_real_t _t356 = -_ms106*_ms187 - _ms107*_ms188 + _ms165*_t353 + _ms167*_t354
+            + _ms183*_t289 + _ms184*_t291 + _t112;
+    const trailer2_real_t _t357 = -_ms110*_ms187 - _ms111*_ms188 + _ms177*_t353 + _ms179*_t354
+            + _ms183*_t294 + _ms184*_t296 + _t119;
+    const trailer2_real_t _t358 = _ms145*_t138 + _ms192*_t226 + _ms193*_t225 + _ms86*_t351
+            + _ms90*_t352 + _t12*_t356 - _t121 + _t133 + _t14*_t357 - _t219 + _t350 + _t355*_t6;
+    const trailer2_real_t _t359 = _t140*_t257 + _t142 - _t143;
+    const trailer2_real_t _t360 = _ms147*_t138 + _ms192*_t223 + _ms193*_t224 + _ms87*_t351
+            + _ms91*_t352 + _t13*_t356 - _t149 + _t15*_t357 + _t155 - _t220 + _t355*_t7 + _t359;
+    const trailer2_real_t _t361 = _ms123*_ms145 - _t160;
+    const trailer2_real_t _t362 = _ms128*_ms145 + _t221;
+    const trailer2_real_t _t363 = J_theta_cart2*_ms145 - _ms125 - _t222;
+    const trailer2_real_t _t364 = _ms106*_t226 + _ms110*_t225 + _ms145*_t6 + _ms165*_t12
+            + _ms177*_t14 + _ms86*_t362 + _ms90*_t363 + _t361;
+    const trailer2_real_t _t365 = -_t177*_t347 + _t181*_t349 + _t183*_t364;
+    const trailer2_real_t _t366 = -_t186*_t365;
+    const trailer2_real_t _t367 = _t188*_t360 + _t190*_t349 - _t191*_t358 - _t193*_t347
+            + _t194*_t366;
+    const trailer2_real_t _t368 = _t188*_t358 - _t190*_t347 + _t193*_t364 - _t195*_t360
+            + _t196*_t366;
+    const trailer2_real_t _t369 = _t169*_t367 + _t172*_t368;
+    const trailer2_real_t _t370 = K_theta_tractor_x_tractor*_t228 + _t233*_t63 + _t258*_t55;
+    const trailer2_real_t _t371 = _ms18*_t230 + _t258*_t72;
+    const trailer2_real_t _t372 = _ms18*_t231 + _t233*_t78;
+    const trailer2_real_t _t373 = _ms60*_t236 + _t232 - _t234;
+    const trailer2_real_t _t374 = _ms18*_t238 - _t237;
+    const trailer2_real_t _t375 = _ms134*_t373 + _ms135*_t374;
+    const trailer2_real_t _t376 = _ms113*_ms60 + _t232;
+    const trailer2_real_t _t377 = _ms114*_ms60 + _t234;
+    const trailer2_real_t _t378 = _ms114*_ms18 + _t237;
+    const trailer2_real_t _t379 = _ms112*_t258 + _ms115*_ms60;
+    const trailer2_real_t _t380 = _ms113*_t258 + _ms115*_ms18;
+    const trailer2_real_t _t381 = _ms137*_t376 + _ms139*_t228 + _ms141*_t377 + _ms143*_t378
+            + _ms145*_t379 + _ms147*_t380;
+    const trailer2_real_t _t382 = _ms149*_t373 + _ms151*_t374;
+    const trailer2_real_t _t383 = _ms153*_t373 + _ms155*_t374;
+    const trailer2_real_t _t384 = _ms157*_t376 + _ms159*_t228 + _ms161*_t377 + _ms163*_t378
+            + _ms165*_t379 + _ms167*_t380;
+    const trailer2_real_t _t385 = _ms169*_t376 + _ms171*_t228 + _ms173*_t377 + _ms175*_t378
+            + _ms177*_t379 + _ms179*_t380;
+    const trailer2_real_t _t386 = _ms86*_t371 + _ms90*_t372 + _t10*_t383 + _t12*_t384 + _t14*_t385
+            + _t161*_t376 + _t370 + _t375*_t4 + _t381*_t6 + _t382*_t8;
+    const trailer2_real_t _t387 = _t140*_t258 + _t145*_t233;
+    const trailer2_real_t _t388 = _ms87*_t371 + _ms91*_t372 + _t11*_t383 + _t13*_t384 + _t15*_t385
+            + _t239*_t376 + _t375*_t5 + _t381*_t7 + _t382*_t9 + _t387;
+    const trailer2_real_t _t389 = _t188*_t388 - _t191*_t386;
+    const trailer2_real_t _t390 = _t176*_t187*_t386 - _t195*_t388;
+    const trailer2_real_t _t391 = _t169*_t389 + _t172*_t390;
+    const trailer2_real_t _t392 = K_theta_tractor_x_tractor*_t240 + _t242*_t63 + _t259*_t55;
+    const trailer2_real_t _t393 = _ms19*_t230 + _t259*_t72;
+    const trailer2_real_t _t394 = _ms19*_t231 + _t242*_t78;
+    const trailer2_real_t _t395 = _ms61*_t236 + _t241 - _t243;
+    const trailer2_real_t _t396 = _ms19*_t238 - _t244;
+    const trailer2_real_t _t397 = _ms134*_t395 + _ms135*_t396;
+    const trailer2_real_t _t398 = _ms113*_ms61 + _t241;
+    const trailer2_real_t _t399 = _ms114*_ms61 + _t243;
+    const trailer2_real_t _t400 = _ms114*_ms19 + _t244;
+    const trailer2_real_t _t401 = _ms112*_t259 + _ms115*_ms61;
+    const trailer2_real_t _t402 = _ms113*_t259 + _ms115*_ms19;
+    const trailer2_real_t _t403 = _ms137*_t398 + _ms139*_t240 + _ms141*_t399 + _ms143*_t400
+            + _ms145*_t401 + _ms147*_t402;
+    const trailer2_real_t _t404 = _ms149*_t395 + _ms151*_t396;
+    const trailer2_real_t _t405 = _ms153*_t395 + _ms155*_t396;
+    const trailer2_real_t _t406 = _ms157*_t398 + _ms159*_t240 + _ms161*_t399 + _ms163*_t400
+            + _ms165*_t401 + _ms167*_t402;
+    const trailer2_real_t _t407 = _ms169*_t398 + _ms171*_t240 + _ms173*_t399 + _ms175*_t400
+            + _ms177*_t401 + _ms179*_t402;
+    const trailer2_real_t _t408 = _ms86*_t393 + _ms90*_t394 + _t10*_t405 + _t12*_t406 + _t14*_t407
+            + _t161*_t398 + _t392 + _t397*_t4 + _t403*_t6 + _t404*_t8;
+    const trailer2_real_t _t409 = _t140*_t259 + _t145*_t242;
+    const trailer2_real_t _t410 = _ms87*_t393 + _ms91*_t394 + _t11*_t405 + _t13*_t406 + _t15*_t407
+            + _t239*_t398 + _t397*_t5 + _t403*_t7 + _t404*_t9 + _t409;
+    const trailer2_real_t _t411 = _t188*_t410 - _t191*_t408;
+    const trailer2_real_t _t412 = _t176*_t187*_t408 - _t195*_t410;
+    const trailer2_real_t _t413 = _t169*_t411 + _t172*_t412;
+    const trailer2_real_t _t414 = _t170*_t307 + _t174*_t308;
+    const trailer2_real_t _t415 = _t170*_t341 + _t174*_t342;
+    const trailer2_real_t _t416 = _t170*_t367 + _t174*_t368;
+    const trailer2_real_t _t417 = _t170*_t389 + _t174*_t390;
+    const trailer2_real_t _t418 = _t170*_t411 + _t174*_t412;
+    const trailer2_real_t _t419 = _t169*_t183*_t187 - _t172*_t188;
+    const trailer2_real_t _t420 = -_t169*_t188 + _t172*_t195;
+    const trailer2_real_t _t421 = _t169*_t419 + _t172*_t420;
+    const trailer2_real_t _t422 = _t170*_t183*_t187 - _t174*_t188;
+    const trailer2_real_t _t423 = -_t170*_t188 + _t174*_t195;
+    const trailer2_real_t _t424 = _t169*_t422 + _t172*_t423;
+    const trailer2_real_t _t425 = _t170*_t419 + _t174*_t420;
+    const trailer2_real_t _t426 = _t170*_t422 + _t174*_t423;
     A[0] = TRAILER2_LIT(0.0);
     A[1] = TRAILER2_LIT(0.0);
-    A[2] = -_t387;
+    A[2] = -_t250;
     A[3] = TRAILER2_LIT(0.0);
     A[4] = TRAILER2_LIT(0.0);
     A[5] = TRAILER2_LIT(0.0);
@@ -2223,11 +1813,11 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[8] = TRAILER2_LIT(0.0);
     A[9] = TRAILER2_LIT(0.0);
     A[10] = TRAILER2_LIT(0.0);
-    A[11] = _t388;
-    A[12] = _t389;
+    A[11] = _t251;
+    A[12] = _t252;
     A[13] = TRAILER2_LIT(0.0);
     A[14] = TRAILER2_LIT(0.0);
-    A[15] = _t386;
+    A[15] = _t249;
     A[16] = TRAILER2_LIT(0.0);
     A[17] = TRAILER2_LIT(0.0);
     A[18] = TRAILER2_LIT(0.0);
@@ -2236,8 +1826,8 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[21] = TRAILER2_LIT(0.0);
     A[22] = TRAILER2_LIT(0.0);
     A[23] = TRAILER2_LIT(0.0);
-    A[24] = _t390;
-    A[25] = _t391;
+    A[24] = _t253;
+    A[25] = _t254;
     A[26] = TRAILER2_LIT(0.0);
     A[27] = TRAILER2_LIT(0.0);
     A[28] = TRAILER2_LIT(0.0);
@@ -2249,12 +1839,12 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[34] = TRAILER2_LIT(0.0);
     A[35] = TRAILER2_LIT(0.0);
     A[36] = TRAILER2_LIT(0.0);
-    A[37] = _t47;
-    A[38] = _t48;
+    A[37] = _ms18;
+    A[38] = _ms19;
     A[39] = TRAILER2_LIT(0.0);
     A[40] = TRAILER2_LIT(0.0);
-    A[41] = _t197;
-    A[42] = -_t197;
+    A[41] = _t65;
+    A[42] = -_t65;
     A[43] = TRAILER2_LIT(0.0);
     A[44] = TRAILER2_LIT(0.0);
     A[45] = TRAILER2_LIT(0.0);
@@ -2262,21 +1852,21 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[47] = TRAILER2_LIT(0.0);
     A[48] = TRAILER2_LIT(0.0);
     A[49] = TRAILER2_LIT(0.0);
-    A[50] = _t370;
-    A[51] = _t379;
+    A[50] = _t233;
+    A[51] = _t242;
     A[52] = TRAILER2_LIT(0.0);
     A[53] = TRAILER2_LIT(0.0);
-    A[54] = _t392;
-    A[55] = _t393;
-    A[56] = _t394;
+    A[54] = _t255;
+    A[55] = _t256;
+    A[56] = _t257;
     A[57] = TRAILER2_LIT(0.0);
     A[58] = TRAILER2_LIT(0.0);
     A[59] = TRAILER2_LIT(0.0);
     A[60] = TRAILER2_LIT(0.0);
     A[61] = TRAILER2_LIT(0.0);
     A[62] = TRAILER2_LIT(0.0);
-    A[63] = _t395;
-    A[64] = _t396;
+    A[63] = _t258;
+    A[64] = _t259;
     A[65] = TRAILER2_LIT(0.0);
     A[66] = TRAILER2_LIT(0.0);
     A[67] = TRAILER2_LIT(0.0);
@@ -2288,8 +1878,8 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[73] = TRAILER2_LIT(0.0);
     A[74] = TRAILER2_LIT(0.0);
     A[75] = TRAILER2_LIT(0.0);
-    A[76] = _t382;
-    A[77] = _t384;
+    A[76] = _t245;
+    A[77] = _t247;
     A[78] = TRAILER2_LIT(0.0);
     A[79] = TRAILER2_LIT(0.0);
     A[80] = TRAILER2_LIT(0.0);
@@ -2301,12 +1891,12 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[86] = TRAILER2_LIT(0.0);
     A[87] = TRAILER2_LIT(0.0);
     A[88] = TRAILER2_LIT(0.0);
-    A[89] = _t383;
-    A[90] = _t385;
+    A[89] = _t246;
+    A[90] = _t248;
     A[91] = TRAILER2_LIT(0.0);
     A[92] = TRAILER2_LIT(0.0);
-    A[93] = _t397;
-    A[94] = -_t397;
+    A[93] = _t260;
+    A[94] = -_t260;
     A[95] = TRAILER2_LIT(0.0);
     A[96] = TRAILER2_LIT(0.0);
     A[97] = TRAILER2_LIT(0.0);
@@ -2314,12 +1904,12 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[99] = TRAILER2_LIT(0.0);
     A[100] = TRAILER2_LIT(0.0);
     A[101] = TRAILER2_LIT(0.0);
-    A[102] = _t398;
-    A[103] = _t399;
+    A[102] = _t261;
+    A[103] = _t262;
     A[104] = TRAILER2_LIT(0.0);
     A[105] = TRAILER2_LIT(0.0);
-    A[106] = _t400;
-    A[107] = -_t400;
+    A[106] = _t263;
+    A[107] = -_t263;
     A[108] = TRAILER2_LIT(0.0);
     A[109] = TRAILER2_LIT(0.0);
     A[110] = TRAILER2_LIT(0.0);
@@ -2327,60 +1917,60 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[112] = TRAILER2_LIT(0.0);
     A[113] = TRAILER2_LIT(0.0);
     A[114] = TRAILER2_LIT(0.0);
-    A[115] = _t401;
-    A[116] = _t402;
+    A[115] = _t264;
+    A[116] = _t265;
     A[117] = TRAILER2_LIT(0.0);
     A[118] = TRAILER2_LIT(0.0);
-    A[119] = _t403;
-    A[120] = _t404;
-    A[121] = _t405;
+    A[119] = _t266;
+    A[120] = _t267;
+    A[121] = _t268;
     A[122] = TRAILER2_LIT(0.0);
     A[123] = TRAILER2_LIT(0.0);
     A[124] = TRAILER2_LIT(0.0);
     A[125] = TRAILER2_LIT(0.0);
     A[126] = TRAILER2_LIT(0.0);
     A[127] = TRAILER2_LIT(0.0);
-    A[128] = _t406;
-    A[129] = _t407;
+    A[128] = _t269;
+    A[129] = _t270;
     A[130] = TRAILER2_LIT(0.0);
     A[131] = TRAILER2_LIT(0.0);
-    A[132] = _t408;
-    A[133] = _t409;
-    A[134] = _t410;
+    A[132] = _t271;
+    A[133] = _t272;
+    A[134] = _t273;
     A[135] = TRAILER2_LIT(0.0);
     A[136] = TRAILER2_LIT(0.0);
     A[137] = TRAILER2_LIT(0.0);
     A[138] = TRAILER2_LIT(0.0);
     A[139] = TRAILER2_LIT(0.0);
     A[140] = TRAILER2_LIT(0.0);
-    A[141] = _t411;
-    A[142] = _t412;
+    A[141] = _t274;
+    A[142] = _t275;
     A[143] = TRAILER2_LIT(0.0);
     A[144] = TRAILER2_LIT(0.0);
-    A[145] = _t446;
-    A[146] = _t480;
-    A[147] = _t506;
+    A[145] = _t309;
+    A[146] = _t343;
+    A[147] = _t369;
     A[148] = TRAILER2_LIT(0.0);
     A[149] = TRAILER2_LIT(0.0);
     A[150] = TRAILER2_LIT(0.0);
     A[151] = TRAILER2_LIT(0.0);
     A[152] = TRAILER2_LIT(0.0);
     A[153] = TRAILER2_LIT(0.0);
-    A[154] = _t528;
-    A[155] = _t550;
+    A[154] = _t391;
+    A[155] = _t413;
     A[156] = TRAILER2_LIT(0.0);
     A[157] = TRAILER2_LIT(0.0);
-    A[158] = _t551;
-    A[159] = _t552;
-    A[160] = _t553;
+    A[158] = _t414;
+    A[159] = _t415;
+    A[160] = _t416;
     A[161] = TRAILER2_LIT(0.0);
     A[162] = TRAILER2_LIT(0.0);
     A[163] = TRAILER2_LIT(0.0);
     A[164] = TRAILER2_LIT(0.0);
     A[165] = TRAILER2_LIT(0.0);
     A[166] = TRAILER2_LIT(0.0);
-    A[167] = _t554;
-    A[168] = _t555;
+    A[167] = _t417;
+    A[168] = _t418;
     B[0] = TRAILER2_LIT(0.0);
     B[1] = TRAILER2_LIT(0.0);
     B[2] = TRAILER2_LIT(0.0);
@@ -2403,14 +1993,14 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     B[19] = TRAILER2_LIT(0.0);
     B[20] = TRAILER2_LIT(0.0);
     B[21] = TRAILER2_LIT(0.0);
-    B[22] = _t558;
-    B[23] = _t561;
-    B[24] = _t562;
-    B[25] = _t563;
+    B[22] = _t421;
+    B[23] = _t424;
+    B[24] = _t425;
+    B[25] = _t426;
 }
 
 /* trailer2_wheel_contact_forces: documented in trailer2_model.h.
-   operations after CSE: 298 add, 428 mul, 7 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 231 add, 343 mul, 7 div, 8 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *longitudinal, trailer2_real_t *lateral)
@@ -2464,336 +2054,141 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
             | trailer2_exp_carry(tau_left)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t0 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t1 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t2 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t3 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t4 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t5 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t6 = _t4*thetadot_right + _t5*thetadot_left;
-    const trailer2_real_t _t7 = _t6*thetadot_right;
-    const trailer2_real_t _t8 = _t6*thetadot_left;
-    const trailer2_real_t _t9 = -theta_tractor;
-    const trailer2_real_t _t10 = _t9 + theta_cart;
-    const trailer2_real_t _t11 = TRAILER2_SIN(_t10);
-    const trailer2_real_t _t12 = -_t11;
-    const trailer2_real_t _t13 = TRAILER2_COS(_t10);
-    const trailer2_real_t _t14 = TRAILER2_LIT(0.3)*_t13;
-    const trailer2_real_t _t15 = -_t14;
-    const trailer2_real_t _t16 = _t9 + theta_cart2;
-    const trailer2_real_t _t17 = TRAILER2_SIN(_t16);
-    const trailer2_real_t _t18 = -_t17;
-    const trailer2_real_t _t19 = TRAILER2_COS(_t16);
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.3)*_t19;
-    const trailer2_real_t _t21 = -_t20;
-    const trailer2_real_t _t22 = TRAILER2_LIT(0.85)*_t19;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(0.85)*_t11*_t17 - _t13*_t22;
-    const trailer2_real_t _t24 = TRAILER2_LIT(0.3)*_t11;
-    const trailer2_real_t _t25 = TRAILER2_LIT(0.3)*_t17;
-    const trailer2_real_t _t26 = -_t11*_t22 + TRAILER2_LIT(0.85)*_t13*_t17;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t28 = _t12*_t27 + _t15*_t4;
-    const trailer2_real_t _t29 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t30 = _t12*_t29 + _t15*_t5;
-    const trailer2_real_t _t31 = TRAILER2_LIT(1.6666666666666667)*_t28;
-    const trailer2_real_t _t32 = _t23*_t31;
-    const trailer2_real_t _t33 = _t18*_t27 + _t21*_t4;
-    const trailer2_real_t _t34 = _t32 + _t33;
-    const trailer2_real_t _t35 = TRAILER2_LIT(1.6666666666666667)*_t30;
-    const trailer2_real_t _t36 = _t23*_t35;
-    const trailer2_real_t _t37 = _t18*_t29 + _t21*_t5;
-    const trailer2_real_t _t38 = _t36 + _t37;
-    const trailer2_real_t _t39 = TRAILER2_LIT(0.2)*_t31;
-    const trailer2_real_t _t40 = _t13*_t27;
-    const trailer2_real_t _t41 = _t24*_t4;
-    const trailer2_real_t _t42 = TRAILER2_LIT(0.2)*_t35;
-    const trailer2_real_t _t43 = _t13*_t29;
-    const trailer2_real_t _t44 = _t24*_t5;
-    const trailer2_real_t _t45 = -_t40 + _t41;
-    const trailer2_real_t _t46 = -_t43 + _t44;
-    const trailer2_real_t _t47 = TRAILER2_LIT(1.6666666666666667)*_t34;
-    const trailer2_real_t _t48 = TRAILER2_LIT(0.2)*_t47;
-    const trailer2_real_t _t49 = _t25*_t4;
-    const trailer2_real_t _t50 = _t26*_t31;
-    const trailer2_real_t _t51 = _t19*_t27;
-    const trailer2_real_t _t52 = _t49 + _t50 - _t51;
-    const trailer2_real_t _t53 = TRAILER2_LIT(1.6666666666666667)*_t38;
-    const trailer2_real_t _t54 = TRAILER2_LIT(0.2)*_t53;
-    const trailer2_real_t _t55 = _t25*_t5;
-    const trailer2_real_t _t56 = _t26*_t35;
-    const trailer2_real_t _t57 = _t19*_t29;
-    const trailer2_real_t _t58 = _t55 + _t56 - _t57;
-    const trailer2_real_t _t59 = -TRAILER2_LIT(1.6666666666666667)*_t45;
-    const trailer2_real_t _t60 = _t23*_t59;
-    const trailer2_real_t _t61 = -TRAILER2_LIT(1.6666666666666667)*_t46;
-    const trailer2_real_t _t62 = _t23*_t61;
-    const trailer2_real_t _t63 = TRAILER2_LIT(0.2)*_t59;
-    const trailer2_real_t _t64 = TRAILER2_LIT(0.2)*_t61;
-    const trailer2_real_t _t65 = _t49 - _t51 - _t60;
-    const trailer2_real_t _t66 = -TRAILER2_LIT(1.6666666666666667)*_t65;
-    const trailer2_real_t _t67 = TRAILER2_LIT(0.2)*_t66;
-    const trailer2_real_t _t68 = _t26*_t59;
-    const trailer2_real_t _t69 = _t33 + _t68;
-    const trailer2_real_t _t70 = _t55 - _t57 - _t62;
-    const trailer2_real_t _t71 = -TRAILER2_LIT(1.6666666666666667)*_t70;
-    const trailer2_real_t _t72 = TRAILER2_LIT(0.2)*_t71;
-    const trailer2_real_t _t73 = _t26*_t61;
-    const trailer2_real_t _t74 = _t37 + _t73;
-    const trailer2_real_t _t75 = _t50 + _t60;
-    const trailer2_real_t _t76 = -TRAILER2_LIT(1.6666666666666667)*_t75;
-    const trailer2_real_t _t77 = TRAILER2_LIT(0.2)*_t76;
-    const trailer2_real_t _t78 = _t56 + _t62;
-    const trailer2_real_t _t79 = -TRAILER2_LIT(1.6666666666666667)*_t78;
-    const trailer2_real_t _t80 = TRAILER2_LIT(0.2)*_t79;
-    const trailer2_real_t _t81 = TRAILER2_LIT(1.6666666666666667)*_t52;
-    const trailer2_real_t _t82 = TRAILER2_LIT(0.2)*_t81;
-    const trailer2_real_t _t83 = TRAILER2_LIT(1.6666666666666667)*_t58;
-    const trailer2_real_t _t84 = TRAILER2_LIT(0.2)*_t83;
-    const trailer2_real_t _t85 = K_theta_cart_x_tractor*_t11;
-    const trailer2_real_t _t86 = K_theta_cart_x_tractor_2*_t13;
-    const trailer2_real_t _t87 = _t85 + _t86;
-    const trailer2_real_t _t88 = K_theta_cart2_x_tractor*_t17;
-    const trailer2_real_t _t89 = K_theta_cart2_x_tractor_2*_t19;
-    const trailer2_real_t _t90 = _t88 + _t89;
-    const trailer2_real_t _t91 = K_theta_cart_x_tractor*_t13;
-    const trailer2_real_t _t92 = K_theta_cart2_x_tractor*_t19;
-    const trailer2_real_t _t93 = K_theta_cart_x_tractor*_t14 - K_theta_cart_x_tractor_2*_t24;
-    const trailer2_real_t _t94 = K_theta_cart2_x_tractor*_t20 - K_theta_cart2_x_tractor_2*_t25;
-    const trailer2_real_t _t95 = TRAILER2_LIT(0.85)*_t11;
-    const trailer2_real_t _t96 = TRAILER2_LIT(0.85)*_t13;
-    const trailer2_real_t _t97 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer2_real_t _t98 = _t88*_t95 + _t89*_t95 + _t92*_t96 - _t96*_t97;
-    const trailer2_real_t _t99 = _t6*_t6;
-    const trailer2_real_t _t100 = _t47*thetadot_right + _t53*thetadot_left;
-    const trailer2_real_t _t101 = _t100*_t100;
-    const trailer2_real_t _t102 = _t101*_t92;
-    const trailer2_real_t _t103 = _t31*thetadot_right + _t35*thetadot_left;
-    const trailer2_real_t _t104 = _t103*_t103;
-    const trailer2_real_t _t105 = _t101*_t97;
-    const trailer2_real_t _t106 = _t101*_t88;
-    const trailer2_real_t _t107 = _t101*_t89;
-    const trailer2_real_t _t108 = K_theta_cart2_x_tractor*_t25;
-    const trailer2_real_t _t109 = K_theta_cart2_x_tractor_2*_t20;
-    const trailer2_real_t _t110 = K_theta_cart_x_tractor*_t24;
-    const trailer2_real_t _t111 = K_theta_cart_x_tractor_2*_t14;
-    const trailer2_real_t _t112 = _t104*_t95;
-    const trailer2_real_t _t113 = _t104*_t96;
-    const trailer2_real_t _t114 = _t103*thetadot_right;
-    const trailer2_real_t _t115 = _t103*thetadot_left;
-    const trailer2_real_t _t116 = _t39 + _t40 - _t41;
-    const trailer2_real_t _t117 = _t0*_t116;
-    const trailer2_real_t _t118 = J_theta_cart_right*_t117;
-    const trailer2_real_t _t119 = _t42 + _t43 - _t44;
-    const trailer2_real_t _t120 = _t0*_t119;
-    const trailer2_real_t _t121 = J_theta_cart_right*_t120;
-    const trailer2_real_t _t122 = -_t39 - _t45;
-    const trailer2_real_t _t123 = _t1*_t122;
-    const trailer2_real_t _t124 = J_theta_cart_left*_t123;
-    const trailer2_real_t _t125 = -_t42 - _t46;
-    const trailer2_real_t _t126 = _t1*_t125;
-    const trailer2_real_t _t127 = J_theta_cart_left*_t126;
-    const trailer2_real_t _t128 = _t48 - _t52;
-    const trailer2_real_t _t129 = _t128*_t2;
-    const trailer2_real_t _t130 = J_theta_cart2_right*_t129;
-    const trailer2_real_t _t131 = _t54 - _t58;
-    const trailer2_real_t _t132 = _t131*_t2;
-    const trailer2_real_t _t133 = J_theta_cart2_right*_t132;
-    const trailer2_real_t _t134 = -_t48 - _t52;
-    const trailer2_real_t _t135 = _t134*_t3;
-    const trailer2_real_t _t136 = J_theta_cart2_left*_t135;
-    const trailer2_real_t _t137 = -_t54 - _t58;
-    const trailer2_real_t _t138 = _t137*_t3;
-    const trailer2_real_t _t139 = J_theta_cart2_left*_t138;
-    const trailer2_real_t _t140 = -K_theta_cart_x_tractor_2*_t104*_t11
-            + K_theta_tractor_x_tractor*_t99 + _t102 + _t104*_t91 - _t105;
-    const trailer2_real_t _t141 = -_t114 + _t7;
-    const trailer2_real_t _t142 = -_t115 + _t8;
-    const trailer2_real_t _t143 = _t141*_t59 + _t142*_t61;
-    const trailer2_real_t _t144 = _t100*thetadot_right;
-    const trailer2_real_t _t145 = _t100*thetadot_left;
-    const trailer2_real_t _t146 = _t114*_t76 + _t115*_t79 + _t144*_t81 + _t145*_t83 + _t66*_t7
-            + _t71*_t8;
-    const trailer2_real_t _t147 = _t140 + _t143*_t87 + _t146*_t90;
-    const trailer2_real_t _t148 = K_theta_cart_x_tractor_2*_t11 - _t91;
-    const trailer2_real_t _t149 = _t102*_t95 - _t105*_t95 - _t106*_t96 - _t107*_t96 + _t110*_t99
-            + _t111*_t99;
-    const trailer2_real_t _t150 = _t27*_t7 + _t29*_t8;
-    const trailer2_real_t _t151 = _t148*_t150 + _t149;
-    const trailer2_real_t _t152 = J_theta_cart*_t143 + _t146*_t98 + _t151;
-    const trailer2_real_t _t153 = K_theta_cart2_x_tractor_2*_t17 - _t92;
-    const trailer2_real_t _t154 = _t108*_t99 + _t109*_t99 - _t112*_t92 + _t112*_t97 + _t113*_t88
-            + _t113*_t89;
-    const trailer2_real_t _t155 = _t150*_t153 + _t154;
-    const trailer2_real_t _t156 = J_theta_cart2*_t146 + _t143*_t98 + _t155;
-    const trailer2_real_t _t157 = -_t101*_t108 - _t101*_t109 - _t104*_t110 - _t104*_t111;
-    const trailer2_real_t _t158 = -K_theta_tractor_x_tractor*_t150 + _t157;
-    const trailer2_real_t _t159 = _t143*_t93 + _t146*_t94 + _t158;
-    const trailer2_real_t _t160 = J_x_tractor*_t29 + K_theta_tractor_x_tractor_2*_t5 + _t35*_t87
-            + _t53*_t90;
-    const trailer2_real_t _t161 = J_theta_tractor*_t5 + K_theta_tractor_x_tractor_2*_t29 + _t35*_t93
-            + _t53*_t94;
-    const trailer2_real_t _t162 = J_theta_cart*_t35 + _t29*_t87 + _t5*_t93 + _t53*_t98;
-    const trailer2_real_t _t163 = J_theta_cart2*_t53 + _t29*_t90 + _t35*_t98 + _t5*_t94;
-    const trailer2_real_t _t164 = _t117*_t121 + _t123*_t127 + _t129*_t133 + _t135*_t139 + _t160*_t27
-            + _t161*_t4 + _t162*_t31 + _t163*_t47;
-    const trailer2_real_t _t165 = J_theta_left + _t120*_t121 + _t126*_t127 + _t132*_t133
-            + _t138*_t139 + _t160*_t29 + _t161*_t5 + _t162*_t35 + _t163*_t53;
-    const trailer2_real_t _t166 = -_t28 + _t63;
-    const trailer2_real_t _t167 = _t0*_t166;
-    const trailer2_real_t _t168 = -_t30 + _t64;
-    const trailer2_real_t _t169 = _t0*_t168;
-    const trailer2_real_t _t170 = _t141*_t167 + _t142*_t169;
-    const trailer2_real_t _t171 = -_t28 - _t63;
-    const trailer2_real_t _t172 = _t1*_t171;
-    const trailer2_real_t _t173 = -_t30 - _t64;
-    const trailer2_real_t _t174 = _t1*_t173;
-    const trailer2_real_t _t175 = _t141*_t172 + _t142*_t174;
-    const trailer2_real_t _t176 = _t67 - _t69;
-    const trailer2_real_t _t177 = _t176*_t2;
-    const trailer2_real_t _t178 = _t72 - _t74;
-    const trailer2_real_t _t179 = _t178*_t2;
-    const trailer2_real_t _t180 = -_t32 + _t68 + _t77;
-    const trailer2_real_t _t181 = _t180*_t2;
-    const trailer2_real_t _t182 = -_t36 + _t73 + _t80;
-    const trailer2_real_t _t183 = _t182*_t2;
-    const trailer2_real_t _t184 = _t34 + _t82;
-    const trailer2_real_t _t185 = _t184*_t2;
-    const trailer2_real_t _t186 = _t38 + _t84;
-    const trailer2_real_t _t187 = _t186*_t2;
-    const trailer2_real_t _t188 = _t114*_t181 + _t115*_t183 + _t144*_t185 + _t145*_t187 + _t177*_t7
-            + _t179*_t8;
-    const trailer2_real_t _t189 = -_t67 - _t69;
-    const trailer2_real_t _t190 = _t189*_t3;
-    const trailer2_real_t _t191 = -_t72 - _t74;
-    const trailer2_real_t _t192 = _t191*_t3;
-    const trailer2_real_t _t193 = -_t32 + _t68 - _t77;
-    const trailer2_real_t _t194 = _t193*_t3;
-    const trailer2_real_t _t195 = -_t36 + _t73 - _t80;
-    const trailer2_real_t _t196 = _t195*_t3;
-    const trailer2_real_t _t197 = _t34 - _t82;
-    const trailer2_real_t _t198 = _t197*_t3;
-    const trailer2_real_t _t199 = _t38 - _t84;
-    const trailer2_real_t _t200 = _t199*_t3;
-    const trailer2_real_t _t201 = _t114*_t194 + _t115*_t196 + _t144*_t198 + _t145*_t200 + _t190*_t7
-            + _t192*_t8;
-    const trailer2_real_t _t202 = _t118*_t170 + _t124*_t175 + _t130*_t188 + _t136*_t201 + _t147*_t27
-            + _t152*_t31 + _t156*_t47 + _t159*_t4;
-    const trailer2_real_t _t203 = -_t202 + tau_right;
-    const trailer2_real_t _t204 = _t121*_t170 + _t127*_t175 + _t133*_t188 + _t139*_t201 + _t147*_t29
-            + _t152*_t35 + _t156*_t53 + _t159*_t5;
-    const trailer2_real_t _t205 = -_t204 + tau_left;
-    const trailer2_real_t _t206 = J_x_tractor*_t27 + K_theta_tractor_x_tractor_2*_t4 + _t31*_t87
-            + _t47*_t90;
-    const trailer2_real_t _t207 = J_theta_tractor*_t4 + K_theta_tractor_x_tractor_2*_t27 + _t31*_t93
-            + _t47*_t94;
-    const trailer2_real_t _t208 = J_theta_cart*_t31 + _t27*_t87 + _t4*_t93 + _t47*_t98;
-    const trailer2_real_t _t209 = J_theta_cart2*_t47 + _t27*_t90 + _t31*_t98 + _t4*_t94;
-    const trailer2_real_t _t210 = J_theta_right + _t117*_t118 + _t123*_t124 + _t129*_t130
-            + _t135*_t136 + _t206*_t27 + _t207*_t4 + _t208*_t31 + _t209*_t47;
-    const trailer2_real_t _t211 = -_t164*_t164 + _t165*_t210;
-    const trailer2_real_t _t212 = TRAILER2_LIT(1.0)/_t211;
-    const trailer2_real_t _t213 = _t212*(-_t164*_t205 + _t165*_t203);
-    const trailer2_real_t _t214 = _t212*(-_t164*_t203 + _t205*_t210);
-    const trailer2_real_t _t215 = _t213*_t27 + _t214*_t29;
-    const trailer2_real_t _t216 = _t213*_t4 + _t214*_t5;
-    const trailer2_real_t _t217 = _t143 + _t213*_t31 + _t214*_t35;
-    const trailer2_real_t _t218 = _t146 + _t213*_t47 + _t214*_t53;
-    const trailer2_real_t _t219 = -J_x_tractor*_t215 - K_theta_tractor_x_tractor_2*_t216 - _t140
-            - _t217*_t87 - _t218*_t90;
-    const trailer2_real_t _t220 = _t129*_t213 + _t132*_t214 + _t188;
-    const trailer2_real_t _t221 = -J_theta_cart2_right*_t220;
-    const trailer2_real_t _t222 = _t2*_t221;
-    const trailer2_real_t _t223 = _t135*_t213 + _t138*_t214 + _t201;
-    const trailer2_real_t _t224 = -J_theta_cart2_left*_t223;
-    const trailer2_real_t _t225 = _t224*_t3;
-    const trailer2_real_t _t226 = -J_theta_cart2*_t218 - _t155 - _t215*_t90 - _t216*_t94
-            - _t217*_t98;
-    const trailer2_real_t _t227 = TRAILER2_LIT(0.2)*_t222 - TRAILER2_LIT(0.2)*_t225 + _t226;
-    const trailer2_real_t _t228 = -TRAILER2_LIT(1.6666666666666667)*_t227;
-    const trailer2_real_t _t229 = _t117*_t213 + _t120*_t214 + _t170;
-    const trailer2_real_t _t230 = -J_theta_cart_right*_t229;
-    const trailer2_real_t _t231 = _t0*_t230;
-    const trailer2_real_t _t232 = _t123*_t213 + _t126*_t214 + _t175;
-    const trailer2_real_t _t233 = -J_theta_cart_left*_t232;
-    const trailer2_real_t _t234 = _t1*_t233;
-    const trailer2_real_t _t235 = -J_theta_cart*_t217 - _t151 - _t215*_t87 - _t216*_t93
-            - _t218*_t98;
-    const trailer2_real_t _t236 = -_t222*_t26 - _t225*_t26 - _t228*_t23 + TRAILER2_LIT(0.2)*_t231
-            - TRAILER2_LIT(0.2)*_t234 + _t235;
-    const trailer2_real_t _t237 = -TRAILER2_LIT(1.6666666666666667)*_t236;
-    const trailer2_real_t _t238 = _t11*_t237 + _t13*_t231 + _t13*_t234 + _t17*_t228 + _t19*_t222
-            + _t19*_t225 + _t219;
-    const trailer2_real_t _t239 = TRAILER2_LIT(0.5)*_t238;
-    const trailer2_real_t _t240 = -J_theta_tractor*_t216 - K_theta_tractor_x_tractor_2*_t215 - _t158
-            - _t217*_t93 - _t218*_t94;
-    const trailer2_real_t _t241 = TRAILER2_LIT(0.3)*_t13*_t237 + TRAILER2_LIT(0.3)*_t19*_t228
-            - _t222*_t25 - _t225*_t25 - _t231*_t24 - _t234*_t24 + _t240;
-    const trailer2_real_t _t242 = TRAILER2_LIT(2.4154589371980677)*_t241;
-    const trailer2_real_t _t243 = TRAILER2_LIT(1.6666666666666667)*_t12;
-    const trailer2_real_t _t244 = TRAILER2_LIT(0.2)*_t243;
-    const trailer2_real_t _t245 = TRAILER2_LIT(1.6666666666666667)*_t15;
-    const trailer2_real_t _t246 = TRAILER2_LIT(0.2)*_t245;
-    const trailer2_real_t _t247 = -_t18 - _t23*_t243;
-    const trailer2_real_t _t248 = -TRAILER2_LIT(1.6666666666666667)*_t247;
-    const trailer2_real_t _t249 = TRAILER2_LIT(0.2)*_t248;
-    const trailer2_real_t _t250 = _t243*_t26;
-    const trailer2_real_t _t251 = -_t21 - _t23*_t245;
-    const trailer2_real_t _t252 = -TRAILER2_LIT(1.6666666666666667)*_t251;
-    const trailer2_real_t _t253 = TRAILER2_LIT(0.2)*_t252;
-    const trailer2_real_t _t254 = _t245*_t26 + _t25;
-    const trailer2_real_t _t255 = K_theta_tractor_x_tractor_2*_t99 + _t104*_t85 + _t104*_t86 + _t106
-            + _t107;
-    const trailer2_real_t _t256 = -J_x_tractor*_t150 + K_theta_tractor_x_tractor*_t216 - _t148*_t217
-            - _t153*_t218 - _t255;
-    const trailer2_real_t _t257 = _t11*_t231 + _t11*_t234 - _t13*_t237 + _t17*_t222 + _t17*_t225
-            - _t19*_t228 + _t256;
-    const trailer2_real_t _t258 = -_t239 + _t242;
-    const trailer2_real_t _t259 = -_t239 - _t242;
-    const trailer2_real_t _t260 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t261 = TRAILER2_LIT(0.207)*_t260;
-    const trailer2_real_t _t262 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t263 = -TRAILER2_LIT(0.207)*_t262;
-    const trailer2_real_t _t264 = _t13 + _t244;
-    const trailer2_real_t _t265 = -_t24 + _t246;
-    const trailer2_real_t _t266 = _t0*_t264;
-    const trailer2_real_t _t267 = _t0*_t265;
-    const trailer2_real_t _t268 = _t13 - _t244;
-    const trailer2_real_t _t269 = -_t24 - _t246;
-    const trailer2_real_t _t270 = _t1*_t268;
-    const trailer2_real_t _t271 = _t1*_t269;
-    const trailer2_real_t _t272 = _t19 + _t249 - _t250;
-    const trailer2_real_t _t273 = _t253 - _t254;
-    const trailer2_real_t _t274 = _t2*_t272;
-    const trailer2_real_t _t275 = _t2*_t273;
-    const trailer2_real_t _t276 = _t19 - _t249 - _t250;
-    const trailer2_real_t _t277 = -_t253 - _t254;
-    const trailer2_real_t _t278 = _t276*_t3;
-    const trailer2_real_t _t279 = _t277*_t3;
-    const trailer2_real_t _t280 = J_x_tractor + _t243*_t87 + _t248*_t90;
-    const trailer2_real_t _t281 = K_theta_tractor_x_tractor_2 + _t245*_t87 + _t252*_t90;
-    const trailer2_real_t _t282 = J_theta_tractor + _t245*_t93 + _t252*_t94;
-    const trailer2_real_t _t283 = J_theta_cart*_t243 + _t248*_t98 + _t87;
-    const trailer2_real_t _t284 = J_theta_cart*_t245 + _t252*_t98 + _t93;
-    const trailer2_real_t _t285 = J_theta_cart2*_t248 + _t243*_t98 + _t90;
-    const trailer2_real_t _t286 = J_theta_cart2*_t252 + _t245*_t98 + _t94;
-    const trailer2_real_t _t287 = J_theta_right*_t260;
-    const trailer2_real_t _t288 = J_theta_right*_t261;
-    const trailer2_real_t _t289 = J_theta_left*_t262;
-    const trailer2_real_t _t290 = J_theta_left*_t263;
-    const trailer2_real_t _t291 = J_theta_cart_right*_t266;
-    const trailer2_real_t _t292 = J_theta_cart_right*_t267;
-    const trailer2_real_t _t293 = J_theta_cart_left*_t270;
-    const trailer2_real_t _t294 = J_theta_cart_left*_t271;
-    const trailer2_real_t _t295 = J_theta_cart2_right*_t274;
-    const trailer2_real_t _t296 = J_theta_cart2_right*_t275;
-    const trailer2_real_t _t297 = J_theta_cart2_left*_t278;
-    const trailer2_real_t _t298 = J_theta_cart2_left*_t279;
-    const trailer2_real_t _t299 = _t243*_t283 + _t248*_t285 + _t260*_t287 + _t262*_t289
-            + _t266*_t291 + _t270*_t293 + _t274*_t295 + _t278*_t297 + _t280;
-    const trailer2_real_t _t300 = _t243*_t284 + _t248*_t286 + _t260*_t288 + _t262*_t290
-            + _t266*_t292 + _t270*_t294 + _t274*_t296 + _t278*_t298 + _t281;
-    const trailer2_real_t _t301 = _t245*_t284 + _t252*_t286 + _t261*_t288 + _t263*_t290
-            + _t267*_t292 + _t271*_t294 + _t275*_t296 + _t279*_t298 + _t282;
+    (void)thetadot_left;
+    (void)thetadot_right;
+    trailer2_real_t _shared[117];
+    trailer2_staged_quantities(p, q, wheel_rates, _shared);
+    const trailer2_real_t _ms32 = _shared[2];
+    const trailer2_real_t _ms37 = _shared[3];
+    const trailer2_real_t _ms42 = _shared[4];
+    const trailer2_real_t _ms47 = _shared[5];
+    const trailer2_real_t _ms86 = _shared[18];
+    const trailer2_real_t _ms87 = _shared[19];
+    const trailer2_real_t _ms90 = _shared[22];
+    const trailer2_real_t _ms91 = _shared[23];
+    const trailer2_real_t _ms98 = _shared[26];
+    const trailer2_real_t _ms99 = _shared[27];
+    const trailer2_real_t _ms102 = _shared[30];
+    const trailer2_real_t _ms103 = _shared[31];
+    const trailer2_real_t _ms106 = _shared[34];
+    const trailer2_real_t _ms107 = _shared[35];
+    const trailer2_real_t _ms110 = _shared[38];
+    const trailer2_real_t _ms111 = _shared[39];
+    const trailer2_real_t _ms113 = _shared[41];
+    const trailer2_real_t _ms114 = _shared[42];
+    const trailer2_real_t _ms115 = _shared[43];
+    const trailer2_real_t _ms122 = _shared[44];
+    const trailer2_real_t _ms123 = _shared[45];
+    const trailer2_real_t _ms124 = _shared[46];
+    const trailer2_real_t _ms125 = _shared[47];
+    const trailer2_real_t _ms126 = _shared[48];
+    const trailer2_real_t _ms127 = _shared[49];
+    const trailer2_real_t _ms128 = _shared[50];
+    const trailer2_real_t _ms129 = _shared[51];
+    const trailer2_real_t _ms131 = _shared[52];
+    const trailer2_real_t _ms132 = _shared[53];
+    const trailer2_real_t _ms133 = _shared[54];
+    const trailer2_real_t _ms182 = _shared[103];
+    const trailer2_real_t _ms183 = _shared[104];
+    const trailer2_real_t _ms189 = _shared[110];
+    const trailer2_real_t _ms190 = _shared[111];
+    const trailer2_real_t _ms191 = _shared[112];
+    const trailer2_real_t _ms192 = _shared[113];
+    const trailer2_real_t _ms193 = _shared[114];
+    const trailer2_real_t _ms219 = _shared[115];
+    const trailer2_real_t _ms220 = _shared[116];
+    const trailer2_real_t _t0 = _ms115*_ms115;
+    const trailer2_real_t _t1 = -theta_tractor;
+    const trailer2_real_t _t2 = _t1 + theta_cart2;
+    const trailer2_real_t _t3 = TRAILER2_SIN(_t2);
+    const trailer2_real_t _t4 = TRAILER2_COS(_t2);
+    const trailer2_real_t _t5 = _ms114*_ms114;
+    const trailer2_real_t _t6 = _t1 + theta_cart;
+    const trailer2_real_t _t7 = TRAILER2_SIN(_t6);
+    const trailer2_real_t _t8 = TRAILER2_COS(_t6);
+    const trailer2_real_t _t9 = TRAILER2_LIT(1.0)/radius_right;
+    const trailer2_real_t _t10 = TRAILER2_LIT(1.0)/radius_left;
+    const trailer2_real_t _t11 = J_x_tractor + _ms122*_ms86 + _ms123*_ms90;
+    const trailer2_real_t _t12 = J_theta_cart*_ms86 + _ms122 + _ms128*_ms90;
+    const trailer2_real_t _t13 = J_theta_cart2*_ms90 + _ms123 + _ms128*_ms86;
+    const trailer2_real_t _t14 = J_theta_right*_t9;
+    const trailer2_real_t _t15 = J_theta_left*_t10;
+    const trailer2_real_t _t16 = J_theta_cart_right*_ms98;
+    const trailer2_real_t _t17 = J_theta_cart_left*_ms102;
+    const trailer2_real_t _t18 = J_theta_cart2_right*_ms106;
+    const trailer2_real_t _t19 = J_theta_cart2_left*_ms110;
+    const trailer2_real_t _t20 = _ms102*_t17 + _ms106*_t18 + _ms110*_t19 + _ms86*_t12 + _ms90*_t13
+            + _ms98*_t16 + _t10*_t15 + _t11 + _t14*_t9;
+    const trailer2_real_t _t21 = K_theta_tractor_x_tractor_2 + _ms122*_ms87 + _ms123*_ms91;
+    const trailer2_real_t _t22 = J_theta_cart*_ms87 + _ms126 + _ms128*_ms91;
+    const trailer2_real_t _t23 = J_theta_cart2*_ms91 + _ms127 + _ms128*_ms87;
+    const trailer2_real_t _t24 = TRAILER2_LIT(0.207)*_t9;
+    const trailer2_real_t _t25 = J_theta_right*_t24;
+    const trailer2_real_t _t26 = -TRAILER2_LIT(0.207)*_t10;
+    const trailer2_real_t _t27 = J_theta_left*_t26;
+    const trailer2_real_t _t28 = J_theta_cart_right*_ms99;
+    const trailer2_real_t _t29 = J_theta_cart_left*_ms103;
+    const trailer2_real_t _t30 = J_theta_cart2_right*_ms107;
+    const trailer2_real_t _t31 = J_theta_cart2_left*_ms111;
+    const trailer2_real_t _t32 = _ms102*_t29 + _ms106*_t30 + _ms110*_t31 + _ms86*_t22 + _ms90*_t23
+            + _ms98*_t28 + _t10*_t27 + _t21 + _t25*_t9;
+    const trailer2_real_t _t33 = J_theta_tractor + _ms126*_ms87 + _ms127*_ms91;
+    const trailer2_real_t _t34 = _ms103*_t29 + _ms107*_t30 + _ms111*_t31 + _ms87*_t22 + _ms91*_t23
+            + _ms99*_t28 + _t24*_t25 + _t26*_t27 + _t33;
+    const trailer2_real_t _t35 = _t20*_t34 - _t32*_t32;
+    const trailer2_real_t _t36 = TRAILER2_LIT(0.85)*_t4;
+    const trailer2_real_t _t37 = TRAILER2_LIT(0.85)*_t3*_t8 - _t36*_t7;
+    const trailer2_real_t _t38 = -_ms219 + _t10*tau_left + _t9*tau_right;
+    const trailer2_real_t _t39 = -_ms220 + _t24*tau_right + _t26*tau_left;
+    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/_t35;
+    const trailer2_real_t _t41 = _t40*(-_t32*_t39 + _t34*_t38);
+    const trailer2_real_t _t42 = _t40*(_t20*_t39 - _t32*_t38);
+    const trailer2_real_t _t43 = _ms106*_t41 + _ms107*_t42 + _ms192;
+    const trailer2_real_t _t44 = -J_theta_cart2_right*_t43;
+    const trailer2_real_t _t45 = _ms42*_t44;
+    const trailer2_real_t _t46 = _t3*_t45;
+    const trailer2_real_t _t47 = _ms110*_t41 + _ms111*_t42 + _ms193;
+    const trailer2_real_t _t48 = -J_theta_cart2_left*_t47;
+    const trailer2_real_t _t49 = _ms47*_t48;
+    const trailer2_real_t _t50 = _t3*_t49;
+    const trailer2_real_t _t51 = _ms190 + _ms98*_t41 + _ms99*_t42;
+    const trailer2_real_t _t52 = -J_theta_cart_right*_t51;
+    const trailer2_real_t _t53 = _ms32*_t52;
+    const trailer2_real_t _t54 = _t53*_t7;
+    const trailer2_real_t _t55 = _ms102*_t41 + _ms103*_t42 + _ms191;
+    const trailer2_real_t _t56 = -J_theta_cart_left*_t55;
+    const trailer2_real_t _t57 = _ms37*_t56;
+    const trailer2_real_t _t58 = _t57*_t7;
+    const trailer2_real_t _t59 = _ms182 + _ms86*_t41 + _ms87*_t42;
+    const trailer2_real_t _t60 = _ms189 + _ms90*_t41 + _ms91*_t42;
+    const trailer2_real_t _t61 = -J_x_tractor*_t41 - K_theta_tractor_x_tractor_2*_t42 - _ms122*_t59
+            - _ms123*_t60 - _ms129;
+    const trailer2_real_t _t62 = -J_theta_cart2*_t60 - _ms123*_t41 - _ms125*_ms183 - _ms127*_t42
+            - _ms128*_t59 - _ms133;
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.2)*_t45 - TRAILER2_LIT(0.2)*_t49 + _t62;
+    const trailer2_real_t _t64 = -TRAILER2_LIT(1.6666666666666667)*_t63;
+    const trailer2_real_t _t65 = -J_theta_cart*_t59 - _ms122*_t41 - _ms124*_ms183 - _ms126*_t42
+            - _ms128*_t60 - _ms132;
+    const trailer2_real_t _t66 = -_t37*_t45 - _t37*_t49 + TRAILER2_LIT(0.2)*_t53
+            - TRAILER2_LIT(0.2)*_t57 - _t64*(-TRAILER2_LIT(0.85)*_t3*_t7 - _t36*_t8) + _t65;
+    const trailer2_real_t _t67 = -TRAILER2_LIT(1.6666666666666667)*_t66;
+    const trailer2_real_t _t68 = _t3*_t64 + _t4*_t45 + _t4*_t49 + _t53*_t8 + _t57*_t8 + _t61
+            + _t67*_t7;
+    const trailer2_real_t _t69 = TRAILER2_LIT(0.5)*_t68;
+    const trailer2_real_t _t70 = -J_theta_tractor*_t42 + K_theta_tractor_x_tractor*_ms183
+            - K_theta_tractor_x_tractor_2*_t41 - _ms126*_t59 - _ms127*_t60 - _ms131;
+    const trailer2_real_t _t71 = TRAILER2_LIT(0.3)*_t4*_t64 - TRAILER2_LIT(0.3)*_t46
+            - TRAILER2_LIT(0.3)*_t50 - TRAILER2_LIT(0.3)*_t54 - TRAILER2_LIT(0.3)*_t58
+            + TRAILER2_LIT(0.3)*_t67*_t8 + _t70;
+    const trailer2_real_t _t72 = TRAILER2_LIT(2.4154589371980677)*_t71;
+    const trailer2_real_t _t73 = K_theta_cart2_x_tractor*_t0*_t3 + K_theta_cart2_x_tractor_2*_t0*_t4
+            + K_theta_cart_x_tractor*_t5*_t7 + K_theta_cart_x_tractor_2*_t5*_t8
+            + K_theta_tractor_x_tractor_2*_ms113*_ms113;
+    const trailer2_real_t _t74 = -J_x_tractor*_ms183 + K_theta_tractor_x_tractor*_t42 - _ms124*_t59
+            - _ms125*_t60 - _t73;
+    const trailer2_real_t _t75 = -_t69 + _t72;
+    const trailer2_real_t _t76 = -_t69 - _t72;
+    const trailer2_real_t _t77 = -_t4*_t64 + _t46 + _t50 + _t54 + _t58 - _t67*_t8 + _t74;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -2842,18 +2237,17 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t299 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t20 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t299*_t301 - _t300*_t300 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
-                                                               model */
+    if (!(_t35 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t259;
-    const trailer2_real_t r_1 = _t258;
-    const trailer2_real_t r_2 = -_t257;
-    const trailer2_real_t r_3 = -_t237;
-    const trailer2_real_t r_4 = -_t228;
+    const trailer2_real_t r_0 = _t76;
+    const trailer2_real_t r_1 = _t75;
+    const trailer2_real_t r_2 = -_t77;
+    const trailer2_real_t r_3 = -_t67;
+    const trailer2_real_t r_4 = -_t64;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
             | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;

@@ -276,7 +276,7 @@ void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_rea
  *         TRAILER2_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER2_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 163 add, 250 mul, 7 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 163 add, 254 mul, 7 div, 4 sin/cos, 0 sqrt
  */
 trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
@@ -312,7 +312,7 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
  * @param[out] A [13x13] row-major (TRAILER2_LINEARIZATION_A_SIZE) -- 13x13 row-major
  * @param[out] B [13x2] row-major (TRAILER2_LINEARIZATION_B_SIZE) -- 13x2 row-major
  *
- * operations after CSE: 715 add, 931 mul, 7 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 731 add, 975 mul, 7 div, 10 sin/cos, 0 sqrt
  */
 void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, trailer2_real_t *A,
@@ -375,7 +375,7 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
  *         TRAILER2_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER2_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 298 add, 428 mul, 7 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 231 add, 343 mul, 7 div, 8 sin/cos, 0 sqrt
  */
 trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,

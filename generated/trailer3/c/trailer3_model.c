@@ -6,40 +6,563 @@
  */
 #include "trailer3_model.h"
 
+/* trailer3_staged_quantities: The quantities minimal_bias_forces, minimal_forward_dynamics,
+   linearization, wheel_contact_forces all read.
+   Each caller's documented operations include these:
+   operations after CSE: 235 add, 362 mul, 6 div, 6 sin/cos, 0 sqrt */
+static void trailer3_staged_quantities(const trailer3_params_t *p, const trailer3_real_t *q,
+    const trailer3_real_t *wheel_rates, trailer3_real_t *shared_quantities)
+{
+    const trailer3_real_t theta_tractor = q[2];
+    const trailer3_real_t _t0 = -theta_tractor;
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t _t1 = _t0 + theta_cart;
+    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
+    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
+    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t theta_cart2 = q[4];
+    const trailer3_real_t _t5 = _t0 + theta_cart2;
+    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
+    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
+    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
+    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
+    const trailer3_real_t theta_cart3 = q[5];
+    const trailer3_real_t _t11 = _t0 + theta_cart3;
+    const trailer3_real_t _t12 = TRAILER3_SIN(_t11);
+    const trailer3_real_t _t13 = TRAILER3_COS(_t11);
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
+    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t13;
+    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
+    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
+    const trailer3_real_t _t19 = -_t10*_t7 - _t6*_t9;
+    const trailer3_real_t _t20 = -TRAILER3_LIT(1.6666666666666667)*_t2;
+    const trailer3_real_t _t21 = _t19*_t20;
+    const trailer3_real_t _t22 = _t21 - _t6;
+    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t4;
+    const trailer3_real_t _t24 = _t19*_t23;
+    const trailer3_real_t _t25 = _t24 - _t8;
+    const trailer3_real_t _t26 = -_t10*_t13 - _t12*_t9;
+    const trailer3_real_t _t27 = _t20*_t26;
+    const trailer3_real_t _t28 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
+    const trailer3_real_t _t29 = TRAILER3_LIT(1.6666666666666667)*_t22;
+    const trailer3_real_t _t30 = _t28*_t29;
+    const trailer3_real_t _t31 = -_t12 + _t27 + _t30;
+    const trailer3_real_t _t32 = _t23*_t26;
+    const trailer3_real_t _t33 = TRAILER3_LIT(1.6666666666666667)*_t25;
+    const trailer3_real_t _t34 = _t28*_t33;
+    const trailer3_real_t _t35 = -_t14 + _t32 + _t34;
+    const trailer3_real_t _t36 = TRAILER3_LIT(0.2)*_t20;
+    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t23;
+    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t29;
+    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const trailer3_real_t _t40 = _t20*_t39;
+    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t33;
+    const trailer3_real_t _t42 = _t23*_t39;
+    const trailer3_real_t _t43 = _t17 + _t42;
+    const trailer3_real_t _t44 = _t40 - _t7;
+    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t31;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
+    const trailer3_real_t _t47 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const trailer3_real_t _t48 = _t20*_t47;
+    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
+    const trailer3_real_t _t50 = _t29*_t49;
+    const trailer3_real_t _t51 = -_t13 + _t48 + _t50;
+    const trailer3_real_t _t52 = TRAILER3_LIT(1.6666666666666667)*_t35;
+    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
+    const trailer3_real_t _t54 = _t23*_t47;
+    const trailer3_real_t _t55 = _t33*_t49;
+    const trailer3_real_t _t56 = _t18 + _t54 + _t55;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t _t57 = K_theta_cart2_x_tractor*_t6;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t _t58 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t _t59 = K_theta_cart3_x_tractor*_t12;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t _t60 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t _t61 = K_theta_cart_x_tractor*_t3;
+    const trailer3_real_t _t62 = K_theta_cart2_x_tractor*_t7;
+    const trailer3_real_t _t63 = K_theta_cart3_x_tractor*_t13;
+    const trailer3_real_t _t64 = K_theta_cart2_x_tractor_2*_t6;
+    const trailer3_real_t _t65 = K_theta_cart3_x_tractor_2*_t12;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t67 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t68 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t _t69 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t thetadot_right = wheel_rates[0];
+    const trailer3_real_t thetadot_left = wheel_rates[1];
+    const trailer3_real_t _t70 = _t68*thetadot_right + _t69*thetadot_left;
+    const trailer3_real_t _t71 = _t70*_t70;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t74 = _t72*thetadot_right + _t73*thetadot_left;
+    const trailer3_real_t _t75 = _t29*_t74 + _t33*_t70;
+    const trailer3_real_t _t76 = _t75*_t75;
+    const trailer3_real_t _t77 = _t45*_t74 + _t52*_t70;
+    const trailer3_real_t _t78 = _t77*_t77;
+    const trailer3_real_t _t79 = _t63*_t78;
+    const trailer3_real_t _t80 = _t20*_t74 + _t23*_t70;
+    const trailer3_real_t _t81 = _t80*_t80;
+    const trailer3_real_t _t82 = _t64*_t76;
+    const trailer3_real_t _t83 = _t65*_t78;
+    const trailer3_real_t _t84 = K_theta_cart2_x_tractor*_t17;
+    const trailer3_real_t _t85 = K_theta_cart2_x_tractor_2*_t8;
+    const trailer3_real_t _t86 = K_theta_cart3_x_tractor*_t18;
+    const trailer3_real_t _t87 = K_theta_cart3_x_tractor_2*_t14;
+    const trailer3_real_t _t88 = _t10*_t76;
+    const trailer3_real_t _t89 = _t10*_t78;
+    const trailer3_real_t _t90 = _t81*_t9;
+    const trailer3_real_t _t91 = _t10*_t81;
+    const trailer3_real_t _t92 = _t67*_t78;
+    const trailer3_real_t _t93 = _t66*_t76;
+    const trailer3_real_t _t94 = _t67*_t76;
+    const trailer3_real_t _t95 = TRAILER3_LIT(1.6666666666666667)*_t3;
+    const trailer3_real_t _t96 = _t19*_t95;
+    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t16;
+    const trailer3_real_t _t98 = _t19*_t97;
+    const trailer3_real_t _t99 = _t26*_t95;
+    const trailer3_real_t _t100 = _t26*_t97;
+    const trailer3_real_t _t101 = TRAILER3_LIT(0.2)*_t95;
+    const trailer3_real_t _t102 = TRAILER3_LIT(0.2)*_t97;
+    const trailer3_real_t _t103 = -_t7 - _t96;
+    const trailer3_real_t _t104 = -TRAILER3_LIT(1.6666666666666667)*_t103;
+    const trailer3_real_t _t105 = TRAILER3_LIT(0.2)*_t104;
+    const trailer3_real_t _t106 = _t39*_t95;
+    const trailer3_real_t _t107 = _t106 - _t6;
+    const trailer3_real_t _t108 = _t17 - _t98;
+    const trailer3_real_t _t109 = -TRAILER3_LIT(1.6666666666666667)*_t108;
+    const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
+    const trailer3_real_t _t111 = _t39*_t97;
+    const trailer3_real_t _t112 = _t111 - _t8;
+    const trailer3_real_t _t113 = _t40 + _t96;
+    const trailer3_real_t _t114 = -TRAILER3_LIT(1.6666666666666667)*_t113;
+    const trailer3_real_t _t115 = TRAILER3_LIT(0.2)*_t114;
+    const trailer3_real_t _t116 = _t42 + _t98;
+    const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
+    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
+    const trailer3_real_t _t119 = TRAILER3_LIT(1.6666666666666667)*_t44;
+    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
+    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t43;
+    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
+    const trailer3_real_t _t123 = -_t104*_t28 - _t13 - _t99;
+    const trailer3_real_t _t124 = -TRAILER3_LIT(1.6666666666666667)*_t123;
+    const trailer3_real_t _t125 = TRAILER3_LIT(0.2)*_t124;
+    const trailer3_real_t _t126 = _t47*_t95;
+    const trailer3_real_t _t127 = _t104*_t49 - _t12 + _t126;
+    const trailer3_real_t _t128 = -_t100 - _t109*_t28 + _t18;
+    const trailer3_real_t _t129 = -TRAILER3_LIT(1.6666666666666667)*_t128;
+    const trailer3_real_t _t130 = TRAILER3_LIT(0.2)*_t129;
+    const trailer3_real_t _t131 = _t47*_t97;
+    const trailer3_real_t _t132 = _t109*_t49 + _t131 - _t14;
+    const trailer3_real_t _t133 = -_t114*_t28 + _t48 + _t99;
+    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
+    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
+    const trailer3_real_t _t136 = _t114*_t49 - _t126 + _t27;
+    const trailer3_real_t _t137 = _t100 - _t117*_t28 + _t54;
+    const trailer3_real_t _t138 = -TRAILER3_LIT(1.6666666666666667)*_t137;
+    const trailer3_real_t _t139 = TRAILER3_LIT(0.2)*_t138;
+    const trailer3_real_t _t140 = _t117*_t49 - _t131 + _t32;
+    const trailer3_real_t _t141 = -_t119*_t28 + _t50;
+    const trailer3_real_t _t142 = -TRAILER3_LIT(1.6666666666666667)*_t141;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
+    const trailer3_real_t _t144 = _t119*_t49 + _t30;
+    const trailer3_real_t _t145 = -_t121*_t28 + _t55;
+    const trailer3_real_t _t146 = -TRAILER3_LIT(1.6666666666666667)*_t145;
+    const trailer3_real_t _t147 = TRAILER3_LIT(0.2)*_t146;
+    const trailer3_real_t _t148 = _t121*_t49 + _t34;
+    const trailer3_real_t _t149 = TRAILER3_LIT(1.6666666666666667)*_t51;
+    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
+    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t56;
+    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
+    const trailer3_real_t _t153 = _t70*_t74;
+    const trailer3_real_t _t154 = _t74*_t80;
+    const trailer3_real_t _t155 = _t70*_t80;
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t _t156 = TRAILER3_LIT(1.0)/radius_cart2_left;
+    const trailer3_real_t _t157 = -_t105 - _t107;
+    const trailer3_real_t _t158 = _t156*_t157;
+    const trailer3_real_t _t159 = -_t110 - _t112;
+    const trailer3_real_t _t160 = _t156*_t159;
+    const trailer3_real_t _t161 = _t106 - _t115 - _t21;
+    const trailer3_real_t _t162 = _t156*_t161;
+    const trailer3_real_t _t163 = _t111 - _t118 - _t24;
+    const trailer3_real_t _t164 = _t156*_t163;
+    const trailer3_real_t _t165 = -_t120 + _t22;
+    const trailer3_real_t _t166 = _t156*_t165;
+    const trailer3_real_t _t167 = -_t122 + _t25;
+    const trailer3_real_t _t168 = _t156*_t167;
+    const trailer3_real_t _t169 = _t74*_t75;
+    const trailer3_real_t _t170 = _t70*_t75;
+    const trailer3_real_t _t171 = _t153*_t158 + _t154*_t162 + _t155*_t164 + _t160*_t71 + _t166*_t169
+            + _t168*_t170;
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t _t172 = J_theta_cart2_left*_t171;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t _t173 = TRAILER3_LIT(1.0)/radius_cart2_right;
+    const trailer3_real_t _t174 = _t105 - _t107;
+    const trailer3_real_t _t175 = _t173*_t174;
+    const trailer3_real_t _t176 = _t110 - _t112;
+    const trailer3_real_t _t177 = _t173*_t176;
+    const trailer3_real_t _t178 = _t106 + _t115 - _t21;
+    const trailer3_real_t _t179 = _t173*_t178;
+    const trailer3_real_t _t180 = _t111 + _t118 - _t24;
+    const trailer3_real_t _t181 = _t173*_t180;
+    const trailer3_real_t _t182 = _t120 + _t22;
+    const trailer3_real_t _t183 = _t173*_t182;
+    const trailer3_real_t _t184 = _t122 + _t25;
+    const trailer3_real_t _t185 = _t173*_t184;
+    const trailer3_real_t _t186 = _t153*_t175 + _t154*_t179 + _t155*_t181 + _t169*_t183
+            + _t170*_t185 + _t177*_t71;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t _t187 = J_theta_cart2_right*_t186;
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t _t188 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t189 = -_t125 - _t127;
+    const trailer3_real_t _t190 = _t188*_t189;
+    const trailer3_real_t _t191 = -_t130 - _t132;
+    const trailer3_real_t _t192 = _t188*_t191;
+    const trailer3_real_t _t193 = -_t135 - _t136;
+    const trailer3_real_t _t194 = _t188*_t193;
+    const trailer3_real_t _t195 = -_t139 - _t140;
+    const trailer3_real_t _t196 = _t188*_t195;
+    const trailer3_real_t _t197 = -_t143 - _t144;
+    const trailer3_real_t _t198 = _t188*_t197;
+    const trailer3_real_t _t199 = -_t147 - _t148;
+    const trailer3_real_t _t200 = _t188*_t199;
+    const trailer3_real_t _t201 = -_t150 + _t31;
+    const trailer3_real_t _t202 = _t188*_t201;
+    const trailer3_real_t _t203 = -_t152 + _t35;
+    const trailer3_real_t _t204 = _t188*_t203;
+    const trailer3_real_t _t205 = _t74*_t77;
+    const trailer3_real_t _t206 = _t70*_t77;
+    const trailer3_real_t _t207 = _t153*_t190 + _t154*_t194 + _t155*_t196 + _t169*_t198
+            + _t170*_t200 + _t192*_t71 + _t202*_t205 + _t204*_t206;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t _t208 = J_theta_cart3_left*_t207;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t _t209 = TRAILER3_LIT(1.0)/radius_cart3_right;
+    const trailer3_real_t _t210 = _t125 - _t127;
+    const trailer3_real_t _t211 = _t209*_t210;
+    const trailer3_real_t _t212 = _t130 - _t132;
+    const trailer3_real_t _t213 = _t209*_t212;
+    const trailer3_real_t _t214 = _t135 - _t136;
+    const trailer3_real_t _t215 = _t209*_t214;
+    const trailer3_real_t _t216 = _t139 - _t140;
+    const trailer3_real_t _t217 = _t209*_t216;
+    const trailer3_real_t _t218 = _t143 - _t144;
+    const trailer3_real_t _t219 = _t209*_t218;
+    const trailer3_real_t _t220 = _t147 - _t148;
+    const trailer3_real_t _t221 = _t209*_t220;
+    const trailer3_real_t _t222 = _t150 + _t31;
+    const trailer3_real_t _t223 = _t209*_t222;
+    const trailer3_real_t _t224 = _t152 + _t35;
+    const trailer3_real_t _t225 = _t209*_t224;
+    const trailer3_real_t _t226 = _t153*_t211 + _t154*_t215 + _t155*_t217 + _t169*_t219
+            + _t170*_t221 + _t205*_t223 + _t206*_t225 + _t213*_t71;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t _t227 = J_theta_cart3_right*_t226;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t _t228 = TRAILER3_LIT(1.0)/radius_cart_left;
+    const trailer3_real_t _t229 = -_t101 + _t2;
+    const trailer3_real_t _t230 = _t228*_t229;
+    const trailer3_real_t _t231 = -_t102 + _t4;
+    const trailer3_real_t _t232 = _t228*_t231;
+    const trailer3_real_t _t233 = _t153 - _t154;
+    const trailer3_real_t _t234 = -_t155 + _t71;
+    const trailer3_real_t _t235 = _t230*_t233 + _t232*_t234;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t _t236 = J_theta_cart_left*_t235;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t _t237 = TRAILER3_LIT(1.0)/radius_cart_right;
+    const trailer3_real_t _t238 = _t101 + _t2;
+    const trailer3_real_t _t239 = _t237*_t238;
+    const trailer3_real_t _t240 = _t102 + _t4;
+    const trailer3_real_t _t241 = _t237*_t240;
+    const trailer3_real_t _t242 = _t233*_t239 + _t234*_t241;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t _t243 = J_theta_cart_right*_t242;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t244 = K_theta_cart_x_tractor_2*_t2 - _t61;
+    const trailer3_real_t _t245 = _t10*_t62 - _t10*_t64 + _t57*_t9 + _t58*_t9;
+    const trailer3_real_t _t246 = _t10*_t63 - _t10*_t65 + _t59*_t9 + _t60*_t9;
+    const trailer3_real_t _t247 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t7*_t76
+            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t78
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t71
+            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t3*_t71 - _t57*_t88 - _t58*_t88
+            - _t59*_t89 - _t60*_t89 - _t82*_t9 - _t83*_t9;
+    const trailer3_real_t _t248 = _t233*_t95 + _t234*_t97;
+    const trailer3_real_t _t249 = _t104*_t153 + _t109*_t71 + _t114*_t154 + _t117*_t155 + _t119*_t169
+            + _t121*_t170;
+    const trailer3_real_t _t250 = _t124*_t153 + _t129*_t71 + _t134*_t154 + _t138*_t155 + _t142*_t169
+            + _t146*_t170 + _t149*_t205 + _t151*_t206;
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t _t251 = J_theta_cart*_t248 + _t153*_t244 + _t245*_t249 + _t246*_t250
+            + _t247;
+    const trailer3_real_t _t252 = K_theta_cart2_x_tractor_2*_t6 - _t62;
+    const trailer3_real_t _t253 = _t59*_t66 + _t60*_t66 + _t63*_t67 - _t65*_t67;
+    const trailer3_real_t _t254 = _t57*_t91 + _t58*_t91 - _t59*_t92 - _t60*_t92 - _t62*_t90
+            + _t64*_t90 + _t66*_t79 - _t66*_t83 + _t71*_t84 + _t71*_t85;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t _t255 = J_theta_cart2*_t249 + _t153*_t252 + _t245*_t248 + _t250*_t253
+            + _t254;
+    const trailer3_real_t _t256 = K_theta_cart3_x_tractor_2*_t12 - _t63;
+    const trailer3_real_t _t257 = _t59*_t91 + _t59*_t94 + _t60*_t91 + _t60*_t94 - _t63*_t90
+            - _t63*_t93 + _t65*_t90 + _t65*_t93 + _t71*_t86 + _t71*_t87;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t _t258 = J_theta_cart3*_t250 + _t153*_t256 + _t246*_t248 + _t249*_t253
+            + _t257;
+    const trailer3_real_t _t259 = _t3 + _t36;
+    const trailer3_real_t _t260 = -_t16 + _t37;
+    const trailer3_real_t _t261 = _t237*_t259;
+    const trailer3_real_t _t262 = _t237*_t260;
+    const trailer3_real_t _t263 = _t3 - _t36;
+    const trailer3_real_t _t264 = -_t16 - _t37;
+    const trailer3_real_t _t265 = _t228*_t263;
+    const trailer3_real_t _t266 = _t228*_t264;
+    const trailer3_real_t _t267 = _t38 - _t40 + _t7;
+    const trailer3_real_t _t268 = _t41 - _t43;
+    const trailer3_real_t _t269 = _t173*_t267;
+    const trailer3_real_t _t270 = _t173*_t268;
+    const trailer3_real_t _t271 = -_t38 - _t44;
+    const trailer3_real_t _t272 = -_t41 - _t43;
+    const trailer3_real_t _t273 = _t156*_t271;
+    const trailer3_real_t _t274 = _t156*_t272;
+    const trailer3_real_t _t275 = _t46 - _t51;
+    const trailer3_real_t _t276 = _t53 - _t56;
+    const trailer3_real_t _t277 = _t209*_t275;
+    const trailer3_real_t _t278 = _t209*_t276;
+    const trailer3_real_t _t279 = -_t46 - _t51;
+    const trailer3_real_t _t280 = -_t53 - _t56;
+    const trailer3_real_t _t281 = _t188*_t279;
+    const trailer3_real_t _t282 = _t188*_t280;
+    const trailer3_real_t _t283 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t284 = _t57 + _t58;
+    const trailer3_real_t _t285 = _t59 + _t60;
+    const trailer3_real_t _t286 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
+    const trailer3_real_t _t287 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t288 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
+    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const trailer3_real_t _t289 = -K_theta_cart_x_tractor_2*_t2*_t81
+            + K_theta_tractor_x_tractor*_t71 + _t61*_t81 + _t62*_t76 + _t79 - _t82 - _t83;
+    const trailer3_real_t _t290 = -K_theta_cart_x_tractor*_t16*_t81
+            - K_theta_cart_x_tractor_2*_t4*_t81 - _t76*_t84 - _t76*_t85 - _t78*_t86 - _t78*_t87;
+    const trailer3_real_t _t291 = _t172*_t273 + _t187*_t269 + _t20*_t251 + _t208*_t281 + _t227*_t277
+            + _t236*_t265 + _t243*_t261 + _t248*_t283 + _t249*_t284 + _t250*_t285 + _t255*_t29
+            + _t258*_t45 + _t289;
+    const trailer3_real_t _t292 = -K_theta_tractor_x_tractor*_t153 + _t172*_t274 + _t187*_t270
+            + _t208*_t282 + _t227*_t278 + _t23*_t251 + _t236*_t266 + _t243*_t262 + _t248*_t286
+            + _t249*_t287 + _t250*_t288 + _t255*_t33 + _t258*_t52 + _t290;
+    shared_quantities[0] = _t68;
+    shared_quantities[1] = _t69;
+    shared_quantities[2] = _t237;
+    shared_quantities[3] = _t228;
+    shared_quantities[4] = _t173;
+    shared_quantities[5] = _t156;
+    shared_quantities[6] = _t209;
+    shared_quantities[7] = _t188;
+    shared_quantities[8] = -_t2;
+    shared_quantities[9] = _t3;
+    shared_quantities[10] = -_t4;
+    shared_quantities[11] = -_t6;
+    shared_quantities[12] = _t7;
+    shared_quantities[13] = -_t8;
+    shared_quantities[14] = _t19;
+    shared_quantities[15] = -_t12;
+    shared_quantities[16] = _t13;
+    shared_quantities[17] = -_t14;
+    shared_quantities[18] = _t26;
+    shared_quantities[19] = _t28;
+    shared_quantities[20] = _t16;
+    shared_quantities[21] = _t17;
+    shared_quantities[22] = _t39;
+    shared_quantities[23] = _t18;
+    shared_quantities[24] = _t47;
+    shared_quantities[25] = _t49;
+    shared_quantities[26] = _t72;
+    shared_quantities[27] = _t73;
+    shared_quantities[28] = _t20;
+    shared_quantities[29] = _t23;
+    shared_quantities[30] = -_t22;
+    shared_quantities[31] = -_t25;
+    shared_quantities[32] = _t29;
+    shared_quantities[33] = _t33;
+    shared_quantities[34] = -_t31;
+    shared_quantities[35] = -_t35;
+    shared_quantities[36] = _t45;
+    shared_quantities[37] = _t52;
+    shared_quantities[38] = _t259;
+    shared_quantities[39] = _t260;
+    shared_quantities[40] = _t261;
+    shared_quantities[41] = _t262;
+    shared_quantities[42] = _t263;
+    shared_quantities[43] = _t264;
+    shared_quantities[44] = _t265;
+    shared_quantities[45] = _t266;
+    shared_quantities[46] = _t267;
+    shared_quantities[47] = _t268;
+    shared_quantities[48] = _t269;
+    shared_quantities[49] = _t270;
+    shared_quantities[50] = _t271;
+    shared_quantities[51] = _t272;
+    shared_quantities[52] = _t273;
+    shared_quantities[53] = _t274;
+    shared_quantities[54] = _t275;
+    shared_quantities[55] = _t276;
+    shared_quantities[56] = _t277;
+    shared_quantities[57] = _t278;
+    shared_quantities[58] = _t279;
+    shared_quantities[59] = _t280;
+    shared_quantities[60] = _t281;
+    shared_quantities[61] = _t282;
+    shared_quantities[62] = _t74;
+    shared_quantities[63] = _t70;
+    shared_quantities[64] = _t80;
+    shared_quantities[65] = _t75;
+    shared_quantities[66] = _t77;
+    shared_quantities[67] = _t283;
+    shared_quantities[68] = _t284;
+    shared_quantities[69] = _t285;
+    shared_quantities[70] = _t244;
+    shared_quantities[71] = _t252;
+    shared_quantities[72] = _t256;
+    shared_quantities[73] = _t286;
+    shared_quantities[74] = _t287;
+    shared_quantities[75] = _t288;
+    shared_quantities[76] = _t245;
+    shared_quantities[77] = _t246;
+    shared_quantities[78] = _t253;
+    shared_quantities[79] = _t289;
+    shared_quantities[80] = _t290;
+    shared_quantities[81] = _t247;
+    shared_quantities[82] = _t254;
+    shared_quantities[83] = _t257;
+    shared_quantities[84] = _t95;
+    shared_quantities[85] = _t97;
+    shared_quantities[86] = _t103;
+    shared_quantities[87] = _t104;
+    shared_quantities[88] = _t108;
+    shared_quantities[89] = _t109;
+    shared_quantities[90] = _t113;
+    shared_quantities[91] = _t114;
+    shared_quantities[92] = _t116;
+    shared_quantities[93] = _t117;
+    shared_quantities[94] = -_t44;
+    shared_quantities[95] = _t119;
+    shared_quantities[96] = -_t43;
+    shared_quantities[97] = _t121;
+    shared_quantities[98] = _t123;
+    shared_quantities[99] = _t124;
+    shared_quantities[100] = _t128;
+    shared_quantities[101] = _t129;
+    shared_quantities[102] = _t133;
+    shared_quantities[103] = _t134;
+    shared_quantities[104] = _t137;
+    shared_quantities[105] = _t138;
+    shared_quantities[106] = _t141;
+    shared_quantities[107] = _t142;
+    shared_quantities[108] = _t145;
+    shared_quantities[109] = _t146;
+    shared_quantities[110] = -_t51;
+    shared_quantities[111] = _t149;
+    shared_quantities[112] = -_t56;
+    shared_quantities[113] = _t151;
+    shared_quantities[114] = _t238;
+    shared_quantities[115] = _t239;
+    shared_quantities[116] = _t240;
+    shared_quantities[117] = _t241;
+    shared_quantities[118] = _t229;
+    shared_quantities[119] = _t230;
+    shared_quantities[120] = _t231;
+    shared_quantities[121] = _t232;
+    shared_quantities[122] = _t174;
+    shared_quantities[123] = _t175;
+    shared_quantities[124] = _t176;
+    shared_quantities[125] = _t177;
+    shared_quantities[126] = _t178;
+    shared_quantities[127] = _t179;
+    shared_quantities[128] = _t180;
+    shared_quantities[129] = _t181;
+    shared_quantities[130] = _t182;
+    shared_quantities[131] = _t183;
+    shared_quantities[132] = _t184;
+    shared_quantities[133] = _t185;
+    shared_quantities[134] = _t157;
+    shared_quantities[135] = _t158;
+    shared_quantities[136] = _t159;
+    shared_quantities[137] = _t160;
+    shared_quantities[138] = _t161;
+    shared_quantities[139] = _t162;
+    shared_quantities[140] = _t163;
+    shared_quantities[141] = _t164;
+    shared_quantities[142] = _t165;
+    shared_quantities[143] = _t166;
+    shared_quantities[144] = _t167;
+    shared_quantities[145] = _t168;
+    shared_quantities[146] = _t210;
+    shared_quantities[147] = _t211;
+    shared_quantities[148] = _t212;
+    shared_quantities[149] = _t213;
+    shared_quantities[150] = _t214;
+    shared_quantities[151] = _t215;
+    shared_quantities[152] = _t216;
+    shared_quantities[153] = _t217;
+    shared_quantities[154] = _t218;
+    shared_quantities[155] = _t219;
+    shared_quantities[156] = _t220;
+    shared_quantities[157] = _t221;
+    shared_quantities[158] = _t222;
+    shared_quantities[159] = _t223;
+    shared_quantities[160] = _t224;
+    shared_quantities[161] = _t225;
+    shared_quantities[162] = _t189;
+    shared_quantities[163] = _t190;
+    shared_quantities[164] = _t191;
+    shared_quantities[165] = _t192;
+    shared_quantities[166] = _t193;
+    shared_quantities[167] = _t194;
+    shared_quantities[168] = _t195;
+    shared_quantities[169] = _t196;
+    shared_quantities[170] = _t197;
+    shared_quantities[171] = _t198;
+    shared_quantities[172] = _t199;
+    shared_quantities[173] = _t200;
+    shared_quantities[174] = _t201;
+    shared_quantities[175] = _t202;
+    shared_quantities[176] = _t203;
+    shared_quantities[177] = _t204;
+    shared_quantities[178] = _t233;
+    shared_quantities[179] = _t234;
+    shared_quantities[180] = _t248;
+    shared_quantities[181] = _t153;
+    shared_quantities[182] = _t71;
+    shared_quantities[183] = _t154;
+    shared_quantities[184] = _t155;
+    shared_quantities[185] = _t169;
+    shared_quantities[186] = _t170;
+    shared_quantities[187] = _t249;
+    shared_quantities[188] = _t205;
+    shared_quantities[189] = _t206;
+    shared_quantities[190] = _t250;
+    shared_quantities[191] = _t242;
+    shared_quantities[192] = _t235;
+    shared_quantities[193] = _t186;
+    shared_quantities[194] = _t171;
+    shared_quantities[195] = _t226;
+    shared_quantities[196] = _t207;
+    shared_quantities[197] = _t291;
+    shared_quantities[198] = _t292;
+}
+
 /* trailer3_forward_dynamics: documented in trailer3_model.h.
    operations after CSE: 324 add, 447 mul, 9 div, 8 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *tau, trailer3_real_t *qddot)
 {
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t radius_right = p->radius_right;
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t theta_cart = q[3];
     const trailer3_real_t theta_cart2 = q[4];
@@ -48,506 +571,19 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
     const trailer3_real_t thetadot_left = qdot[7];
     const trailer3_real_t tau_right = tau[0];
     const trailer3_real_t tau_left = tau[1];
-    if (((trailer3_exp_carry(J_theta_cart) | trailer3_exp_carry(J_theta_cart2)
-            | trailer3_exp_carry(J_theta_cart2_left) | trailer3_exp_carry(J_theta_cart2_right)
-            | trailer3_exp_carry(J_theta_cart3) | trailer3_exp_carry(J_theta_cart3_left)
-            | trailer3_exp_carry(J_theta_cart3_right) | trailer3_exp_carry(J_theta_cart_left)
-            | trailer3_exp_carry(J_theta_cart_right) | trailer3_exp_carry(J_theta_left)
-            | trailer3_exp_carry(J_theta_right) | trailer3_exp_carry(J_theta_tractor)
-            | trailer3_exp_carry(J_x_tractor) | trailer3_exp_carry(K_theta_cart_x_tractor)
-            | trailer3_exp_carry(K_theta_cart_x_tractor_2)
-            | trailer3_exp_carry(K_theta_cart2_x_tractor)
-            | trailer3_exp_carry(K_theta_cart2_x_tractor_2)
-            | trailer3_exp_carry(K_theta_cart3_x_tractor)
-            | trailer3_exp_carry(K_theta_cart3_x_tractor_2)
-            | trailer3_exp_carry(K_theta_tractor_x_tractor)
-            | trailer3_exp_carry(K_theta_tractor_x_tractor_2)
-            | trailer3_exp_carry(radius_cart2_left) | trailer3_exp_carry(radius_cart2_right)
-            | trailer3_exp_carry(radius_cart3_left) | trailer3_exp_carry(radius_cart3_right)
-            | trailer3_exp_carry(radius_cart_left) | trailer3_exp_carry(radius_cart_right)
-            | trailer3_exp_carry(radius_left) | trailer3_exp_carry(radius_right)
-            | trailer3_exp_carry(theta_tractor) | trailer3_exp_carry(theta_cart)
+    if (((trailer3_exp_carry(theta_tractor) | trailer3_exp_carry(theta_cart)
             | trailer3_exp_carry(theta_cart2) | trailer3_exp_carry(theta_cart3)
             | trailer3_exp_carry(thetadot_right) | trailer3_exp_carry(thetadot_left)
             | trailer3_exp_carry(tau_right) | trailer3_exp_carry(tau_left))
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t1 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t2 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t6 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t7 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t8 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t9 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor;
-    const trailer3_real_t _t11 = TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor;
-    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor;
-    const trailer3_real_t _t13 = TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t14 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t15 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t16 = J_theta_right*_t14;
-    const trailer3_real_t _t17 = J_theta_left*_t15;
-    const trailer3_real_t _t18 = _t14*_t16 + _t15*_t17;
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.207)*_t14;
-    const trailer3_real_t _t20 = J_theta_right*_t19;
-    const trailer3_real_t _t21 = -TRAILER3_LIT(0.207)*_t15;
-    const trailer3_real_t _t22 = J_theta_left*_t21;
-    const trailer3_real_t _t23 = _t14*_t20 + _t15*_t22;
-    const trailer3_real_t _t24 = _t19*_t20 + _t21*_t22;
-    if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
+    trailer3_model_prepared_t prepared;
+    const trailer3_status_t prepare_status = trailer3_model_prepare(p, &prepared);
+    if (prepare_status != TRAILER3_OK) {
+        return prepare_status;
     }
-    if (!(radius_cart2_right > TRAILER3_LIT(0.0))) { /* radius_cart2_right > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart3_left > TRAILER3_LIT(0.0))) { /* radius_cart3_left > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart3_right > TRAILER3_LIT(0.0))) { /* radius_cart3_right > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart_left > TRAILER3_LIT(0.0))) { /* radius_cart_left > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart_right > TRAILER3_LIT(0.0))) { /* radius_cart_right > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(radius_left > TRAILER3_LIT(0.0))) { /* radius_left > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(radius_right > TRAILER3_LIT(0.0))) { /* radius_right > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart > TRAILER3_LIT(0.0))) { /* J_theta_cart > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2 > TRAILER3_LIT(0.0))) { /* J_theta_cart2 > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2_left > TRAILER3_LIT(0.0))) { /* J_theta_cart2_left > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2_right > TRAILER3_LIT(0.0))) { /* J_theta_cart2_right > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart3 > TRAILER3_LIT(0.0))) { /* J_theta_cart3 > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart3_left > TRAILER3_LIT(0.0))) { /* J_theta_cart3_left > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart3_right > TRAILER3_LIT(0.0))) { /* J_theta_cart3_right > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_left > TRAILER3_LIT(0.0))) { /* J_theta_cart_left > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_right > TRAILER3_LIT(0.0))) { /* J_theta_cart_right > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_left > TRAILER3_LIT(0.0))) { /* J_theta_left > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_right > TRAILER3_LIT(0.0))) { /* J_theta_right > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_tractor > TRAILER3_LIT(0.0))) { /* J_theta_tractor > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    const trailer3_real_t _t25 = -theta_tractor;
-    const trailer3_real_t _t26 = _t25 + theta_cart;
-    const trailer3_real_t _t27 = TRAILER3_SIN(_t26);
-    const trailer3_real_t _t28 = TRAILER3_COS(_t26);
-    const trailer3_real_t _t29 = TRAILER3_LIT(0.3)*_t28;
-    const trailer3_real_t _t30 = _t25 + theta_cart2;
-    const trailer3_real_t _t31 = TRAILER3_SIN(_t30);
-    const trailer3_real_t _t32 = TRAILER3_COS(_t30);
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.3)*_t32;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t27;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.85)*_t28;
-    const trailer3_real_t _t36 = _t25 + theta_cart3;
-    const trailer3_real_t _t37 = TRAILER3_SIN(_t36);
-    const trailer3_real_t _t38 = TRAILER3_COS(_t36);
-    const trailer3_real_t _t39 = TRAILER3_LIT(0.3)*_t38;
-    const trailer3_real_t _t40 = TRAILER3_LIT(0.85)*_t38;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.3)*_t27;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.3)*_t31;
-    const trailer3_real_t _t43 = TRAILER3_LIT(0.3)*_t37;
-    const trailer3_real_t _t44 = -_t31*_t34 - _t32*_t35;
-    const trailer3_real_t _t45 = -TRAILER3_LIT(1.6666666666666667)*_t27;
-    const trailer3_real_t _t46 = _t44*_t45;
-    const trailer3_real_t _t47 = -_t31 + _t46;
-    const trailer3_real_t _t48 = -TRAILER3_LIT(1.6666666666666667)*_t29;
-    const trailer3_real_t _t49 = _t44*_t48;
-    const trailer3_real_t _t50 = -_t33 + _t49;
-    const trailer3_real_t _t51 = -_t34*_t37 - _t35*_t38;
-    const trailer3_real_t _t52 = _t45*_t51;
-    const trailer3_real_t _t53 = -TRAILER3_LIT(0.85)*_t31*_t37 - _t32*_t40;
-    const trailer3_real_t _t54 = TRAILER3_LIT(1.6666666666666667)*_t47;
-    const trailer3_real_t _t55 = _t53*_t54;
-    const trailer3_real_t _t56 = -_t37 + _t52 + _t55;
-    const trailer3_real_t _t57 = _t48*_t51;
-    const trailer3_real_t _t58 = TRAILER3_LIT(1.6666666666666667)*_t50;
-    const trailer3_real_t _t59 = _t53*_t58;
-    const trailer3_real_t _t60 = -_t39 + _t57 + _t59;
-    const trailer3_real_t _t61 = TRAILER3_LIT(0.2)*_t45;
-    const trailer3_real_t _t62 = TRAILER3_LIT(0.2)*_t48;
-    const trailer3_real_t _t63 = TRAILER3_LIT(0.2)*_t54;
-    const trailer3_real_t _t64 = TRAILER3_LIT(0.85)*_t28*_t31 - _t32*_t34;
-    const trailer3_real_t _t65 = _t45*_t64;
-    const trailer3_real_t _t66 = TRAILER3_LIT(0.2)*_t58;
-    const trailer3_real_t _t67 = _t48*_t64;
-    const trailer3_real_t _t68 = _t42 + _t67;
-    const trailer3_real_t _t69 = -_t32 + _t65;
-    const trailer3_real_t _t70 = TRAILER3_LIT(1.6666666666666667)*_t56;
-    const trailer3_real_t _t71 = TRAILER3_LIT(0.2)*_t70;
-    const trailer3_real_t _t72 = TRAILER3_LIT(0.85)*_t28*_t37 - _t34*_t38;
-    const trailer3_real_t _t73 = _t45*_t72;
-    const trailer3_real_t _t74 = -_t31*_t40 + TRAILER3_LIT(0.85)*_t32*_t37;
-    const trailer3_real_t _t75 = _t54*_t74;
-    const trailer3_real_t _t76 = -_t38 + _t73 + _t75;
-    const trailer3_real_t _t77 = TRAILER3_LIT(1.6666666666666667)*_t60;
-    const trailer3_real_t _t78 = TRAILER3_LIT(0.2)*_t77;
-    const trailer3_real_t _t79 = _t48*_t72;
-    const trailer3_real_t _t80 = _t58*_t74;
-    const trailer3_real_t _t81 = _t43 + _t79 + _t80;
-    const trailer3_real_t _t82 = K_theta_cart2_x_tractor*_t31;
-    const trailer3_real_t _t83 = K_theta_cart2_x_tractor_2*_t32;
-    const trailer3_real_t _t84 = K_theta_cart3_x_tractor*_t37;
-    const trailer3_real_t _t85 = K_theta_cart3_x_tractor_2*_t38;
-    const trailer3_real_t _t86 = K_theta_cart_x_tractor*_t28;
-    const trailer3_real_t _t87 = K_theta_cart2_x_tractor*_t32;
-    const trailer3_real_t _t88 = K_theta_cart3_x_tractor*_t38;
-    const trailer3_real_t _t89 = K_theta_cart2_x_tractor_2*_t31;
-    const trailer3_real_t _t90 = K_theta_cart3_x_tractor_2*_t37;
-    const trailer3_real_t _t91 = TRAILER3_LIT(0.85)*_t31;
-    const trailer3_real_t _t92 = TRAILER3_LIT(0.85)*_t32;
-    const trailer3_real_t _t93 = _t0*thetadot_right + _t1*thetadot_left;
-    const trailer3_real_t _t94 = _t93*_t93;
-    const trailer3_real_t _t95 = _t2*thetadot_right + _t3*thetadot_left;
-    const trailer3_real_t _t96 = _t54*_t95 + _t58*_t93;
-    const trailer3_real_t _t97 = _t96*_t96;
-    const trailer3_real_t _t98 = _t70*_t95 + _t77*_t93;
-    const trailer3_real_t _t99 = _t98*_t98;
-    const trailer3_real_t _t100 = _t88*_t99;
-    const trailer3_real_t _t101 = _t45*_t95 + _t48*_t93;
-    const trailer3_real_t _t102 = _t101*_t101;
-    const trailer3_real_t _t103 = _t89*_t97;
-    const trailer3_real_t _t104 = _t90*_t99;
-    const trailer3_real_t _t105 = K_theta_cart2_x_tractor*_t42;
-    const trailer3_real_t _t106 = K_theta_cart2_x_tractor_2*_t33;
-    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t43;
-    const trailer3_real_t _t108 = K_theta_cart3_x_tractor_2*_t39;
-    const trailer3_real_t _t109 = _t35*_t97;
-    const trailer3_real_t _t110 = _t35*_t99;
-    const trailer3_real_t _t111 = _t102*_t34;
-    const trailer3_real_t _t112 = _t102*_t35;
-    const trailer3_real_t _t113 = _t92*_t99;
-    const trailer3_real_t _t114 = _t91*_t97;
-    const trailer3_real_t _t115 = _t92*_t97;
-    const trailer3_real_t _t116 = TRAILER3_LIT(1.6666666666666667)*_t28;
-    const trailer3_real_t _t117 = _t116*_t44;
-    const trailer3_real_t _t118 = -TRAILER3_LIT(1.6666666666666667)*_t41;
-    const trailer3_real_t _t119 = _t118*_t44;
-    const trailer3_real_t _t120 = _t116*_t51;
-    const trailer3_real_t _t121 = _t118*_t51;
-    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t116;
-    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t118;
-    const trailer3_real_t _t124 = -_t117 - _t32;
-    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
-    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
-    const trailer3_real_t _t127 = _t116*_t64;
-    const trailer3_real_t _t128 = _t127 - _t31;
-    const trailer3_real_t _t129 = -_t119 + _t42;
-    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
-    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
-    const trailer3_real_t _t132 = _t118*_t64;
-    const trailer3_real_t _t133 = _t132 - _t33;
-    const trailer3_real_t _t134 = _t117 + _t65;
-    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
-    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
-    const trailer3_real_t _t137 = _t119 + _t67;
-    const trailer3_real_t _t138 = -TRAILER3_LIT(1.6666666666666667)*_t137;
-    const trailer3_real_t _t139 = TRAILER3_LIT(0.2)*_t138;
-    const trailer3_real_t _t140 = TRAILER3_LIT(1.6666666666666667)*_t69;
-    const trailer3_real_t _t141 = TRAILER3_LIT(0.2)*_t140;
-    const trailer3_real_t _t142 = TRAILER3_LIT(1.6666666666666667)*_t68;
-    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
-    const trailer3_real_t _t144 = -_t120 - _t125*_t53 - _t38;
-    const trailer3_real_t _t145 = -TRAILER3_LIT(1.6666666666666667)*_t144;
-    const trailer3_real_t _t146 = TRAILER3_LIT(0.2)*_t145;
-    const trailer3_real_t _t147 = _t116*_t72;
-    const trailer3_real_t _t148 = _t125*_t74 + _t147 - _t37;
-    const trailer3_real_t _t149 = -_t121 - _t130*_t53 + _t43;
-    const trailer3_real_t _t150 = -TRAILER3_LIT(1.6666666666666667)*_t149;
-    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
-    const trailer3_real_t _t152 = _t118*_t72;
-    const trailer3_real_t _t153 = _t130*_t74 + _t152 - _t39;
-    const trailer3_real_t _t154 = _t120 - _t135*_t53 + _t73;
-    const trailer3_real_t _t155 = -TRAILER3_LIT(1.6666666666666667)*_t154;
-    const trailer3_real_t _t156 = TRAILER3_LIT(0.2)*_t155;
-    const trailer3_real_t _t157 = _t135*_t74 - _t147 + _t52;
-    const trailer3_real_t _t158 = _t121 - _t138*_t53 + _t79;
-    const trailer3_real_t _t159 = -TRAILER3_LIT(1.6666666666666667)*_t158;
-    const trailer3_real_t _t160 = TRAILER3_LIT(0.2)*_t159;
-    const trailer3_real_t _t161 = _t138*_t74 - _t152 + _t57;
-    const trailer3_real_t _t162 = -_t140*_t53 + _t75;
-    const trailer3_real_t _t163 = -TRAILER3_LIT(1.6666666666666667)*_t162;
-    const trailer3_real_t _t164 = TRAILER3_LIT(0.2)*_t163;
-    const trailer3_real_t _t165 = _t140*_t74 + _t55;
-    const trailer3_real_t _t166 = -_t142*_t53 + _t80;
-    const trailer3_real_t _t167 = -TRAILER3_LIT(1.6666666666666667)*_t166;
-    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t167;
-    const trailer3_real_t _t169 = _t142*_t74 + _t59;
-    const trailer3_real_t _t170 = TRAILER3_LIT(1.6666666666666667)*_t76;
-    const trailer3_real_t _t171 = TRAILER3_LIT(0.2)*_t170;
-    const trailer3_real_t _t172 = TRAILER3_LIT(1.6666666666666667)*_t81;
-    const trailer3_real_t _t173 = TRAILER3_LIT(0.2)*_t172;
-    const trailer3_real_t _t174 = _t93*_t95;
-    const trailer3_real_t _t175 = _t101*_t95;
-    const trailer3_real_t _t176 = _t101*_t93;
-    const trailer3_real_t _t177 = _t28 + _t61;
-    const trailer3_real_t _t178 = _t177*_t4;
-    const trailer3_real_t _t179 = J_theta_cart_right*_t178;
-    const trailer3_real_t _t180 = -_t41 + _t62;
-    const trailer3_real_t _t181 = _t180*_t4;
-    const trailer3_real_t _t182 = J_theta_cart_right*_t181;
-    const trailer3_real_t _t183 = _t28 - _t61;
-    const trailer3_real_t _t184 = _t183*_t5;
-    const trailer3_real_t _t185 = J_theta_cart_left*_t184;
-    const trailer3_real_t _t186 = -_t41 - _t62;
-    const trailer3_real_t _t187 = _t186*_t5;
-    const trailer3_real_t _t188 = J_theta_cart_left*_t187;
-    const trailer3_real_t _t189 = _t32 + _t63 - _t65;
-    const trailer3_real_t _t190 = _t189*_t6;
-    const trailer3_real_t _t191 = J_theta_cart2_right*_t190;
-    const trailer3_real_t _t192 = _t66 - _t68;
-    const trailer3_real_t _t193 = _t192*_t6;
-    const trailer3_real_t _t194 = J_theta_cart2_right*_t193;
-    const trailer3_real_t _t195 = -_t63 - _t69;
-    const trailer3_real_t _t196 = _t195*_t7;
-    const trailer3_real_t _t197 = J_theta_cart2_left*_t196;
-    const trailer3_real_t _t198 = -_t66 - _t68;
-    const trailer3_real_t _t199 = _t198*_t7;
-    const trailer3_real_t _t200 = J_theta_cart2_left*_t199;
-    const trailer3_real_t _t201 = _t71 - _t76;
-    const trailer3_real_t _t202 = _t201*_t8;
-    const trailer3_real_t _t203 = J_theta_cart3_right*_t202;
-    const trailer3_real_t _t204 = _t78 - _t81;
-    const trailer3_real_t _t205 = _t204*_t8;
-    const trailer3_real_t _t206 = J_theta_cart3_right*_t205;
-    const trailer3_real_t _t207 = -_t71 - _t76;
-    const trailer3_real_t _t208 = _t207*_t9;
-    const trailer3_real_t _t209 = J_theta_cart3_left*_t208;
-    const trailer3_real_t _t210 = -_t78 - _t81;
-    const trailer3_real_t _t211 = _t210*_t9;
-    const trailer3_real_t _t212 = J_theta_cart3_left*_t211;
-    const trailer3_real_t _t213 = K_theta_cart_x_tractor_2*_t27 - _t86;
-    const trailer3_real_t _t214 = _t34*(_t82 + _t83) + _t35*(_t87 - _t89);
-    const trailer3_real_t _t215 = _t34*(_t84 + _t85) + _t35*(_t88 - _t90);
-    const trailer3_real_t _t216 = _t109*(-_t82 - _t83) + _t110*(-_t84 - _t85) + _t13*_t28*_t94
-            + _t27*(_t10*_t94 + _t11*_t38*_t99 + _t12*_t32*_t97) + _t34*(-_t103 - _t104);
-    const trailer3_real_t _t217 = _t174 - _t175;
-    const trailer3_real_t _t218 = -_t176 + _t94;
-    const trailer3_real_t _t219 = _t116*_t217 + _t118*_t218;
-    const trailer3_real_t _t220 = _t95*_t96;
-    const trailer3_real_t _t221 = _t93*_t96;
-    const trailer3_real_t _t222 = _t125*_t174 + _t130*_t94 + _t135*_t175 + _t138*_t176 + _t140*_t220
-            + _t142*_t221;
-    const trailer3_real_t _t223 = _t95*_t98;
-    const trailer3_real_t _t224 = _t93*_t98;
-    const trailer3_real_t _t225 = _t145*_t174 + _t150*_t94 + _t155*_t175 + _t159*_t176 + _t163*_t220
-            + _t167*_t221 + _t170*_t223 + _t172*_t224;
-    const trailer3_real_t _t226 = J_theta_cart*_t219 + _t174*_t213 + _t214*_t222 + _t215*_t225
-            + _t216;
-    const trailer3_real_t _t227 = K_theta_cart2_x_tractor_2*_t31 - _t87;
-    const trailer3_real_t _t228 = _t91*(_t84 + _t85) + _t92*(_t88 - _t90);
-    const trailer3_real_t _t229 = _t111*(-_t87 + _t89) + _t112*(_t82 + _t83) + _t113*(-_t84 - _t85)
-            + _t91*(_t100 - _t104) + _t94*(_t105 + _t106);
-    const trailer3_real_t _t230 = J_theta_cart2*_t222 + _t174*_t227 + _t214*_t219 + _t225*_t228
-            + _t229;
-    const trailer3_real_t _t231 = K_theta_cart3_x_tractor_2*_t37 - _t88;
-    const trailer3_real_t _t232 = _t84*(_t112 + _t115) + _t85*(_t112 + _t115)
-            + _t88*(-_t111 - _t114) + _t90*(_t111 + _t114) + _t94*(_t107 + _t108);
-    const trailer3_real_t _t233 = J_theta_cart3*_t225 + _t174*_t231 + _t215*_t219 + _t222*_t228
-            + _t232;
-    const trailer3_real_t _t234 = K_theta_cart_x_tractor*_t27 + K_theta_cart_x_tractor_2*_t28;
-    const trailer3_real_t _t235 = _t82 + _t83;
-    const trailer3_real_t _t236 = _t84 + _t85;
-    const trailer3_real_t _t237 = J_x_tractor + _t234*_t45 + _t235*_t54 + _t236*_t70;
-    const trailer3_real_t _t238 = J_theta_cart*_t45 + _t214*_t54 + _t215*_t70 + _t234;
-    const trailer3_real_t _t239 = J_theta_cart2*_t54 + _t214*_t45 + _t228*_t70 + _t235;
-    const trailer3_real_t _t240 = J_theta_cart3*_t70 + _t215*_t45 + _t228*_t54 + _t236;
-    const trailer3_real_t _t241 = _t178*_t179 + _t18 + _t184*_t185 + _t190*_t191 + _t196*_t197
-            + _t202*_t203 + _t208*_t209 + _t237 + _t238*_t45 + _t239*_t54 + _t240*_t70;
-    const trailer3_real_t _t242 = K_theta_tractor_x_tractor_2 + _t234*_t48 + _t235*_t58
-            + _t236*_t77;
-    const trailer3_real_t _t243 = K_theta_cart_x_tractor*_t29 - K_theta_cart_x_tractor_2*_t41;
-    const trailer3_real_t _t244 = J_theta_cart*_t48 + _t214*_t58 + _t215*_t77 + _t243;
-    const trailer3_real_t _t245 = K_theta_cart2_x_tractor*_t33 - K_theta_cart2_x_tractor_2*_t42;
-    const trailer3_real_t _t246 = J_theta_cart2*_t58 + _t214*_t48 + _t228*_t77 + _t245;
-    const trailer3_real_t _t247 = K_theta_cart3_x_tractor*_t39 - K_theta_cart3_x_tractor_2*_t43;
-    const trailer3_real_t _t248 = J_theta_cart3*_t77 + _t215*_t48 + _t228*_t58 + _t247;
-    const trailer3_real_t _t249 = _t178*_t182 + _t184*_t188 + _t190*_t194 + _t196*_t200
-            + _t202*_t206 + _t208*_t212 + _t23 + _t242 + _t244*_t45 + _t246*_t54 + _t248*_t70;
-    const trailer3_real_t _t250 = J_theta_tractor + _t243*_t48 + _t245*_t58 + _t247*_t77;
-    const trailer3_real_t _t251 = _t181*_t182 + _t187*_t188 + _t193*_t194 + _t199*_t200
-            + _t205*_t206 + _t211*_t212 + _t24 + _t244*_t48 + _t246*_t58 + _t248*_t77 + _t250;
-    const trailer3_real_t _t252 = _t241*_t251 - _t249*_t249;
-    const trailer3_real_t _t253 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t254 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t255 = K_theta_tractor_x_tractor*_t94 + _t100
-            + _t102*(-K_theta_cart_x_tractor_2*_t27 + _t86) - _t103 - _t104 + _t87*_t97;
-    const trailer3_real_t _t256 = _t102*(-K_theta_cart_x_tractor*_t41
-            - K_theta_cart_x_tractor_2*_t29) + _t97*(-_t105 - _t106) + _t99*(-_t107 - _t108);
-    const trailer3_real_t _t257 = _t122 + _t27;
-    const trailer3_real_t _t258 = _t257*_t4;
-    const trailer3_real_t _t259 = _t123 + _t29;
-    const trailer3_real_t _t260 = _t259*_t4;
-    const trailer3_real_t _t261 = -_t122 + _t27;
-    const trailer3_real_t _t262 = _t261*_t5;
-    const trailer3_real_t _t263 = -_t123 + _t29;
-    const trailer3_real_t _t264 = _t263*_t5;
-    const trailer3_real_t _t265 = _t126 - _t128;
-    const trailer3_real_t _t266 = _t265*_t6;
-    const trailer3_real_t _t267 = _t131 - _t133;
-    const trailer3_real_t _t268 = _t267*_t6;
-    const trailer3_real_t _t269 = _t127 + _t136 - _t46;
-    const trailer3_real_t _t270 = _t269*_t6;
-    const trailer3_real_t _t271 = _t132 + _t139 - _t49;
-    const trailer3_real_t _t272 = _t271*_t6;
-    const trailer3_real_t _t273 = _t141 + _t47;
-    const trailer3_real_t _t274 = _t273*_t6;
-    const trailer3_real_t _t275 = _t143 + _t50;
-    const trailer3_real_t _t276 = _t275*_t6;
-    const trailer3_real_t _t277 = -_t126 - _t128;
-    const trailer3_real_t _t278 = _t277*_t7;
-    const trailer3_real_t _t279 = -_t131 - _t133;
-    const trailer3_real_t _t280 = _t279*_t7;
-    const trailer3_real_t _t281 = _t127 - _t136 - _t46;
-    const trailer3_real_t _t282 = _t281*_t7;
-    const trailer3_real_t _t283 = _t132 - _t139 - _t49;
-    const trailer3_real_t _t284 = _t283*_t7;
-    const trailer3_real_t _t285 = -_t141 + _t47;
-    const trailer3_real_t _t286 = _t285*_t7;
-    const trailer3_real_t _t287 = -_t143 + _t50;
-    const trailer3_real_t _t288 = _t287*_t7;
-    const trailer3_real_t _t289 = _t146 - _t148;
-    const trailer3_real_t _t290 = _t289*_t8;
-    const trailer3_real_t _t291 = _t151 - _t153;
-    const trailer3_real_t _t292 = _t291*_t8;
-    const trailer3_real_t _t293 = _t156 - _t157;
-    const trailer3_real_t _t294 = _t293*_t8;
-    const trailer3_real_t _t295 = _t160 - _t161;
-    const trailer3_real_t _t296 = _t295*_t8;
-    const trailer3_real_t _t297 = _t164 - _t165;
-    const trailer3_real_t _t298 = _t297*_t8;
-    const trailer3_real_t _t299 = _t168 - _t169;
-    const trailer3_real_t _t300 = _t299*_t8;
-    const trailer3_real_t _t301 = _t171 + _t56;
-    const trailer3_real_t _t302 = _t301*_t8;
-    const trailer3_real_t _t303 = _t173 + _t60;
-    const trailer3_real_t _t304 = _t303*_t8;
-    const trailer3_real_t _t305 = -_t146 - _t148;
-    const trailer3_real_t _t306 = _t305*_t9;
-    const trailer3_real_t _t307 = -_t151 - _t153;
-    const trailer3_real_t _t308 = _t307*_t9;
-    const trailer3_real_t _t309 = -_t156 - _t157;
-    const trailer3_real_t _t310 = _t309*_t9;
-    const trailer3_real_t _t311 = -_t160 - _t161;
-    const trailer3_real_t _t312 = _t311*_t9;
-    const trailer3_real_t _t313 = -_t164 - _t165;
-    const trailer3_real_t _t314 = _t313*_t9;
-    const trailer3_real_t _t315 = -_t168 - _t169;
-    const trailer3_real_t _t316 = _t315*_t9;
-    const trailer3_real_t _t317 = -_t171 + _t56;
-    const trailer3_real_t _t318 = _t317*_t9;
-    const trailer3_real_t _t319 = -_t173 + _t60;
-    const trailer3_real_t _t320 = _t319*_t9;
-    const trailer3_real_t _t321 = _t217*_t258 + _t218*_t260;
-    const trailer3_real_t _t322 = _t217*_t262 + _t218*_t264;
-    const trailer3_real_t _t323 = _t174*_t266 + _t175*_t270 + _t176*_t272 + _t220*_t274
-            + _t221*_t276 + _t268*_t94;
-    const trailer3_real_t _t324 = _t174*_t278 + _t175*_t282 + _t176*_t284 + _t220*_t286
-            + _t221*_t288 + _t280*_t94;
-    const trailer3_real_t _t325 = _t174*_t290 + _t175*_t294 + _t176*_t296 + _t220*_t298
-            + _t221*_t300 + _t223*_t302 + _t224*_t304 + _t292*_t94;
-    const trailer3_real_t _t326 = _t174*_t306 + _t175*_t310 + _t176*_t312 + _t220*_t314
-            + _t221*_t316 + _t223*_t318 + _t224*_t320 + _t308*_t94;
-    const trailer3_real_t _t327 = _t179*_t321 + _t185*_t322 + _t191*_t323 + _t197*_t324
-            + _t203*_t325 + _t209*_t326 + _t219*_t234 + _t222*_t235 + _t225*_t236 + _t226*_t45
-            + _t230*_t54 + _t233*_t70 + _t255;
-    const trailer3_real_t _t328 = -K_theta_tractor_x_tractor*_t174 + _t182*_t321 + _t188*_t322
-            + _t194*_t323 + _t200*_t324 + _t206*_t325 + _t212*_t326 + _t219*_t243 + _t222*_t245
-            + _t225*_t247 + _t226*_t48 + _t230*_t58 + _t233*_t77 + _t256;
-    const trailer3_real_t _t329 = _t14*tau_right + _t15*tau_left - _t327;
-    const trailer3_real_t _t330 = _t19*tau_right + _t21*tau_left - _t328;
-    const trailer3_real_t _t331 = TRAILER3_LIT(1.0)/_t252;
-    const trailer3_real_t _t332 = _t331*(-_t249*_t330 + _t251*_t329);
-    const trailer3_real_t _t333 = _t331*(_t241*_t330 - _t249*_t329);
-    const trailer3_real_t _t334 = _t219 + _t332*_t45 + _t333*_t48;
-    const trailer3_real_t _t335 = _t222 + _t332*_t54 + _t333*_t58;
-    const trailer3_real_t _t336 = _t225 + _t332*_t70 + _t333*_t77;
-    const trailer3_real_t _t337 = _t14*_t332 + _t19*_t333;
-    const trailer3_real_t _t338 = _t15*_t332 + _t21*_t333;
-    const trailer3_real_t _t339 = _t178*_t332 + _t181*_t333 + _t321;
-    const trailer3_real_t _t340 = _t184*_t332 + _t187*_t333 + _t322;
-    const trailer3_real_t _t341 = _t190*_t332 + _t193*_t333 + _t323;
-    const trailer3_real_t _t342 = _t196*_t332 + _t199*_t333 + _t324;
-    const trailer3_real_t _t343 = _t202*_t332 + _t205*_t333 + _t325;
-    const trailer3_real_t _t344 = _t208*_t332 + _t211*_t333 + _t326;
-    const trailer3_real_t _t345 = -_t174*_t253 + _t254*_t332;
-    const trailer3_real_t _t346 = _t174*_t254 + _t253*_t332;
-    if (!(_t241 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    if (!(_t252 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
-        return TRAILER3_ERR_BAD_PARAMS;
-    }
-    const trailer3_real_t r_0 = _t345;
-    const trailer3_real_t r_1 = _t346;
-    const trailer3_real_t r_2 = _t333;
-    const trailer3_real_t r_3 = _t334;
-    const trailer3_real_t r_4 = _t335;
-    const trailer3_real_t r_5 = _t336;
-    const trailer3_real_t r_6 = _t337;
-    const trailer3_real_t r_7 = _t338;
-    const trailer3_real_t r_8 = _t339;
-    const trailer3_real_t r_9 = _t340;
-    const trailer3_real_t r_10 = _t341;
-    const trailer3_real_t r_11 = _t342;
-    const trailer3_real_t r_12 = _t343;
-    const trailer3_real_t r_13 = _t344;
-    if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
-            | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5)
-            | trailer3_exp_carry(r_6) | trailer3_exp_carry(r_7) | trailer3_exp_carry(r_8)
-            | trailer3_exp_carry(r_9) | trailer3_exp_carry(r_10) | trailer3_exp_carry(r_11)
-            | trailer3_exp_carry(r_12) | trailer3_exp_carry(r_13)) & TRAILER3_EXP_CARRY_TOP)
-            != 0u) {
-        return TRAILER3_ERR_NONFINITE_OUTPUT;
-    }
-    qddot[0] = r_0;
-    qddot[1] = r_1;
-    qddot[2] = r_2;
-    qddot[3] = r_3;
-    qddot[4] = r_4;
-    qddot[5] = r_5;
-    qddot[6] = r_6;
-    qddot[7] = r_7;
-    qddot[8] = r_8;
-    qddot[9] = r_9;
-    qddot[10] = r_10;
-    qddot[11] = r_11;
-    qddot[12] = r_12;
-    qddot[13] = r_13;
-    return TRAILER3_OK;
+    return trailer3_forward_dynamics_prepared(&prepared, q, qdot, tau, qddot);
 }
 
 /* trailer3_model_prepare: documented in trailer3_model.h.
@@ -1510,358 +1546,22 @@ void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_rea
 void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *H)
 {
-    const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t0 = -theta_tractor;
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t1 = _t0 + theta_cart;
-    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
-    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
-    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
-    const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t5 = _t0 + theta_cart2;
-    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
-    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
-    const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t11 = _t0 + theta_cart3;
-    const trailer3_real_t _t12 = TRAILER3_SIN(_t11);
-    const trailer3_real_t _t13 = TRAILER3_COS(_t11);
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t13;
-    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t _t19 = -_t10*_t7 - _t6*_t9;
-    const trailer3_real_t _t20 = -TRAILER3_LIT(1.6666666666666667)*_t2;
-    const trailer3_real_t _t21 = _t19*_t20;
-    const trailer3_real_t _t22 = _t21 - _t6;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t4;
-    const trailer3_real_t _t24 = _t19*_t23;
-    const trailer3_real_t _t25 = _t24 - _t8;
-    const trailer3_real_t _t26 = -_t10*_t13 - _t12*_t9;
-    const trailer3_real_t _t27 = _t20*_t26;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
-    const trailer3_real_t _t29 = TRAILER3_LIT(1.6666666666666667)*_t22;
-    const trailer3_real_t _t30 = _t28*_t29;
-    const trailer3_real_t _t31 = -_t12 + _t27 + _t30;
-    const trailer3_real_t _t32 = _t23*_t26;
-    const trailer3_real_t _t33 = TRAILER3_LIT(1.6666666666666667)*_t25;
-    const trailer3_real_t _t34 = _t28*_t33;
-    const trailer3_real_t _t35 = -_t14 + _t32 + _t34;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.2)*_t20;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t23;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t40 = _t20*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t33;
-    const trailer3_real_t _t42 = _t23*_t39;
-    const trailer3_real_t _t43 = _t17 + _t42;
-    const trailer3_real_t _t44 = _t40 - _t7;
-    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t31;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const trailer3_real_t _t48 = _t20*_t47;
-    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
-    const trailer3_real_t _t50 = _t29*_t49;
-    const trailer3_real_t _t51 = -_t13 + _t48 + _t50;
-    const trailer3_real_t _t52 = TRAILER3_LIT(1.6666666666666667)*_t35;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
-    const trailer3_real_t _t54 = _t23*_t47;
-    const trailer3_real_t _t55 = _t33*_t49;
-    const trailer3_real_t _t56 = _t18 + _t54 + _t55;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t57 = K_theta_cart2_x_tractor*_t6;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t58 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t59 = K_theta_cart3_x_tractor*_t12;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t60 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t _t61 = K_theta_cart_x_tractor*_t3;
-    const trailer3_real_t _t62 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t _t63 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t _t64 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer3_real_t _t65 = K_theta_cart3_x_tractor_2*_t12;
-    const trailer3_real_t _t66 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t68 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t69 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t thetadot_right = wheel_rates[0];
-    const trailer3_real_t thetadot_left = wheel_rates[1];
-    const trailer3_real_t _t70 = _t68*thetadot_right + _t69*thetadot_left;
-    const trailer3_real_t _t71 = _t70*_t70;
-    const trailer3_real_t _t72 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t74 = _t72*thetadot_right + _t73*thetadot_left;
-    const trailer3_real_t _t75 = _t29*_t74 + _t33*_t70;
-    const trailer3_real_t _t76 = _t75*_t75;
-    const trailer3_real_t _t77 = _t45*_t74 + _t52*_t70;
-    const trailer3_real_t _t78 = _t77*_t77;
-    const trailer3_real_t _t79 = _t63*_t78;
-    const trailer3_real_t _t80 = _t20*_t74 + _t23*_t70;
-    const trailer3_real_t _t81 = _t80*_t80;
-    const trailer3_real_t _t82 = _t64*_t76;
-    const trailer3_real_t _t83 = _t65*_t78;
-    const trailer3_real_t _t84 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t85 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer3_real_t _t86 = K_theta_cart3_x_tractor*_t18;
-    const trailer3_real_t _t87 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t88 = _t10*_t76;
-    const trailer3_real_t _t89 = _t10*_t78;
-    const trailer3_real_t _t90 = _t81*_t9;
-    const trailer3_real_t _t91 = _t10*_t81;
-    const trailer3_real_t _t92 = _t67*_t78;
-    const trailer3_real_t _t93 = _t66*_t76;
-    const trailer3_real_t _t94 = _t67*_t76;
-    const trailer3_real_t _t95 = TRAILER3_LIT(1.6666666666666667)*_t3;
-    const trailer3_real_t _t96 = _t19*_t95;
-    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t16;
-    const trailer3_real_t _t98 = _t19*_t97;
-    const trailer3_real_t _t99 = _t26*_t95;
-    const trailer3_real_t _t100 = _t26*_t97;
-    const trailer3_real_t _t101 = TRAILER3_LIT(0.2)*_t95;
-    const trailer3_real_t _t102 = TRAILER3_LIT(0.2)*_t97;
-    const trailer3_real_t _t103 = -_t7 - _t96;
-    const trailer3_real_t _t104 = -TRAILER3_LIT(1.6666666666666667)*_t103;
-    const trailer3_real_t _t105 = TRAILER3_LIT(0.2)*_t104;
-    const trailer3_real_t _t106 = _t39*_t95;
-    const trailer3_real_t _t107 = _t106 - _t6;
-    const trailer3_real_t _t108 = _t17 - _t98;
-    const trailer3_real_t _t109 = -TRAILER3_LIT(1.6666666666666667)*_t108;
-    const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
-    const trailer3_real_t _t111 = _t39*_t97;
-    const trailer3_real_t _t112 = _t111 - _t8;
-    const trailer3_real_t _t113 = _t40 + _t96;
-    const trailer3_real_t _t114 = -TRAILER3_LIT(1.6666666666666667)*_t113;
-    const trailer3_real_t _t115 = TRAILER3_LIT(0.2)*_t114;
-    const trailer3_real_t _t116 = _t42 + _t98;
-    const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
-    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
-    const trailer3_real_t _t119 = TRAILER3_LIT(1.6666666666666667)*_t44;
-    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
-    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
-    const trailer3_real_t _t123 = -_t104*_t28 - _t13 - _t99;
-    const trailer3_real_t _t124 = -TRAILER3_LIT(1.6666666666666667)*_t123;
-    const trailer3_real_t _t125 = TRAILER3_LIT(0.2)*_t124;
-    const trailer3_real_t _t126 = _t47*_t95;
-    const trailer3_real_t _t127 = _t104*_t49 - _t12 + _t126;
-    const trailer3_real_t _t128 = -_t100 - _t109*_t28 + _t18;
-    const trailer3_real_t _t129 = -TRAILER3_LIT(1.6666666666666667)*_t128;
-    const trailer3_real_t _t130 = TRAILER3_LIT(0.2)*_t129;
-    const trailer3_real_t _t131 = _t47*_t97;
-    const trailer3_real_t _t132 = _t109*_t49 + _t131 - _t14;
-    const trailer3_real_t _t133 = -_t114*_t28 + _t48 + _t99;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
-    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
-    const trailer3_real_t _t136 = _t114*_t49 - _t126 + _t27;
-    const trailer3_real_t _t137 = _t100 - _t117*_t28 + _t54;
-    const trailer3_real_t _t138 = -TRAILER3_LIT(1.6666666666666667)*_t137;
-    const trailer3_real_t _t139 = TRAILER3_LIT(0.2)*_t138;
-    const trailer3_real_t _t140 = _t117*_t49 - _t131 + _t32;
-    const trailer3_real_t _t141 = -_t119*_t28 + _t50;
-    const trailer3_real_t _t142 = -TRAILER3_LIT(1.6666666666666667)*_t141;
-    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
-    const trailer3_real_t _t144 = _t119*_t49 + _t30;
-    const trailer3_real_t _t145 = -_t121*_t28 + _t55;
-    const trailer3_real_t _t146 = -TRAILER3_LIT(1.6666666666666667)*_t145;
-    const trailer3_real_t _t147 = TRAILER3_LIT(0.2)*_t146;
-    const trailer3_real_t _t148 = _t121*_t49 + _t34;
-    const trailer3_real_t _t149 = TRAILER3_LIT(1.6666666666666667)*_t51;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
-    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t56;
-    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
-    const trailer3_real_t _t153 = _t70*_t74;
-    const trailer3_real_t _t154 = _t74*_t80;
-    const trailer3_real_t _t155 = _t70*_t80;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t156 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t157 = -_t105 - _t107;
-    const trailer3_real_t _t158 = _t156*_t157;
-    const trailer3_real_t _t159 = -_t110 - _t112;
-    const trailer3_real_t _t160 = _t156*_t159;
-    const trailer3_real_t _t161 = _t106 - _t115 - _t21;
-    const trailer3_real_t _t162 = _t156*_t161;
-    const trailer3_real_t _t163 = _t111 - _t118 - _t24;
-    const trailer3_real_t _t164 = _t156*_t163;
-    const trailer3_real_t _t165 = -_t120 + _t22;
-    const trailer3_real_t _t166 = _t156*_t165;
-    const trailer3_real_t _t167 = -_t122 + _t25;
-    const trailer3_real_t _t168 = _t156*_t167;
-    const trailer3_real_t _t169 = _t74*_t75;
-    const trailer3_real_t _t170 = _t70*_t75;
-    const trailer3_real_t _t171 = _t153*_t158 + _t154*_t162 + _t155*_t164 + _t160*_t71 + _t166*_t169
-            + _t168*_t170;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t172 = J_theta_cart2_left*_t171;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t173 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t174 = _t105 - _t107;
-    const trailer3_real_t _t175 = _t173*_t174;
-    const trailer3_real_t _t176 = _t110 - _t112;
-    const trailer3_real_t _t177 = _t173*_t176;
-    const trailer3_real_t _t178 = _t106 + _t115 - _t21;
-    const trailer3_real_t _t179 = _t173*_t178;
-    const trailer3_real_t _t180 = _t111 + _t118 - _t24;
-    const trailer3_real_t _t181 = _t173*_t180;
-    const trailer3_real_t _t182 = _t120 + _t22;
-    const trailer3_real_t _t183 = _t173*_t182;
-    const trailer3_real_t _t184 = _t122 + _t25;
-    const trailer3_real_t _t185 = _t173*_t184;
-    const trailer3_real_t _t186 = _t153*_t175 + _t154*_t179 + _t155*_t181 + _t169*_t183
-            + _t170*_t185 + _t177*_t71;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t187 = J_theta_cart2_right*_t186;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t188 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t189 = -_t125 - _t127;
-    const trailer3_real_t _t190 = _t188*_t189;
-    const trailer3_real_t _t191 = -_t130 - _t132;
-    const trailer3_real_t _t192 = _t188*_t191;
-    const trailer3_real_t _t193 = -_t135 - _t136;
-    const trailer3_real_t _t194 = _t188*_t193;
-    const trailer3_real_t _t195 = -_t139 - _t140;
-    const trailer3_real_t _t196 = _t188*_t195;
-    const trailer3_real_t _t197 = -_t143 - _t144;
-    const trailer3_real_t _t198 = _t188*_t197;
-    const trailer3_real_t _t199 = -_t147 - _t148;
-    const trailer3_real_t _t200 = _t188*_t199;
-    const trailer3_real_t _t201 = -_t150 + _t31;
-    const trailer3_real_t _t202 = _t188*_t201;
-    const trailer3_real_t _t203 = -_t152 + _t35;
-    const trailer3_real_t _t204 = _t188*_t203;
-    const trailer3_real_t _t205 = _t74*_t77;
-    const trailer3_real_t _t206 = _t70*_t77;
-    const trailer3_real_t _t207 = _t153*_t190 + _t154*_t194 + _t155*_t196 + _t169*_t198
-            + _t170*_t200 + _t192*_t71 + _t202*_t205 + _t204*_t206;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t208 = J_theta_cart3_left*_t207;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t209 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t210 = _t125 - _t127;
-    const trailer3_real_t _t211 = _t209*_t210;
-    const trailer3_real_t _t212 = _t130 - _t132;
-    const trailer3_real_t _t213 = _t209*_t212;
-    const trailer3_real_t _t214 = _t135 - _t136;
-    const trailer3_real_t _t215 = _t209*_t214;
-    const trailer3_real_t _t216 = _t139 - _t140;
-    const trailer3_real_t _t217 = _t209*_t216;
-    const trailer3_real_t _t218 = _t143 - _t144;
-    const trailer3_real_t _t219 = _t209*_t218;
-    const trailer3_real_t _t220 = _t147 - _t148;
-    const trailer3_real_t _t221 = _t209*_t220;
-    const trailer3_real_t _t222 = _t150 + _t31;
-    const trailer3_real_t _t223 = _t209*_t222;
-    const trailer3_real_t _t224 = _t152 + _t35;
-    const trailer3_real_t _t225 = _t209*_t224;
-    const trailer3_real_t _t226 = _t153*_t211 + _t154*_t215 + _t155*_t217 + _t169*_t219
-            + _t170*_t221 + _t205*_t223 + _t206*_t225 + _t213*_t71;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t227 = J_theta_cart3_right*_t226;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t228 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t229 = -_t101 + _t2;
-    const trailer3_real_t _t230 = _t228*_t229;
-    const trailer3_real_t _t231 = -_t102 + _t4;
-    const trailer3_real_t _t232 = _t228*_t231;
-    const trailer3_real_t _t233 = _t153 - _t154;
-    const trailer3_real_t _t234 = -_t155 + _t71;
-    const trailer3_real_t _t235 = _t230*_t233 + _t232*_t234;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t236 = J_theta_cart_left*_t235;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t237 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t238 = _t101 + _t2;
-    const trailer3_real_t _t239 = _t237*_t238;
-    const trailer3_real_t _t240 = _t102 + _t4;
-    const trailer3_real_t _t241 = _t237*_t240;
-    const trailer3_real_t _t242 = _t233*_t239 + _t234*_t241;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t243 = J_theta_cart_right*_t242;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t244 = K_theta_cart_x_tractor_2*_t2 - _t61;
-    const trailer3_real_t _t245 = _t10*_t62 - _t10*_t64 + _t57*_t9 + _t58*_t9;
-    const trailer3_real_t _t246 = _t10*_t63 - _t10*_t65 + _t59*_t9 + _t60*_t9;
-    const trailer3_real_t _t247 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t7*_t76
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t78
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t71
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t3*_t71 - _t57*_t88 - _t58*_t88
-            - _t59*_t89 - _t60*_t89 - _t82*_t9 - _t83*_t9;
-    const trailer3_real_t _t248 = _t233*_t95 + _t234*_t97;
-    const trailer3_real_t _t249 = _t104*_t153 + _t109*_t71 + _t114*_t154 + _t117*_t155 + _t119*_t169
-            + _t121*_t170;
-    const trailer3_real_t _t250 = _t124*_t153 + _t129*_t71 + _t134*_t154 + _t138*_t155 + _t142*_t169
-            + _t146*_t170 + _t149*_t205 + _t151*_t206;
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t251 = J_theta_cart*_t248 + _t153*_t244 + _t245*_t249 + _t246*_t250
-            + _t247;
-    const trailer3_real_t _t252 = K_theta_cart2_x_tractor_2*_t6 - _t62;
-    const trailer3_real_t _t253 = _t59*_t66 + _t60*_t66 + _t63*_t67 - _t65*_t67;
-    const trailer3_real_t _t254 = _t57*_t91 + _t58*_t91 - _t59*_t92 - _t60*_t92 - _t62*_t90
-            + _t64*_t90 + _t66*_t79 - _t66*_t83 + _t71*_t84 + _t71*_t85;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t255 = J_theta_cart2*_t249 + _t153*_t252 + _t245*_t248 + _t250*_t253
-            + _t254;
-    const trailer3_real_t _t256 = K_theta_cart3_x_tractor_2*_t12 - _t63;
-    const trailer3_real_t _t257 = _t59*_t91 + _t59*_t94 + _t60*_t91 + _t60*_t94 - _t63*_t90
-            - _t63*_t93 + _t65*_t90 + _t65*_t93 + _t71*_t86 + _t71*_t87;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t258 = J_theta_cart3*_t250 + _t153*_t256 + _t246*_t248 + _t249*_t253
-            + _t257;
-    const trailer3_real_t _t259 = _t3 + _t36;
-    const trailer3_real_t _t260 = -_t16 + _t37;
-    const trailer3_real_t _t261 = _t237*_t259;
-    const trailer3_real_t _t262 = _t237*_t260;
-    const trailer3_real_t _t263 = _t3 - _t36;
-    const trailer3_real_t _t264 = -_t16 - _t37;
-    const trailer3_real_t _t265 = _t228*_t263;
-    const trailer3_real_t _t266 = _t228*_t264;
-    const trailer3_real_t _t267 = _t38 - _t40 + _t7;
-    const trailer3_real_t _t268 = _t41 - _t43;
-    const trailer3_real_t _t269 = _t173*_t267;
-    const trailer3_real_t _t270 = _t173*_t268;
-    const trailer3_real_t _t271 = -_t38 - _t44;
-    const trailer3_real_t _t272 = -_t41 - _t43;
-    const trailer3_real_t _t273 = _t156*_t271;
-    const trailer3_real_t _t274 = _t156*_t272;
-    const trailer3_real_t _t275 = _t46 - _t51;
-    const trailer3_real_t _t276 = _t53 - _t56;
-    const trailer3_real_t _t277 = _t209*_t275;
-    const trailer3_real_t _t278 = _t209*_t276;
-    const trailer3_real_t _t279 = -_t46 - _t51;
-    const trailer3_real_t _t280 = -_t53 - _t56;
-    const trailer3_real_t _t281 = _t188*_t279;
-    const trailer3_real_t _t282 = _t188*_t280;
-    const trailer3_real_t _t283 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t284 = _t57 + _t58;
-    const trailer3_real_t _t285 = _t59 + _t60;
-    const trailer3_real_t _t286 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t287 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t _t288 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
-    const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t _t289 = -K_theta_cart_x_tractor_2*_t2*_t81
-            + K_theta_tractor_x_tractor*_t71 + _t61*_t81 + _t62*_t76 + _t79 - _t82 - _t83;
-    const trailer3_real_t _t290 = -K_theta_cart_x_tractor*_t16*_t81
-            - K_theta_cart_x_tractor_2*_t4*_t81 - _t76*_t84 - _t76*_t85 - _t78*_t86 - _t78*_t87;
-    const trailer3_real_t _t291 = _t172*_t273 + _t187*_t269 + _t20*_t251 + _t208*_t281 + _t227*_t277
-            + _t236*_t265 + _t243*_t261 + _t248*_t283 + _t249*_t284 + _t250*_t285 + _t255*_t29
-            + _t258*_t45 + _t289;
-    const trailer3_real_t _t292 = -K_theta_tractor_x_tractor*_t153 + _t172*_t274 + _t187*_t270
-            + _t208*_t282 + _t227*_t278 + _t23*_t251 + _t236*_t266 + _t243*_t262 + _t248*_t286
-            + _t249*_t287 + _t250*_t288 + _t255*_t33 + _t258*_t52 + _t290;
-    const trailer3_real_t _t293 = _t291*_t72 + _t292*_t68;
-    const trailer3_real_t _t294 = _t291*_t73 + _t292*_t69;
-    H[0] = _t293;
-    H[1] = _t294;
+    trailer3_real_t _shared[199];
+    trailer3_staged_quantities(p, q, wheel_rates, _shared);
+    const trailer3_real_t _ms26 = _shared[0];
+    const trailer3_real_t _ms27 = _shared[1];
+    const trailer3_real_t _ms90 = _shared[26];
+    const trailer3_real_t _ms91 = _shared[27];
+    const trailer3_real_t _ms341 = _shared[197];
+    const trailer3_real_t _ms342 = _shared[198];
+    const trailer3_real_t _t0 = _ms26*_ms342 + _ms341*_ms90;
+    const trailer3_real_t _t1 = _ms27*_ms342 + _ms341*_ms91;
+    H[0] = _t0;
+    H[1] = _t1;
 }
 
 /* trailer3_minimal_forward_dynamics: documented in trailer3_model.h.
-   operations after CSE: 304 add, 450 mul, 9 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 304 add, 456 mul, 9 div, 6 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *wheel_accels)
@@ -1928,361 +1628,94 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = -theta_tractor;
-    const trailer3_real_t _t1 = _t0 + theta_cart;
-    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
-    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
-    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
-    const trailer3_real_t _t5 = _t0 + theta_cart2;
-    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
-    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
-    const trailer3_real_t _t11 = _t0 + theta_cart3;
-    const trailer3_real_t _t12 = TRAILER3_SIN(_t11);
-    const trailer3_real_t _t13 = TRAILER3_COS(_t11);
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t13;
-    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t _t19 = -_t10*_t7 - _t6*_t9;
-    const trailer3_real_t _t20 = -TRAILER3_LIT(1.6666666666666667)*_t2;
-    const trailer3_real_t _t21 = _t19*_t20;
-    const trailer3_real_t _t22 = _t21 - _t6;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t4;
-    const trailer3_real_t _t24 = _t19*_t23;
-    const trailer3_real_t _t25 = _t24 - _t8;
-    const trailer3_real_t _t26 = -_t10*_t13 - _t12*_t9;
-    const trailer3_real_t _t27 = _t20*_t26;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
-    const trailer3_real_t _t29 = TRAILER3_LIT(1.6666666666666667)*_t22;
-    const trailer3_real_t _t30 = _t28*_t29;
-    const trailer3_real_t _t31 = -_t12 + _t27 + _t30;
-    const trailer3_real_t _t32 = _t23*_t26;
-    const trailer3_real_t _t33 = TRAILER3_LIT(1.6666666666666667)*_t25;
-    const trailer3_real_t _t34 = _t28*_t33;
-    const trailer3_real_t _t35 = -_t14 + _t32 + _t34;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.2)*_t20;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t23;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t40 = _t20*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t33;
-    const trailer3_real_t _t42 = _t23*_t39;
-    const trailer3_real_t _t43 = _t17 + _t42;
-    const trailer3_real_t _t44 = _t40 - _t7;
-    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t31;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const trailer3_real_t _t48 = _t20*_t47;
-    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
-    const trailer3_real_t _t50 = _t29*_t49;
-    const trailer3_real_t _t51 = -_t13 + _t48 + _t50;
-    const trailer3_real_t _t52 = TRAILER3_LIT(1.6666666666666667)*_t35;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
-    const trailer3_real_t _t54 = _t23*_t47;
-    const trailer3_real_t _t55 = _t33*_t49;
-    const trailer3_real_t _t56 = _t18 + _t54 + _t55;
-    const trailer3_real_t _t57 = K_theta_cart2_x_tractor*_t6;
-    const trailer3_real_t _t58 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t _t59 = K_theta_cart3_x_tractor*_t12;
-    const trailer3_real_t _t60 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t61 = K_theta_cart_x_tractor*_t3;
-    const trailer3_real_t _t62 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t _t63 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t _t64 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer3_real_t _t65 = K_theta_cart3_x_tractor_2*_t12;
-    const trailer3_real_t _t66 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t _t68 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t69 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t70 = _t68*thetadot_right + _t69*thetadot_left;
-    const trailer3_real_t _t71 = _t70*_t70;
-    const trailer3_real_t _t72 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t74 = _t72*thetadot_right + _t73*thetadot_left;
-    const trailer3_real_t _t75 = _t29*_t74 + _t33*_t70;
-    const trailer3_real_t _t76 = _t75*_t75;
-    const trailer3_real_t _t77 = _t45*_t74 + _t52*_t70;
-    const trailer3_real_t _t78 = _t77*_t77;
-    const trailer3_real_t _t79 = _t63*_t78;
-    const trailer3_real_t _t80 = _t20*_t74 + _t23*_t70;
-    const trailer3_real_t _t81 = _t80*_t80;
-    const trailer3_real_t _t82 = _t64*_t76;
-    const trailer3_real_t _t83 = _t65*_t78;
-    const trailer3_real_t _t84 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t85 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer3_real_t _t86 = K_theta_cart3_x_tractor*_t18;
-    const trailer3_real_t _t87 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t88 = _t10*_t76;
-    const trailer3_real_t _t89 = _t10*_t78;
-    const trailer3_real_t _t90 = _t81*_t9;
-    const trailer3_real_t _t91 = _t10*_t81;
-    const trailer3_real_t _t92 = _t67*_t78;
-    const trailer3_real_t _t93 = _t66*_t76;
-    const trailer3_real_t _t94 = _t67*_t76;
-    const trailer3_real_t _t95 = TRAILER3_LIT(1.6666666666666667)*_t3;
-    const trailer3_real_t _t96 = _t19*_t95;
-    const trailer3_real_t _t97 = -TRAILER3_LIT(1.6666666666666667)*_t16;
-    const trailer3_real_t _t98 = _t19*_t97;
-    const trailer3_real_t _t99 = _t26*_t95;
-    const trailer3_real_t _t100 = _t26*_t97;
-    const trailer3_real_t _t101 = TRAILER3_LIT(0.2)*_t95;
-    const trailer3_real_t _t102 = TRAILER3_LIT(0.2)*_t97;
-    const trailer3_real_t _t103 = -_t7 - _t96;
-    const trailer3_real_t _t104 = -TRAILER3_LIT(1.6666666666666667)*_t103;
-    const trailer3_real_t _t105 = TRAILER3_LIT(0.2)*_t104;
-    const trailer3_real_t _t106 = _t39*_t95;
-    const trailer3_real_t _t107 = _t106 - _t6;
-    const trailer3_real_t _t108 = _t17 - _t98;
-    const trailer3_real_t _t109 = -TRAILER3_LIT(1.6666666666666667)*_t108;
-    const trailer3_real_t _t110 = TRAILER3_LIT(0.2)*_t109;
-    const trailer3_real_t _t111 = _t39*_t97;
-    const trailer3_real_t _t112 = _t111 - _t8;
-    const trailer3_real_t _t113 = _t40 + _t96;
-    const trailer3_real_t _t114 = -TRAILER3_LIT(1.6666666666666667)*_t113;
-    const trailer3_real_t _t115 = TRAILER3_LIT(0.2)*_t114;
-    const trailer3_real_t _t116 = _t42 + _t98;
-    const trailer3_real_t _t117 = -TRAILER3_LIT(1.6666666666666667)*_t116;
-    const trailer3_real_t _t118 = TRAILER3_LIT(0.2)*_t117;
-    const trailer3_real_t _t119 = TRAILER3_LIT(1.6666666666666667)*_t44;
-    const trailer3_real_t _t120 = TRAILER3_LIT(0.2)*_t119;
-    const trailer3_real_t _t121 = TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t122 = TRAILER3_LIT(0.2)*_t121;
-    const trailer3_real_t _t123 = -_t104*_t28 - _t13 - _t99;
-    const trailer3_real_t _t124 = -TRAILER3_LIT(1.6666666666666667)*_t123;
-    const trailer3_real_t _t125 = TRAILER3_LIT(0.2)*_t124;
-    const trailer3_real_t _t126 = _t47*_t95;
-    const trailer3_real_t _t127 = _t104*_t49 - _t12 + _t126;
-    const trailer3_real_t _t128 = -_t100 - _t109*_t28 + _t18;
-    const trailer3_real_t _t129 = -TRAILER3_LIT(1.6666666666666667)*_t128;
-    const trailer3_real_t _t130 = TRAILER3_LIT(0.2)*_t129;
-    const trailer3_real_t _t131 = _t47*_t97;
-    const trailer3_real_t _t132 = _t109*_t49 + _t131 - _t14;
-    const trailer3_real_t _t133 = -_t114*_t28 + _t48 + _t99;
-    const trailer3_real_t _t134 = -TRAILER3_LIT(1.6666666666666667)*_t133;
-    const trailer3_real_t _t135 = TRAILER3_LIT(0.2)*_t134;
-    const trailer3_real_t _t136 = _t114*_t49 - _t126 + _t27;
-    const trailer3_real_t _t137 = _t100 - _t117*_t28 + _t54;
-    const trailer3_real_t _t138 = -TRAILER3_LIT(1.6666666666666667)*_t137;
-    const trailer3_real_t _t139 = TRAILER3_LIT(0.2)*_t138;
-    const trailer3_real_t _t140 = _t117*_t49 - _t131 + _t32;
-    const trailer3_real_t _t141 = -_t119*_t28 + _t50;
-    const trailer3_real_t _t142 = -TRAILER3_LIT(1.6666666666666667)*_t141;
-    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t142;
-    const trailer3_real_t _t144 = _t119*_t49 + _t30;
-    const trailer3_real_t _t145 = -_t121*_t28 + _t55;
-    const trailer3_real_t _t146 = -TRAILER3_LIT(1.6666666666666667)*_t145;
-    const trailer3_real_t _t147 = TRAILER3_LIT(0.2)*_t146;
-    const trailer3_real_t _t148 = _t121*_t49 + _t34;
-    const trailer3_real_t _t149 = TRAILER3_LIT(1.6666666666666667)*_t51;
-    const trailer3_real_t _t150 = TRAILER3_LIT(0.2)*_t149;
-    const trailer3_real_t _t151 = TRAILER3_LIT(1.6666666666666667)*_t56;
-    const trailer3_real_t _t152 = TRAILER3_LIT(0.2)*_t151;
-    const trailer3_real_t _t153 = _t70*_t74;
-    const trailer3_real_t _t154 = _t74*_t80;
-    const trailer3_real_t _t155 = _t70*_t80;
-    const trailer3_real_t _t156 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t157 = _t3 + _t36;
-    const trailer3_real_t _t158 = _t156*_t157;
-    const trailer3_real_t _t159 = J_theta_cart_right*_t158;
-    const trailer3_real_t _t160 = -_t16 + _t37;
-    const trailer3_real_t _t161 = _t156*_t160;
-    const trailer3_real_t _t162 = J_theta_cart_right*_t161;
-    const trailer3_real_t _t163 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t164 = _t3 - _t36;
-    const trailer3_real_t _t165 = _t163*_t164;
-    const trailer3_real_t _t166 = J_theta_cart_left*_t165;
-    const trailer3_real_t _t167 = -_t16 - _t37;
-    const trailer3_real_t _t168 = _t163*_t167;
-    const trailer3_real_t _t169 = J_theta_cart_left*_t168;
-    const trailer3_real_t _t170 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t171 = _t38 - _t40 + _t7;
-    const trailer3_real_t _t172 = _t170*_t171;
-    const trailer3_real_t _t173 = J_theta_cart2_right*_t172;
-    const trailer3_real_t _t174 = _t41 - _t43;
-    const trailer3_real_t _t175 = _t170*_t174;
-    const trailer3_real_t _t176 = J_theta_cart2_right*_t175;
-    const trailer3_real_t _t177 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t178 = -_t38 - _t44;
-    const trailer3_real_t _t179 = _t177*_t178;
-    const trailer3_real_t _t180 = J_theta_cart2_left*_t179;
-    const trailer3_real_t _t181 = -_t41 - _t43;
-    const trailer3_real_t _t182 = _t177*_t181;
-    const trailer3_real_t _t183 = J_theta_cart2_left*_t182;
-    const trailer3_real_t _t184 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t185 = _t46 - _t51;
-    const trailer3_real_t _t186 = _t184*_t185;
-    const trailer3_real_t _t187 = J_theta_cart3_right*_t186;
-    const trailer3_real_t _t188 = _t53 - _t56;
-    const trailer3_real_t _t189 = _t184*_t188;
-    const trailer3_real_t _t190 = J_theta_cart3_right*_t189;
-    const trailer3_real_t _t191 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t192 = -_t46 - _t51;
-    const trailer3_real_t _t193 = _t191*_t192;
-    const trailer3_real_t _t194 = J_theta_cart3_left*_t193;
-    const trailer3_real_t _t195 = -_t53 - _t56;
-    const trailer3_real_t _t196 = _t191*_t195;
-    const trailer3_real_t _t197 = J_theta_cart3_left*_t196;
-    const trailer3_real_t _t198 = K_theta_cart_x_tractor_2*_t2 - _t61;
-    const trailer3_real_t _t199 = _t10*_t62 - _t10*_t64 + _t57*_t9 + _t58*_t9;
-    const trailer3_real_t _t200 = _t10*_t63 - _t10*_t65 + _t59*_t9 + _t60*_t9;
-    const trailer3_real_t _t201 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t7*_t76
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t78
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t71
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t3*_t71 - _t57*_t88 - _t58*_t88
-            - _t59*_t89 - _t60*_t89 - _t82*_t9 - _t83*_t9;
-    const trailer3_real_t _t202 = _t153 - _t154;
-    const trailer3_real_t _t203 = -_t155 + _t71;
-    const trailer3_real_t _t204 = _t202*_t95 + _t203*_t97;
-    const trailer3_real_t _t205 = _t74*_t75;
-    const trailer3_real_t _t206 = _t70*_t75;
-    const trailer3_real_t _t207 = _t104*_t153 + _t109*_t71 + _t114*_t154 + _t117*_t155 + _t119*_t205
-            + _t121*_t206;
-    const trailer3_real_t _t208 = _t74*_t77;
-    const trailer3_real_t _t209 = _t70*_t77;
-    const trailer3_real_t _t210 = _t124*_t153 + _t129*_t71 + _t134*_t154 + _t138*_t155 + _t142*_t205
-            + _t146*_t206 + _t149*_t208 + _t151*_t209;
-    const trailer3_real_t _t211 = J_theta_cart*_t204 + _t153*_t198 + _t199*_t207 + _t200*_t210
-            + _t201;
-    const trailer3_real_t _t212 = K_theta_cart2_x_tractor_2*_t6 - _t62;
-    const trailer3_real_t _t213 = _t59*_t66 + _t60*_t66 + _t63*_t67 - _t65*_t67;
-    const trailer3_real_t _t214 = _t57*_t91 + _t58*_t91 - _t59*_t92 - _t60*_t92 - _t62*_t90
-            + _t64*_t90 + _t66*_t79 - _t66*_t83 + _t71*_t84 + _t71*_t85;
-    const trailer3_real_t _t215 = J_theta_cart2*_t207 + _t153*_t212 + _t199*_t204 + _t210*_t213
-            + _t214;
-    const trailer3_real_t _t216 = K_theta_cart3_x_tractor_2*_t12 - _t63;
-    const trailer3_real_t _t217 = _t59*_t91 + _t59*_t94 + _t60*_t91 + _t60*_t94 - _t63*_t90
-            - _t63*_t93 + _t65*_t90 + _t65*_t93 + _t71*_t86 + _t71*_t87;
-    const trailer3_real_t _t218 = J_theta_cart3*_t210 + _t153*_t216 + _t200*_t204 + _t207*_t213
-            + _t217;
-    const trailer3_real_t _t219 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t220 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t221 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t222 = _t57 + _t58;
-    const trailer3_real_t _t223 = _t59 + _t60;
-    const trailer3_real_t _t224 = J_x_tractor + _t20*_t221 + _t222*_t29 + _t223*_t45;
-    const trailer3_real_t _t225 = J_theta_cart*_t20 + _t199*_t29 + _t200*_t45 + _t221;
-    const trailer3_real_t _t226 = J_theta_cart2*_t29 + _t199*_t20 + _t213*_t45 + _t222;
-    const trailer3_real_t _t227 = J_theta_cart3*_t45 + _t20*_t200 + _t213*_t29 + _t223;
-    const trailer3_real_t _t228 = J_theta_right*_t219;
-    const trailer3_real_t _t229 = J_theta_left*_t220;
-    const trailer3_real_t _t230 = _t158*_t159 + _t165*_t166 + _t172*_t173 + _t179*_t180
-            + _t186*_t187 + _t193*_t194 + _t20*_t225 + _t219*_t228 + _t220*_t229 + _t224
-            + _t226*_t29 + _t227*_t45;
-    const trailer3_real_t _t231 = K_theta_tractor_x_tractor_2 + _t221*_t23 + _t222*_t33
-            + _t223*_t52;
-    const trailer3_real_t _t232 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t233 = J_theta_cart*_t23 + _t199*_t33 + _t200*_t52 + _t232;
-    const trailer3_real_t _t234 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t _t235 = J_theta_cart2*_t33 + _t199*_t23 + _t213*_t52 + _t234;
-    const trailer3_real_t _t236 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t18;
-    const trailer3_real_t _t237 = J_theta_cart3*_t52 + _t200*_t23 + _t213*_t33 + _t236;
-    const trailer3_real_t _t238 = TRAILER3_LIT(0.207)*_t219;
-    const trailer3_real_t _t239 = J_theta_right*_t238;
-    const trailer3_real_t _t240 = -TRAILER3_LIT(0.207)*_t220;
-    const trailer3_real_t _t241 = J_theta_left*_t240;
-    const trailer3_real_t _t242 = _t158*_t162 + _t165*_t169 + _t172*_t176 + _t179*_t183
-            + _t186*_t190 + _t193*_t197 + _t20*_t233 + _t219*_t239 + _t220*_t241 + _t231
-            + _t235*_t29 + _t237*_t45;
-    const trailer3_real_t _t243 = J_theta_tractor + _t23*_t232 + _t234*_t33 + _t236*_t52;
-    const trailer3_real_t _t244 = _t161*_t162 + _t168*_t169 + _t175*_t176 + _t182*_t183
-            + _t189*_t190 + _t196*_t197 + _t23*_t233 + _t235*_t33 + _t237*_t52 + _t238*_t239
-            + _t240*_t241 + _t243;
-    const trailer3_real_t _t245 = _t230*_t244 - _t242*_t242;
-    const trailer3_real_t _t246 = -K_theta_cart_x_tractor_2*_t2*_t81
-            + K_theta_tractor_x_tractor*_t71 + _t61*_t81 + _t62*_t76 + _t79 - _t82 - _t83;
-    const trailer3_real_t _t247 = -K_theta_cart_x_tractor*_t16*_t81
-            - K_theta_cart_x_tractor_2*_t4*_t81 - _t76*_t84 - _t76*_t85 - _t78*_t86 - _t78*_t87;
-    const trailer3_real_t _t248 = _t101 + _t2;
-    const trailer3_real_t _t249 = _t156*_t248;
-    const trailer3_real_t _t250 = _t102 + _t4;
-    const trailer3_real_t _t251 = _t156*_t250;
-    const trailer3_real_t _t252 = -_t101 + _t2;
-    const trailer3_real_t _t253 = _t163*_t252;
-    const trailer3_real_t _t254 = -_t102 + _t4;
-    const trailer3_real_t _t255 = _t163*_t254;
-    const trailer3_real_t _t256 = _t105 - _t107;
-    const trailer3_real_t _t257 = _t170*_t256;
-    const trailer3_real_t _t258 = _t110 - _t112;
-    const trailer3_real_t _t259 = _t170*_t258;
-    const trailer3_real_t _t260 = _t106 + _t115 - _t21;
-    const trailer3_real_t _t261 = _t170*_t260;
-    const trailer3_real_t _t262 = _t111 + _t118 - _t24;
-    const trailer3_real_t _t263 = _t170*_t262;
-    const trailer3_real_t _t264 = _t120 + _t22;
-    const trailer3_real_t _t265 = _t170*_t264;
-    const trailer3_real_t _t266 = _t122 + _t25;
-    const trailer3_real_t _t267 = _t170*_t266;
-    const trailer3_real_t _t268 = -_t105 - _t107;
-    const trailer3_real_t _t269 = _t177*_t268;
-    const trailer3_real_t _t270 = -_t110 - _t112;
-    const trailer3_real_t _t271 = _t177*_t270;
-    const trailer3_real_t _t272 = _t106 - _t115 - _t21;
-    const trailer3_real_t _t273 = _t177*_t272;
-    const trailer3_real_t _t274 = _t111 - _t118 - _t24;
-    const trailer3_real_t _t275 = _t177*_t274;
-    const trailer3_real_t _t276 = -_t120 + _t22;
-    const trailer3_real_t _t277 = _t177*_t276;
-    const trailer3_real_t _t278 = -_t122 + _t25;
-    const trailer3_real_t _t279 = _t177*_t278;
-    const trailer3_real_t _t280 = _t125 - _t127;
-    const trailer3_real_t _t281 = _t184*_t280;
-    const trailer3_real_t _t282 = _t130 - _t132;
-    const trailer3_real_t _t283 = _t184*_t282;
-    const trailer3_real_t _t284 = _t135 - _t136;
-    const trailer3_real_t _t285 = _t184*_t284;
-    const trailer3_real_t _t286 = _t139 - _t140;
-    const trailer3_real_t _t287 = _t184*_t286;
-    const trailer3_real_t _t288 = _t143 - _t144;
-    const trailer3_real_t _t289 = _t184*_t288;
-    const trailer3_real_t _t290 = _t147 - _t148;
-    const trailer3_real_t _t291 = _t184*_t290;
-    const trailer3_real_t _t292 = _t150 + _t31;
-    const trailer3_real_t _t293 = _t184*_t292;
-    const trailer3_real_t _t294 = _t152 + _t35;
-    const trailer3_real_t _t295 = _t184*_t294;
-    const trailer3_real_t _t296 = -_t125 - _t127;
-    const trailer3_real_t _t297 = _t191*_t296;
-    const trailer3_real_t _t298 = -_t130 - _t132;
-    const trailer3_real_t _t299 = _t191*_t298;
-    const trailer3_real_t _t300 = -_t135 - _t136;
-    const trailer3_real_t _t301 = _t191*_t300;
-    const trailer3_real_t _t302 = -_t139 - _t140;
-    const trailer3_real_t _t303 = _t191*_t302;
-    const trailer3_real_t _t304 = -_t143 - _t144;
-    const trailer3_real_t _t305 = _t191*_t304;
-    const trailer3_real_t _t306 = -_t147 - _t148;
-    const trailer3_real_t _t307 = _t191*_t306;
-    const trailer3_real_t _t308 = -_t150 + _t31;
-    const trailer3_real_t _t309 = _t191*_t308;
-    const trailer3_real_t _t310 = -_t152 + _t35;
-    const trailer3_real_t _t311 = _t191*_t310;
-    const trailer3_real_t _t312 = _t202*_t249 + _t203*_t251;
-    const trailer3_real_t _t313 = _t202*_t253 + _t203*_t255;
-    const trailer3_real_t _t314 = _t153*_t257 + _t154*_t261 + _t155*_t263 + _t205*_t265
-            + _t206*_t267 + _t259*_t71;
-    const trailer3_real_t _t315 = _t153*_t269 + _t154*_t273 + _t155*_t275 + _t205*_t277
-            + _t206*_t279 + _t271*_t71;
-    const trailer3_real_t _t316 = _t153*_t281 + _t154*_t285 + _t155*_t287 + _t205*_t289
-            + _t206*_t291 + _t208*_t293 + _t209*_t295 + _t283*_t71;
-    const trailer3_real_t _t317 = _t153*_t297 + _t154*_t301 + _t155*_t303 + _t205*_t305
-            + _t206*_t307 + _t208*_t309 + _t209*_t311 + _t299*_t71;
-    const trailer3_real_t _t318 = _t159*_t312 + _t166*_t313 + _t173*_t314 + _t180*_t315
-            + _t187*_t316 + _t194*_t317 + _t20*_t211 + _t204*_t221 + _t207*_t222 + _t210*_t223
-            + _t215*_t29 + _t218*_t45 + _t246;
-    const trailer3_real_t _t319 = -K_theta_tractor_x_tractor*_t153 + _t162*_t312 + _t169*_t313
-            + _t176*_t314 + _t183*_t315 + _t190*_t316 + _t197*_t317 + _t204*_t232 + _t207*_t234
-            + _t210*_t236 + _t211*_t23 + _t215*_t33 + _t218*_t52 + _t247;
-    const trailer3_real_t _t320 = _t219*tau_right + _t220*tau_left - _t318;
-    const trailer3_real_t _t321 = _t238*tau_right + _t240*tau_left - _t319;
-    const trailer3_real_t _t322 = TRAILER3_LIT(1.0)/_t245;
-    const trailer3_real_t _t323 = _t322*(-_t242*_t321 + _t244*_t320);
-    const trailer3_real_t _t324 = _t322*(_t230*_t321 - _t242*_t320);
-    const trailer3_real_t _t325 = _t219*_t323 + _t238*_t324;
-    const trailer3_real_t _t326 = _t220*_t323 + _t240*_t324;
+    (void)K_theta_cart2_x_tractor;
+    (void)K_theta_cart2_x_tractor_2;
+    (void)K_theta_cart3_x_tractor;
+    (void)K_theta_cart3_x_tractor_2;
+    (void)K_theta_cart_x_tractor;
+    (void)K_theta_cart_x_tractor_2;
+    (void)K_theta_tractor_x_tractor;
+    (void)theta_cart;
+    (void)theta_cart2;
+    (void)theta_cart3;
+    (void)theta_tractor;
+    (void)thetadot_left;
+    (void)thetadot_right;
+    trailer3_real_t _shared[199];
+    trailer3_staged_quantities(p, q, wheel_rates, _shared);
+    const trailer3_real_t _ms128 = _shared[28];
+    const trailer3_real_t _ms129 = _shared[29];
+    const trailer3_real_t _ms132 = _shared[32];
+    const trailer3_real_t _ms133 = _shared[33];
+    const trailer3_real_t _ms136 = _shared[36];
+    const trailer3_real_t _ms137 = _shared[37];
+    const trailer3_real_t _ms144 = _shared[40];
+    const trailer3_real_t _ms145 = _shared[41];
+    const trailer3_real_t _ms148 = _shared[44];
+    const trailer3_real_t _ms149 = _shared[45];
+    const trailer3_real_t _ms152 = _shared[48];
+    const trailer3_real_t _ms153 = _shared[49];
+    const trailer3_real_t _ms156 = _shared[52];
+    const trailer3_real_t _ms157 = _shared[53];
+    const trailer3_real_t _ms160 = _shared[56];
+    const trailer3_real_t _ms161 = _shared[57];
+    const trailer3_real_t _ms164 = _shared[60];
+    const trailer3_real_t _ms165 = _shared[61];
+    const trailer3_real_t _ms179 = _shared[67];
+    const trailer3_real_t _ms180 = _shared[68];
+    const trailer3_real_t _ms181 = _shared[69];
+    const trailer3_real_t _ms185 = _shared[73];
+    const trailer3_real_t _ms186 = _shared[74];
+    const trailer3_real_t _ms187 = _shared[75];
+    const trailer3_real_t _ms188 = _shared[76];
+    const trailer3_real_t _ms189 = _shared[77];
+    const trailer3_real_t _ms190 = _shared[78];
+    const trailer3_real_t _ms341 = _shared[197];
+    const trailer3_real_t _ms342 = _shared[198];
+    const trailer3_real_t _t0 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t _t2 = J_x_tractor + _ms128*_ms179 + _ms132*_ms180 + _ms136*_ms181;
+    const trailer3_real_t _t3 = J_theta_cart*_ms128 + _ms132*_ms188 + _ms136*_ms189 + _ms179;
+    const trailer3_real_t _t4 = J_theta_cart2*_ms132 + _ms128*_ms188 + _ms136*_ms190 + _ms180;
+    const trailer3_real_t _t5 = J_theta_cart3*_ms136 + _ms128*_ms189 + _ms132*_ms190 + _ms181;
+    const trailer3_real_t _t6 = J_theta_right*_t0;
+    const trailer3_real_t _t7 = J_theta_left*_t1;
+    const trailer3_real_t _t8 = J_theta_cart_right*_ms144;
+    const trailer3_real_t _t9 = J_theta_cart_left*_ms148;
+    const trailer3_real_t _t10 = J_theta_cart2_right*_ms152;
+    const trailer3_real_t _t11 = J_theta_cart2_left*_ms156;
+    const trailer3_real_t _t12 = J_theta_cart3_right*_ms160;
+    const trailer3_real_t _t13 = J_theta_cart3_left*_ms164;
+    const trailer3_real_t _t14 = _ms128*_t3 + _ms132*_t4 + _ms136*_t5 + _ms144*_t8 + _ms148*_t9
+            + _ms152*_t10 + _ms156*_t11 + _ms160*_t12 + _ms164*_t13 + _t0*_t6 + _t1*_t7 + _t2;
+    const trailer3_real_t _t15 = K_theta_tractor_x_tractor_2 + _ms129*_ms179 + _ms133*_ms180
+            + _ms137*_ms181;
+    const trailer3_real_t _t16 = J_theta_cart*_ms129 + _ms133*_ms188 + _ms137*_ms189 + _ms185;
+    const trailer3_real_t _t17 = J_theta_cart2*_ms133 + _ms129*_ms188 + _ms137*_ms190 + _ms186;
+    const trailer3_real_t _t18 = J_theta_cart3*_ms137 + _ms129*_ms189 + _ms133*_ms190 + _ms187;
+    const trailer3_real_t _t19 = TRAILER3_LIT(0.207)*_t0;
+    const trailer3_real_t _t20 = J_theta_right*_t19;
+    const trailer3_real_t _t21 = -TRAILER3_LIT(0.207)*_t1;
+    const trailer3_real_t _t22 = J_theta_left*_t21;
+    const trailer3_real_t _t23 = J_theta_cart_right*_ms145;
+    const trailer3_real_t _t24 = J_theta_cart_left*_ms149;
+    const trailer3_real_t _t25 = J_theta_cart2_right*_ms153;
+    const trailer3_real_t _t26 = J_theta_cart2_left*_ms157;
+    const trailer3_real_t _t27 = J_theta_cart3_right*_ms161;
+    const trailer3_real_t _t28 = J_theta_cart3_left*_ms165;
+    const trailer3_real_t _t29 = _ms128*_t16 + _ms132*_t17 + _ms136*_t18 + _ms144*_t23 + _ms148*_t24
+            + _ms152*_t25 + _ms156*_t26 + _ms160*_t27 + _ms164*_t28 + _t0*_t20 + _t1*_t22 + _t15;
+    const trailer3_real_t _t30 = J_theta_tractor + _ms129*_ms185 + _ms133*_ms186 + _ms137*_ms187;
+    const trailer3_real_t _t31 = _ms129*_t16 + _ms133*_t17 + _ms137*_t18 + _ms145*_t23 + _ms149*_t24
+            + _ms153*_t25 + _ms157*_t26 + _ms161*_t27 + _ms165*_t28 + _t19*_t20 + _t21*_t22 + _t30;
+    const trailer3_real_t _t32 = _t14*_t31 - _t29*_t29;
+    const trailer3_real_t _t33 = -_ms341 + _t0*tau_right + _t1*tau_left;
+    const trailer3_real_t _t34 = -_ms342 + _t19*tau_right + _t21*tau_left;
+    const trailer3_real_t _t35 = TRAILER3_LIT(1.0)/_t32;
+    const trailer3_real_t _t36 = _t35*(-_t29*_t34 + _t31*_t33);
+    const trailer3_real_t _t37 = _t35*(_t14*_t34 - _t29*_t33);
+    const trailer3_real_t _t38 = _t0*_t36 + _t19*_t37;
+    const trailer3_real_t _t39 = _t1*_t36 + _t21*_t37;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -2346,14 +1779,14 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t230 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t14 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t245 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t32 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t r_0 = _t325;
-    const trailer3_real_t r_1 = _t326;
+    const trailer3_real_t r_0 = _t38;
+    const trailer3_real_t r_1 = _t39;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1)) & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_OUTPUT;
     }
@@ -2363,1195 +1796,1065 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
 }
 
 /* trailer3_linearization: documented in trailer3_model.h.
-   operations after CSE: 1443 add, 1827 mul, 9 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 1486 add, 1923 mul, 9 div, 14 sin/cos, 0 sqrt */
 void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,
     trailer3_real_t *B)
 {
-    const trailer3_real_t theta_tractor = q[2];
-    const trailer3_real_t _t0 = -theta_tractor;
-    const trailer3_real_t theta_cart = q[3];
-    const trailer3_real_t _t1 = _t0 + theta_cart;
-    const trailer3_real_t _t2 = TRAILER3_SIN(_t1);
-    const trailer3_real_t _t3 = TRAILER3_COS(_t1);
-    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
-    const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t5 = _t0 + theta_cart2;
-    const trailer3_real_t _t6 = TRAILER3_SIN(_t5);
-    const trailer3_real_t _t7 = TRAILER3_COS(_t5);
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
-    const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t11 = _t0 + theta_cart3;
-    const trailer3_real_t _t12 = TRAILER3_SIN(_t11);
-    const trailer3_real_t _t13 = TRAILER3_COS(_t11);
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.85)*_t13;
-    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.3)*_t6;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t _t19 = -_t10*_t7 - _t6*_t9;
-    const trailer3_real_t _t20 = -TRAILER3_LIT(1.6666666666666667)*_t2;
-    const trailer3_real_t _t21 = _t19*_t20;
-    const trailer3_real_t _t22 = _t21 - _t6;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t4;
-    const trailer3_real_t _t24 = _t19*_t23;
-    const trailer3_real_t _t25 = _t24 - _t8;
-    const trailer3_real_t _t26 = -_t10*_t13 - _t12*_t9;
-    const trailer3_real_t _t27 = _t20*_t26;
-    const trailer3_real_t _t28 = -TRAILER3_LIT(0.85)*_t12*_t6 - _t15*_t7;
-    const trailer3_real_t _t29 = TRAILER3_LIT(1.6666666666666667)*_t22;
-    const trailer3_real_t _t30 = _t28*_t29;
-    const trailer3_real_t _t31 = -_t12 + _t27 + _t30;
-    const trailer3_real_t _t32 = _t23*_t26;
-    const trailer3_real_t _t33 = TRAILER3_LIT(1.6666666666666667)*_t25;
-    const trailer3_real_t _t34 = _t28*_t33;
-    const trailer3_real_t _t35 = -_t14 + _t32 + _t34;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.2)*_t20;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t23;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t39 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t40 = _t20*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t33;
-    const trailer3_real_t _t42 = _t23*_t39;
-    const trailer3_real_t _t43 = _t17 + _t42;
-    const trailer3_real_t _t44 = _t40 - _t7;
-    const trailer3_real_t _t45 = TRAILER3_LIT(1.6666666666666667)*_t31;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*_t45;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const trailer3_real_t _t48 = _t20*_t47;
-    const trailer3_real_t _t49 = TRAILER3_LIT(0.85)*_t12*_t7 - _t15*_t6;
-    const trailer3_real_t _t50 = _t29*_t49;
-    const trailer3_real_t _t51 = -_t13 + _t48 + _t50;
-    const trailer3_real_t _t52 = TRAILER3_LIT(1.6666666666666667)*_t35;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.2)*_t52;
-    const trailer3_real_t _t54 = _t23*_t47;
-    const trailer3_real_t _t55 = _t33*_t49;
-    const trailer3_real_t _t56 = _t18 + _t54 + _t55;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t _t57 = K_theta_cart_x_tractor*_t2;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t58 = K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t59 = K_theta_cart2_x_tractor*_t6;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t60 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t61 = K_theta_cart3_x_tractor*_t12;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t62 = K_theta_cart3_x_tractor_2*_t13;
-    const trailer3_real_t _t63 = K_theta_cart_x_tractor*_t3;
-    const trailer3_real_t _t64 = K_theta_cart2_x_tractor*_t7;
-    const trailer3_real_t _t65 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t _t66 = K_theta_cart_x_tractor*_t4;
-    const trailer3_real_t _t67 = K_theta_cart_x_tractor_2*_t16;
-    const trailer3_real_t _t68 = K_theta_cart2_x_tractor*_t8;
-    const trailer3_real_t _t69 = K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t _t70 = K_theta_cart3_x_tractor*_t14;
-    const trailer3_real_t _t71 = K_theta_cart3_x_tractor_2*_t18;
-    const trailer3_real_t _t72 = _t59*_t9;
-    const trailer3_real_t _t73 = _t10*_t64;
-    const trailer3_real_t _t74 = _t60*_t9;
-    const trailer3_real_t _t75 = K_theta_cart2_x_tractor_2*_t6;
-    const trailer3_real_t _t76 = _t10*_t75;
-    const trailer3_real_t _t77 = _t61*_t9;
-    const trailer3_real_t _t78 = _t10*_t65;
-    const trailer3_real_t _t79 = _t62*_t9;
-    const trailer3_real_t _t80 = K_theta_cart3_x_tractor_2*_t12;
-    const trailer3_real_t _t81 = _t10*_t80;
-    const trailer3_real_t _t82 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t _t83 = _t61*_t82;
-    const trailer3_real_t _t84 = TRAILER3_LIT(0.85)*_t7;
-    const trailer3_real_t _t85 = _t65*_t84;
-    const trailer3_real_t _t86 = _t62*_t82;
-    const trailer3_real_t _t87 = _t80*_t84;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t88 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t89 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t thetadot_right = wheel_rates[0];
-    const trailer3_real_t thetadot_left = wheel_rates[1];
-    const trailer3_real_t _t90 = _t88*thetadot_right + _t89*thetadot_left;
-    const trailer3_real_t _t91 = _t90*_t90;
-    const trailer3_real_t _t92 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t93 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t94 = _t92*thetadot_right + _t93*thetadot_left;
-    const trailer3_real_t _t95 = _t29*_t94 + _t33*_t90;
-    const trailer3_real_t _t96 = _t95*_t95;
-    const trailer3_real_t _t97 = _t64*_t96;
-    const trailer3_real_t _t98 = _t45*_t94 + _t52*_t90;
-    const trailer3_real_t _t99 = _t98*_t98;
-    const trailer3_real_t _t100 = _t65*_t99;
-    const trailer3_real_t _t101 = _t20*_t94 + _t23*_t90;
-    const trailer3_real_t _t102 = _t101*_t101;
-    const trailer3_real_t _t103 = _t75*_t96;
-    const trailer3_real_t _t104 = _t80*_t99;
-    const trailer3_real_t _t105 = K_theta_cart_x_tractor_2*_t2;
-    const trailer3_real_t _t106 = K_theta_cart2_x_tractor*_t17;
-    const trailer3_real_t _t107 = K_theta_cart2_x_tractor_2*_t8;
-    const trailer3_real_t _t108 = K_theta_cart3_x_tractor*_t18;
-    const trailer3_real_t _t109 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t110 = K_theta_cart_x_tractor*_t16;
-    const trailer3_real_t _t111 = K_theta_cart_x_tractor_2*_t4;
-    const trailer3_real_t _t112 = _t59*_t96;
-    const trailer3_real_t _t113 = _t60*_t96;
-    const trailer3_real_t _t114 = _t61*_t99;
-    const trailer3_real_t _t115 = _t62*_t99;
-    const trailer3_real_t _t116 = _t64*_t9;
-    const trailer3_real_t _t117 = _t10*_t59;
-    const trailer3_real_t _t118 = _t75*_t9;
-    const trailer3_real_t _t119 = _t10*_t60;
-    const trailer3_real_t _t120 = _t65*_t9;
-    const trailer3_real_t _t121 = _t10*_t61;
-    const trailer3_real_t _t122 = _t65*_t82;
-    const trailer3_real_t _t123 = _t61*_t84;
-    const trailer3_real_t _t124 = _t80*_t9;
-    const trailer3_real_t _t125 = _t10*_t62;
-    const trailer3_real_t _t126 = _t80*_t82;
-    const trailer3_real_t _t127 = _t62*_t84;
-    const trailer3_real_t _t128 = TRAILER3_LIT(1.6666666666666667)*_t3;
-    const trailer3_real_t _t129 = _t128*_t19;
-    const trailer3_real_t _t130 = _t129 + _t7;
-    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t16;
-    const trailer3_real_t _t132 = _t131*_t19;
-    const trailer3_real_t _t133 = _t132 - _t17;
-    const trailer3_real_t _t134 = _t129 + _t40;
-    const trailer3_real_t _t135 = _t132 + _t42;
-    const trailer3_real_t _t136 = _t128*_t26;
-    const trailer3_real_t _t137 = TRAILER3_LIT(1.6666666666666667)*_t130;
-    const trailer3_real_t _t138 = _t137*_t28;
-    const trailer3_real_t _t139 = _t13 + _t136 + _t138;
-    const trailer3_real_t _t140 = _t131*_t26;
-    const trailer3_real_t _t141 = TRAILER3_LIT(1.6666666666666667)*_t133;
-    const trailer3_real_t _t142 = _t141*_t28;
-    const trailer3_real_t _t143 = _t140 + _t142 - _t18;
-    const trailer3_real_t _t144 = -TRAILER3_LIT(1.6666666666666667)*_t134;
-    const trailer3_real_t _t145 = _t144*_t28;
-    const trailer3_real_t _t146 = _t136 + _t48;
-    const trailer3_real_t _t147 = -_t145 + _t146;
-    const trailer3_real_t _t148 = -TRAILER3_LIT(1.6666666666666667)*_t135;
-    const trailer3_real_t _t149 = _t148*_t28;
-    const trailer3_real_t _t150 = _t140 + _t54;
-    const trailer3_real_t _t151 = -_t149 + _t150;
-    const trailer3_real_t _t152 = TRAILER3_LIT(1.6666666666666667)*_t44;
-    const trailer3_real_t _t153 = _t152*_t28;
-    const trailer3_real_t _t154 = -_t153 + _t50;
-    const trailer3_real_t _t155 = TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t156 = _t155*_t28;
-    const trailer3_real_t _t157 = -_t156 + _t55;
-    const trailer3_real_t _t158 = TRAILER3_LIT(0.2)*_t128;
-    const trailer3_real_t _t159 = TRAILER3_LIT(0.2)*_t131;
-    const trailer3_real_t _t160 = TRAILER3_LIT(0.2)*_t137;
-    const trailer3_real_t _t161 = _t128*_t39;
-    const trailer3_real_t _t162 = _t161 - _t6;
-    const trailer3_real_t _t163 = TRAILER3_LIT(0.2)*_t141;
-    const trailer3_real_t _t164 = _t131*_t39;
-    const trailer3_real_t _t165 = _t164 - _t8;
-    const trailer3_real_t _t166 = TRAILER3_LIT(0.2)*_t144;
-    const trailer3_real_t _t167 = TRAILER3_LIT(0.2)*_t148;
-    const trailer3_real_t _t168 = TRAILER3_LIT(0.2)*_t152;
-    const trailer3_real_t _t169 = TRAILER3_LIT(0.2)*_t155;
-    const trailer3_real_t _t170 = -_t161 + _t21;
-    const trailer3_real_t _t171 = -_t164 + _t24;
-    const trailer3_real_t _t172 = TRAILER3_LIT(1.6666666666666667)*_t139;
-    const trailer3_real_t _t173 = TRAILER3_LIT(0.2)*_t172;
-    const trailer3_real_t _t174 = _t128*_t47;
-    const trailer3_real_t _t175 = _t137*_t49;
-    const trailer3_real_t _t176 = -_t12 + _t174 + _t175;
-    const trailer3_real_t _t177 = TRAILER3_LIT(1.6666666666666667)*_t143;
-    const trailer3_real_t _t178 = TRAILER3_LIT(0.2)*_t177;
-    const trailer3_real_t _t179 = _t131*_t47;
-    const trailer3_real_t _t180 = _t141*_t49;
-    const trailer3_real_t _t181 = -_t14 + _t179 + _t180;
-    const trailer3_real_t _t182 = -TRAILER3_LIT(1.6666666666666667)*_t147;
-    const trailer3_real_t _t183 = TRAILER3_LIT(0.2)*_t182;
-    const trailer3_real_t _t184 = _t144*_t49;
-    const trailer3_real_t _t185 = -_t174 + _t27;
-    const trailer3_real_t _t186 = _t184 + _t185;
-    const trailer3_real_t _t187 = -TRAILER3_LIT(1.6666666666666667)*_t151;
-    const trailer3_real_t _t188 = TRAILER3_LIT(0.2)*_t187;
-    const trailer3_real_t _t189 = _t148*_t49;
-    const trailer3_real_t _t190 = -_t179 + _t32;
-    const trailer3_real_t _t191 = _t189 + _t190;
-    const trailer3_real_t _t192 = -TRAILER3_LIT(1.6666666666666667)*_t154;
-    const trailer3_real_t _t193 = TRAILER3_LIT(0.2)*_t192;
-    const trailer3_real_t _t194 = _t152*_t49;
-    const trailer3_real_t _t195 = _t194 + _t30;
-    const trailer3_real_t _t196 = -TRAILER3_LIT(1.6666666666666667)*_t157;
-    const trailer3_real_t _t197 = TRAILER3_LIT(0.2)*_t196;
-    const trailer3_real_t _t198 = _t155*_t49;
-    const trailer3_real_t _t199 = _t198 + _t34;
-    const trailer3_real_t _t200 = TRAILER3_LIT(1.6666666666666667)*_t51;
-    const trailer3_real_t _t201 = TRAILER3_LIT(0.2)*_t200;
-    const trailer3_real_t _t202 = TRAILER3_LIT(1.6666666666666667)*_t56;
-    const trailer3_real_t _t203 = TRAILER3_LIT(0.2)*_t202;
-    const trailer3_real_t _t204 = _t90*_t94;
-    const trailer3_real_t _t205 = _t101*_t94;
-    const trailer3_real_t _t206 = _t101*_t90;
-    const trailer3_real_t _t207 = _t57 + _t58;
-    const trailer3_real_t _t208 = _t20*_t207;
-    const trailer3_real_t _t209 = _t59 + _t60;
-    const trailer3_real_t _t210 = _t209*_t29;
-    const trailer3_real_t _t211 = _t61 + _t62;
-    const trailer3_real_t _t212 = _t211*_t45;
-    const trailer3_real_t _t213 = _t207*_t23;
-    const trailer3_real_t _t214 = _t209*_t33;
-    const trailer3_real_t _t215 = _t211*_t52;
-    const trailer3_real_t _t216 = _t72 + _t73 + _t74 - _t76;
-    const trailer3_real_t _t217 = _t77 + _t78 + _t79 - _t81;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t218 = J_theta_cart*_t20 + _t207 + _t216*_t29 + _t217*_t45;
-    const trailer3_real_t _t219 = _t66 - _t67;
-    const trailer3_real_t _t220 = J_theta_cart*_t23 + _t216*_t33 + _t217*_t52 + _t219;
-    const trailer3_real_t _t221 = _t83 + _t85 + _t86 - _t87;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t222 = J_theta_cart2*_t29 + _t20*_t216 + _t209 + _t221*_t45;
-    const trailer3_real_t _t223 = _t68 - _t69;
-    const trailer3_real_t _t224 = J_theta_cart2*_t33 + _t216*_t23 + _t221*_t52 + _t223;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t225 = J_theta_cart3*_t45 + _t20*_t217 + _t211 + _t221*_t29;
-    const trailer3_real_t _t226 = _t70 - _t71;
-    const trailer3_real_t _t227 = J_theta_cart3*_t52 + _t217*_t23 + _t221*_t33 + _t226;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t228 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t229 = _t3 + _t36;
-    const trailer3_real_t _t230 = _t228*_t229;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t231 = J_theta_cart_right*_t230;
-    const trailer3_real_t _t232 = -_t16 + _t37;
-    const trailer3_real_t _t233 = _t228*_t232;
-    const trailer3_real_t _t234 = J_theta_cart_right*_t233;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t235 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t236 = _t3 - _t36;
-    const trailer3_real_t _t237 = _t235*_t236;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t238 = J_theta_cart_left*_t237;
-    const trailer3_real_t _t239 = -_t16 - _t37;
-    const trailer3_real_t _t240 = _t235*_t239;
-    const trailer3_real_t _t241 = J_theta_cart_left*_t240;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t242 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t243 = _t38 - _t40 + _t7;
-    const trailer3_real_t _t244 = _t242*_t243;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t245 = J_theta_cart2_right*_t244;
-    const trailer3_real_t _t246 = _t41 - _t43;
-    const trailer3_real_t _t247 = _t242*_t246;
-    const trailer3_real_t _t248 = J_theta_cart2_right*_t247;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t249 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t250 = -_t38 - _t44;
-    const trailer3_real_t _t251 = _t249*_t250;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t252 = J_theta_cart2_left*_t251;
-    const trailer3_real_t _t253 = -_t41 - _t43;
-    const trailer3_real_t _t254 = _t249*_t253;
-    const trailer3_real_t _t255 = J_theta_cart2_left*_t254;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t256 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t257 = _t46 - _t51;
-    const trailer3_real_t _t258 = _t256*_t257;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t259 = J_theta_cart3_right*_t258;
-    const trailer3_real_t _t260 = _t53 - _t56;
-    const trailer3_real_t _t261 = _t256*_t260;
-    const trailer3_real_t _t262 = J_theta_cart3_right*_t261;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t263 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t264 = -_t46 - _t51;
-    const trailer3_real_t _t265 = _t263*_t264;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t266 = J_theta_cart3_left*_t265;
-    const trailer3_real_t _t267 = -_t53 - _t56;
-    const trailer3_real_t _t268 = _t263*_t267;
-    const trailer3_real_t _t269 = J_theta_cart3_left*_t268;
-    const trailer3_real_t _t270 = K_theta_cart_x_tractor_2*_t2 - _t63;
-    const trailer3_real_t _t271 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t7*_t96
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t99
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t91
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t3*_t91 - _t10*_t112 - _t10*_t113
-            - _t10*_t114 - _t10*_t115 - _t103*_t9 - _t104*_t9;
-    const trailer3_real_t _t272 = _t204 - _t205;
-    const trailer3_real_t _t273 = -_t206 + _t91;
-    const trailer3_real_t _t274 = _t128*_t272 + _t131*_t273;
-    const trailer3_real_t _t275 = _t94*_t95;
-    const trailer3_real_t _t276 = _t90*_t95;
-    const trailer3_real_t _t277 = _t137*_t204 + _t141*_t91 + _t144*_t205 + _t148*_t206 + _t152*_t275
-            + _t155*_t276;
-    const trailer3_real_t _t278 = _t94*_t98;
-    const trailer3_real_t _t279 = _t90*_t98;
-    const trailer3_real_t _t280 = _t172*_t204 + _t177*_t91 + _t182*_t205 + _t187*_t206 + _t192*_t275
-            + _t196*_t276 + _t200*_t278 + _t202*_t279;
-    const trailer3_real_t _t281 = J_theta_cart*_t274 + _t204*_t270 + _t216*_t277 + _t217*_t280
-            + _t271;
-    const trailer3_real_t _t282 = K_theta_cart2_x_tractor_2*_t6 - _t64;
-    const trailer3_real_t _t283 = _t100*_t82 - _t102*_t116 + _t102*_t117 + _t102*_t118 + _t102*_t119
-            - _t104*_t82 + _t106*_t91 + _t107*_t91 - _t114*_t84 - _t115*_t84;
-    const trailer3_real_t _t284 = J_theta_cart2*_t277 + _t204*_t282 + _t216*_t274 + _t221*_t280
-            + _t283;
-    const trailer3_real_t _t285 = K_theta_cart3_x_tractor_2*_t12 - _t65;
-    const trailer3_real_t _t286 = -_t102*_t120 + _t102*_t121 + _t102*_t124 + _t102*_t125
-            + _t108*_t91 + _t109*_t91 - _t122*_t96 + _t123*_t96 + _t126*_t96 + _t127*_t96;
-    const trailer3_real_t _t287 = J_theta_cart3*_t280 + _t204*_t285 + _t217*_t274 + _t221*_t277
-            + _t286;
-    const trailer3_real_t _t288 = TRAILER3_COS(theta_tractor);
-    const trailer3_real_t _t289 = TRAILER3_SIN(theta_tractor);
-    const trailer3_real_t _t290 = _t23*_t270;
-    const trailer3_real_t _t291 = _t131*_t207 + _t290;
-    const trailer3_real_t _t292 = _t285*_t52;
-    const trailer3_real_t _t293 = _t282*_t33;
-    const trailer3_real_t _t294 = _t292 + _t293;
-    const trailer3_real_t _t295 = J_theta_cart*_t131;
-    const trailer3_real_t _t296 = _t131*_t216;
-    const trailer3_real_t _t297 = _t131*_t217;
-    const trailer3_real_t _t298 = _t159 + _t4;
-    const trailer3_real_t _t299 = _t228*_t298;
-    const trailer3_real_t _t300 = J_theta_cart_right*_t299;
-    const trailer3_real_t _t301 = -_t159 + _t4;
-    const trailer3_real_t _t302 = _t235*_t301;
-    const trailer3_real_t _t303 = J_theta_cart_left*_t302;
-    const trailer3_real_t _t304 = _t163 - _t165;
-    const trailer3_real_t _t305 = _t242*_t304;
-    const trailer3_real_t _t306 = J_theta_cart2_right*_t305;
-    const trailer3_real_t _t307 = -_t163 - _t165;
-    const trailer3_real_t _t308 = _t249*_t307;
-    const trailer3_real_t _t309 = J_theta_cart2_left*_t308;
-    const trailer3_real_t _t310 = _t178 - _t181;
-    const trailer3_real_t _t311 = _t256*_t310;
-    const trailer3_real_t _t312 = J_theta_cart3_right*_t311;
-    const trailer3_real_t _t313 = -_t178 - _t181;
-    const trailer3_real_t _t314 = _t263*_t313;
-    const trailer3_real_t _t315 = J_theta_cart3_left*_t314;
-    const trailer3_real_t _t316 = _t230*_t300;
-    const trailer3_real_t _t317 = _t237*_t303;
-    const trailer3_real_t _t318 = _t128*_t220;
-    const trailer3_real_t _t319 = _t158 + _t2;
-    const trailer3_real_t _t320 = _t228*_t319;
-    const trailer3_real_t _t321 = _t234*_t320;
-    const trailer3_real_t _t322 = -_t158 + _t2;
-    const trailer3_real_t _t323 = _t235*_t322;
-    const trailer3_real_t _t324 = _t241*_t323;
-    const trailer3_real_t _t325 = _t108 + _t109;
-    const trailer3_real_t _t326 = _t325*_t52;
-    const trailer3_real_t _t327 = _t106 + _t107;
-    const trailer3_real_t _t328 = _t327*_t33;
-    const trailer3_real_t _t329 = _t110 + _t111;
-    const trailer3_real_t _t330 = _t131*_t219 + _t23*_t329;
-    const trailer3_real_t _t331 = _t233*_t300;
-    const trailer3_real_t _t332 = _t240*_t303;
-    const trailer3_real_t _t333 = _t131*_t220;
-    const trailer3_real_t _t334 = _t234*_t299;
-    const trailer3_real_t _t335 = _t241*_t302;
-    const trailer3_real_t _t336 = TRAILER3_LIT(2.0)*_t95;
-    const trailer3_real_t _t337 = _t336*_t64 - _t336*_t75;
-    const trailer3_real_t _t338 = TRAILER3_LIT(2.0)*_t98;
-    const trailer3_real_t _t339 = _t338*_t65 - _t338*_t80;
-    const trailer3_real_t _t340 = _t114 + _t115;
-    const trailer3_real_t _t341 = _t112 + _t113;
-    const trailer3_real_t _t342 = TRAILER3_LIT(2.0)*_t101;
-    const trailer3_real_t _t343 = -_t105*_t342 + _t342*_t63;
-    const trailer3_real_t _t344 = _t128*_t94 + _t131*_t90;
-    const trailer3_real_t _t345 = _t102*_t57 + _t102*_t58 + _t343*_t344;
-    const trailer3_real_t _t346 = _t66*_t91;
-    const trailer3_real_t _t347 = _t67*_t91;
-    const trailer3_real_t _t348 = TRAILER3_LIT(1.7)*_t95;
-    const trailer3_real_t _t349 = _t3*_t348;
-    const trailer3_real_t _t350 = TRAILER3_LIT(1.7)*K_theta_cart2_x_tractor*_t2*_t7*_t95
-            - _t2*_t348*_t75 - _t349*_t59 - _t349*_t60;
-    const trailer3_real_t _t351 = TRAILER3_LIT(1.7)*_t98;
-    const trailer3_real_t _t352 = _t3*_t351;
-    const trailer3_real_t _t353 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t2*_t98
-            - _t2*_t351*_t80 - _t352*_t61 - _t352*_t62;
-    const trailer3_real_t _t354 = _t68*_t91;
-    const trailer3_real_t _t355 = _t69*_t91;
-    const trailer3_real_t _t356 = TRAILER3_LIT(1.7)*_t101;
-    const trailer3_real_t _t357 = _t2*_t356;
-    const trailer3_real_t _t358 = _t3*_t356;
-    const trailer3_real_t _t359 = -_t357*_t64 + _t357*_t75 + _t358*_t59 + _t358*_t60;
-    const trailer3_real_t _t360 = _t344*_t359;
-    const trailer3_real_t _t361 = _t351*_t7;
-    const trailer3_real_t _t362 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t6*_t98
-            - _t351*_t6*_t80 - _t361*_t61 - _t361*_t62;
-    const trailer3_real_t _t363 = _t70*_t91;
-    const trailer3_real_t _t364 = _t71*_t91;
-    const trailer3_real_t _t365 = -_t357*_t65 + _t357*_t80 + _t358*_t61 + _t358*_t62;
-    const trailer3_real_t _t366 = _t344*_t365;
-    const trailer3_real_t _t367 = _t348*_t6;
-    const trailer3_real_t _t368 = _t348*_t7;
-    const trailer3_real_t _t369 = -_t367*_t65 + _t367*_t80 + _t368*_t61 + _t368*_t62;
-    const trailer3_real_t _t370 = -_t344*_t94;
-    const trailer3_real_t _t371 = _t144*_t370;
-    const trailer3_real_t _t372 = -_t344*_t90;
-    const trailer3_real_t _t373 = _t148*_t372;
-    const trailer3_real_t _t374 = TRAILER3_LIT(1.6666666666666667)*_t170;
-    const trailer3_real_t _t375 = TRAILER3_LIT(1.6666666666666667)*_t171;
-    const trailer3_real_t _t376 = _t205*_t374 + _t206*_t375;
-    const trailer3_real_t _t377 = _t28*_t374;
-    const trailer3_real_t _t378 = _t28*_t375;
-    const trailer3_real_t _t379 = _t182*_t370;
-    const trailer3_real_t _t380 = _t187*_t372;
-    const trailer3_real_t _t381 = TRAILER3_LIT(0.2)*_t374;
-    const trailer3_real_t _t382 = TRAILER3_LIT(0.2)*_t375;
-    const trailer3_real_t _t383 = TRAILER3_LIT(1.6666666666666667)*_t162;
-    const trailer3_real_t _t384 = TRAILER3_LIT(0.2)*_t383;
-    const trailer3_real_t _t385 = TRAILER3_LIT(1.6666666666666667)*_t165;
-    const trailer3_real_t _t386 = TRAILER3_LIT(0.2)*_t385;
-    const trailer3_real_t _t387 = _t161 + _t166 - _t21;
-    const trailer3_real_t _t388 = _t242*_t387;
-    const trailer3_real_t _t389 = _t370*_t388;
-    const trailer3_real_t _t390 = _t164 + _t167 - _t24;
-    const trailer3_real_t _t391 = _t242*_t390;
-    const trailer3_real_t _t392 = _t372*_t391;
-    const trailer3_real_t _t393 = -_t134 + _t381;
-    const trailer3_real_t _t394 = _t242*_t393;
-    const trailer3_real_t _t395 = -_t135 + _t382;
-    const trailer3_real_t _t396 = _t242*_t395;
-    const trailer3_real_t _t397 = _t205*_t394 + _t206*_t396;
-    const trailer3_real_t _t398 = -_t166 - _t170;
-    const trailer3_real_t _t399 = _t249*_t398;
-    const trailer3_real_t _t400 = _t370*_t399;
-    const trailer3_real_t _t401 = -_t167 - _t171;
-    const trailer3_real_t _t402 = _t249*_t401;
-    const trailer3_real_t _t403 = _t372*_t402;
-    const trailer3_real_t _t404 = -_t134 - _t381;
-    const trailer3_real_t _t405 = _t249*_t404;
-    const trailer3_real_t _t406 = -_t135 - _t382;
-    const trailer3_real_t _t407 = _t249*_t406;
-    const trailer3_real_t _t408 = _t205*_t405 + _t206*_t407;
-    const trailer3_real_t _t409 = -_t185 - _t377;
-    const trailer3_real_t _t410 = -TRAILER3_LIT(1.6666666666666667)*_t409;
-    const trailer3_real_t _t411 = TRAILER3_LIT(0.2)*_t410;
-    const trailer3_real_t _t412 = _t374*_t49;
-    const trailer3_real_t _t413 = _t146 + _t412;
-    const trailer3_real_t _t414 = -_t190 - _t378;
-    const trailer3_real_t _t415 = -TRAILER3_LIT(1.6666666666666667)*_t414;
-    const trailer3_real_t _t416 = TRAILER3_LIT(0.2)*_t415;
-    const trailer3_real_t _t417 = _t375*_t49;
-    const trailer3_real_t _t418 = _t150 + _t417;
-    const trailer3_real_t _t419 = _t175 - _t28*_t383;
-    const trailer3_real_t _t420 = -TRAILER3_LIT(1.6666666666666667)*_t419;
-    const trailer3_real_t _t421 = TRAILER3_LIT(0.2)*_t420;
-    const trailer3_real_t _t422 = _t138 + _t383*_t49;
-    const trailer3_real_t _t423 = _t180 - _t28*_t385;
-    const trailer3_real_t _t424 = -TRAILER3_LIT(1.6666666666666667)*_t423;
-    const trailer3_real_t _t425 = TRAILER3_LIT(0.2)*_t424;
-    const trailer3_real_t _t426 = _t142 + _t385*_t49;
-    const trailer3_real_t _t427 = TRAILER3_LIT(1.6666666666666667)*_t176;
-    const trailer3_real_t _t428 = TRAILER3_LIT(0.2)*_t427;
-    const trailer3_real_t _t429 = TRAILER3_LIT(1.6666666666666667)*_t181;
-    const trailer3_real_t _t430 = TRAILER3_LIT(0.2)*_t429;
-    const trailer3_real_t _t431 = _t183 - _t186;
-    const trailer3_real_t _t432 = _t256*_t431;
-    const trailer3_real_t _t433 = _t370*_t432;
-    const trailer3_real_t _t434 = _t188 - _t191;
-    const trailer3_real_t _t435 = _t256*_t434;
-    const trailer3_real_t _t436 = _t372*_t435;
-    const trailer3_real_t _t437 = -_t183 - _t186;
-    const trailer3_real_t _t438 = _t263*_t437;
-    const trailer3_real_t _t439 = _t370*_t438;
-    const trailer3_real_t _t440 = -_t188 - _t191;
-    const trailer3_real_t _t441 = _t263*_t440;
-    const trailer3_real_t _t442 = _t372*_t441;
-    const trailer3_real_t _t443 = _t270*_t274;
-    const trailer3_real_t _t444 = _t277*_t282;
-    const trailer3_real_t _t445 = _t280*_t285;
-    const trailer3_real_t _t446 = -_t160 - _t162;
-    const trailer3_real_t _t447 = _t249*_t446;
-    const trailer3_real_t _t448 = J_theta_cart2_left*_t447;
-    const trailer3_real_t _t449 = _t160 - _t162;
-    const trailer3_real_t _t450 = _t242*_t449;
-    const trailer3_real_t _t451 = J_theta_cart2_right*_t450;
-    const trailer3_real_t _t452 = -_t173 - _t176;
-    const trailer3_real_t _t453 = _t263*_t452;
-    const trailer3_real_t _t454 = J_theta_cart3_left*_t453;
-    const trailer3_real_t _t455 = _t173 - _t176;
-    const trailer3_real_t _t456 = _t256*_t455;
-    const trailer3_real_t _t457 = J_theta_cart3_right*_t456;
-    const trailer3_real_t _t458 = -_t237*_t272 - _t240*_t273 + _t302*_t372 + _t323*_t370;
-    const trailer3_real_t _t459 = _t238*_t458;
-    const trailer3_real_t _t460 = J_theta_cart_left*_t323;
-    const trailer3_real_t _t461 = _t272*_t323 + _t273*_t302;
-    const trailer3_real_t _t462 = _t460*_t461;
-    const trailer3_real_t _t463 = -_t230*_t272 - _t233*_t273 + _t299*_t372 + _t320*_t370;
-    const trailer3_real_t _t464 = _t231*_t463;
-    const trailer3_real_t _t465 = J_theta_cart_right*_t320;
-    const trailer3_real_t _t466 = _t272*_t320 + _t273*_t299;
-    const trailer3_real_t _t467 = _t465*_t466;
-    const trailer3_real_t _t468 = _t204*_t208;
-    const trailer3_real_t _t469 = _t204*_t210;
-    const trailer3_real_t _t470 = _t204*_t212;
-    const trailer3_real_t _t471 = _t128*_t370 + _t131*_t372 - _t20*_t272 - _t23*_t273;
-    const trailer3_real_t _t472 = _t218*_t471;
-    const trailer3_real_t _t473 = _t128*_t281;
-    const trailer3_real_t _t474 = _t68*_t96;
-    const trailer3_real_t _t475 = _t69*_t96;
-    const trailer3_real_t _t476 = _t70*_t99;
-    const trailer3_real_t _t477 = _t71*_t99;
-    const trailer3_real_t _t478 = _t102*_t66;
-    const trailer3_real_t _t479 = _t102*_t67;
-    const trailer3_real_t _t480 = TRAILER3_LIT(0.6)*_t101;
-    const trailer3_real_t _t481 = -_t480*_t57 - _t480*_t58;
-    const trailer3_real_t _t482 = _t344*_t481;
-    const trailer3_real_t _t483 = TRAILER3_LIT(0.6)*_t95;
-    const trailer3_real_t _t484 = -_t483*_t59 - _t483*_t60;
-    const trailer3_real_t _t485 = TRAILER3_LIT(0.6)*_t98;
-    const trailer3_real_t _t486 = -_t485*_t61 - _t485*_t62;
-    const trailer3_real_t _t487 = _t274*_t329;
-    const trailer3_real_t _t488 = _t277*_t327;
-    const trailer3_real_t _t489 = _t280*_t325;
-    const trailer3_real_t _t490 = _t241*_t458;
-    const trailer3_real_t _t491 = _t303*_t461;
-    const trailer3_real_t _t492 = _t234*_t463;
-    const trailer3_real_t _t493 = _t300*_t466;
-    const trailer3_real_t _t494 = _t204*_t213;
-    const trailer3_real_t _t495 = _t204*_t214;
-    const trailer3_real_t _t496 = _t204*_t215;
-    const trailer3_real_t _t497 = _t220*_t471;
-    const trailer3_real_t _t498 = _t131*_t281;
-    const trailer3_real_t _t499 = _t128*_t207;
-    const trailer3_real_t _t500 = _t20*_t270;
-    const trailer3_real_t _t501 = _t282*_t29;
-    const trailer3_real_t _t502 = _t285*_t45;
-    const trailer3_real_t _t503 = _t500 + _t501 + _t502;
-    const trailer3_real_t _t504 = J_theta_cart*_t128;
-    const trailer3_real_t _t505 = _t128*_t216;
-    const trailer3_real_t _t506 = _t128*_t217;
-    const trailer3_real_t _t507 = _t230*_t465;
-    const trailer3_real_t _t508 = _t237*_t460;
-    const trailer3_real_t _t509 = _t128*_t218;
-    const trailer3_real_t _t510 = _t231*_t320;
-    const trailer3_real_t _t511 = _t238*_t323;
-    const trailer3_real_t _t512 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t513 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t514 = K_theta_tractor_x_tractor_2 + _t213 + _t214 + _t215;
-    const trailer3_real_t _t515 = TRAILER3_LIT(0.207)*_t512;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t516 = J_theta_right*_t515;
-    const trailer3_real_t _t517 = -TRAILER3_LIT(0.207)*_t513;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t518 = J_theta_left*_t517;
-    const trailer3_real_t _t519 = _t20*_t220 + _t224*_t29 + _t227*_t45 + _t230*_t234 + _t237*_t241
-            + _t244*_t248 + _t251*_t255 + _t258*_t262 + _t265*_t269 + _t512*_t516 + _t513*_t518
-            + _t514;
-    const trailer3_real_t _t520 = TRAILER3_LIT(2.0)*_t519;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t521 = J_x_tractor + _t208 + _t210 + _t212;
-    const trailer3_real_t _t522 = J_theta_right*_t512;
-    const trailer3_real_t _t523 = J_theta_left*_t513;
-    const trailer3_real_t _t524 = _t20*_t218 + _t222*_t29 + _t225*_t45 + _t230*_t231 + _t237*_t238
-            + _t244*_t245 + _t251*_t252 + _t258*_t259 + _t265*_t266 + _t512*_t522 + _t513*_t523
-            + _t521;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t525 = J_theta_tractor + _t219*_t23 + _t223*_t33 + _t226*_t52;
-    const trailer3_real_t _t526 = _t220*_t23 + _t224*_t33 + _t227*_t52 + _t233*_t234 + _t240*_t241
-            + _t247*_t248 + _t254*_t255 + _t261*_t262 + _t268*_t269 + _t515*_t516 + _t517*_t518
-            + _t525;
-    const trailer3_real_t _t527 = -_t519*_t519 + _t524*_t526;
-    const trailer3_real_t _t528 = TRAILER3_LIT(1.0)/_t527;
-    const trailer3_real_t _t529 = _t528*_t528;
-    const trailer3_real_t _t530 = _t528;
-    const trailer3_real_t _t531 = _t519*_t530;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
     const trailer3_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer3_real_t _t532 = K_theta_tractor_x_tractor*_t91 + _t100 - _t102*_t105 + _t102*_t63
-            - _t103 - _t104 + _t97;
-    const trailer3_real_t _t533 = _t168 + _t22;
-    const trailer3_real_t _t534 = _t242*_t533;
-    const trailer3_real_t _t535 = _t169 + _t25;
-    const trailer3_real_t _t536 = _t242*_t535;
-    const trailer3_real_t _t537 = _t204*_t450 + _t205*_t388 + _t206*_t391 + _t275*_t534
-            + _t276*_t536 + _t305*_t91;
-    const trailer3_real_t _t538 = -_t168 + _t22;
-    const trailer3_real_t _t539 = _t249*_t538;
-    const trailer3_real_t _t540 = -_t169 + _t25;
-    const trailer3_real_t _t541 = _t249*_t540;
-    const trailer3_real_t _t542 = _t204*_t447 + _t205*_t399 + _t206*_t402 + _t275*_t539
-            + _t276*_t541 + _t308*_t91;
-    const trailer3_real_t _t543 = _t193 - _t195;
-    const trailer3_real_t _t544 = _t256*_t543;
-    const trailer3_real_t _t545 = _t197 - _t199;
-    const trailer3_real_t _t546 = _t256*_t545;
-    const trailer3_real_t _t547 = _t201 + _t31;
-    const trailer3_real_t _t548 = _t256*_t547;
-    const trailer3_real_t _t549 = _t203 + _t35;
-    const trailer3_real_t _t550 = _t256*_t549;
-    const trailer3_real_t _t551 = _t204*_t456 + _t205*_t432 + _t206*_t435 + _t275*_t544
-            + _t276*_t546 + _t278*_t548 + _t279*_t550 + _t311*_t91;
-    const trailer3_real_t _t552 = -_t193 - _t195;
-    const trailer3_real_t _t553 = _t263*_t552;
-    const trailer3_real_t _t554 = -_t197 - _t199;
-    const trailer3_real_t _t555 = _t263*_t554;
-    const trailer3_real_t _t556 = -_t201 + _t31;
-    const trailer3_real_t _t557 = _t263*_t556;
-    const trailer3_real_t _t558 = -_t203 + _t35;
-    const trailer3_real_t _t559 = _t263*_t558;
-    const trailer3_real_t _t560 = _t204*_t453 + _t205*_t438 + _t206*_t441 + _t275*_t553
-            + _t276*_t555 + _t278*_t557 + _t279*_t559 + _t314*_t91;
-    const trailer3_real_t _t561 = _t20*_t281 + _t207*_t274 + _t209*_t277 + _t211*_t280 + _t231*_t466
-            + _t238*_t461 + _t245*_t537 + _t252*_t542 + _t259*_t551 + _t266*_t560 + _t284*_t29
-            + _t287*_t45 + _t532;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t theta_tractor = q[2];
+    const trailer3_real_t theta_cart = q[3];
+    const trailer3_real_t theta_cart2 = q[4];
+    const trailer3_real_t theta_cart3 = q[5];
+    trailer3_real_t _shared[199];
+    trailer3_staged_quantities(p, q, wheel_rates, _shared);
+    const trailer3_real_t _ms26 = _shared[0];
+    const trailer3_real_t _ms27 = _shared[1];
+    const trailer3_real_t _ms54 = _shared[4];
+    const trailer3_real_t _ms59 = _shared[5];
+    const trailer3_real_t _ms64 = _shared[6];
+    const trailer3_real_t _ms69 = _shared[7];
+    const trailer3_real_t _ms75 = _shared[11];
+    const trailer3_real_t _ms76 = _shared[12];
+    const trailer3_real_t _ms77 = _shared[13];
+    const trailer3_real_t _ms78 = _shared[14];
+    const trailer3_real_t _ms79 = _shared[15];
+    const trailer3_real_t _ms80 = _shared[16];
+    const trailer3_real_t _ms81 = _shared[17];
+    const trailer3_real_t _ms82 = _shared[18];
+    const trailer3_real_t _ms83 = _shared[19];
+    const trailer3_real_t _ms85 = _shared[21];
+    const trailer3_real_t _ms86 = _shared[22];
+    const trailer3_real_t _ms87 = _shared[23];
+    const trailer3_real_t _ms88 = _shared[24];
+    const trailer3_real_t _ms89 = _shared[25];
+    const trailer3_real_t _ms90 = _shared[26];
+    const trailer3_real_t _ms91 = _shared[27];
+    const trailer3_real_t _ms128 = _shared[28];
+    const trailer3_real_t _ms129 = _shared[29];
+    const trailer3_real_t _ms132 = _shared[32];
+    const trailer3_real_t _ms133 = _shared[33];
+    const trailer3_real_t _ms136 = _shared[36];
+    const trailer3_real_t _ms137 = _shared[37];
+    const trailer3_real_t _ms144 = _shared[40];
+    const trailer3_real_t _ms145 = _shared[41];
+    const trailer3_real_t _ms148 = _shared[44];
+    const trailer3_real_t _ms149 = _shared[45];
+    const trailer3_real_t _ms152 = _shared[48];
+    const trailer3_real_t _ms153 = _shared[49];
+    const trailer3_real_t _ms156 = _shared[52];
+    const trailer3_real_t _ms157 = _shared[53];
+    const trailer3_real_t _ms160 = _shared[56];
+    const trailer3_real_t _ms161 = _shared[57];
+    const trailer3_real_t _ms164 = _shared[60];
+    const trailer3_real_t _ms165 = _shared[61];
+    const trailer3_real_t _ms166 = _shared[62];
+    const trailer3_real_t _ms167 = _shared[63];
+    const trailer3_real_t _ms168 = _shared[64];
+    const trailer3_real_t _ms169 = _shared[65];
+    const trailer3_real_t _ms170 = _shared[66];
+    const trailer3_real_t _ms179 = _shared[67];
+    const trailer3_real_t _ms180 = _shared[68];
+    const trailer3_real_t _ms181 = _shared[69];
+    const trailer3_real_t _ms182 = _shared[70];
+    const trailer3_real_t _ms183 = _shared[71];
+    const trailer3_real_t _ms184 = _shared[72];
+    const trailer3_real_t _ms185 = _shared[73];
+    const trailer3_real_t _ms186 = _shared[74];
+    const trailer3_real_t _ms187 = _shared[75];
+    const trailer3_real_t _ms188 = _shared[76];
+    const trailer3_real_t _ms189 = _shared[77];
+    const trailer3_real_t _ms190 = _shared[78];
+    const trailer3_real_t _ms194 = _shared[81];
+    const trailer3_real_t _ms195 = _shared[82];
+    const trailer3_real_t _ms196 = _shared[83];
+    const trailer3_real_t _ms197 = _shared[84];
+    const trailer3_real_t _ms198 = _shared[85];
+    const trailer3_real_t _ms200 = _shared[87];
+    const trailer3_real_t _ms202 = _shared[89];
+    const trailer3_real_t _ms204 = _shared[91];
+    const trailer3_real_t _ms206 = _shared[93];
+    const trailer3_real_t _ms208 = _shared[95];
+    const trailer3_real_t _ms210 = _shared[97];
+    const trailer3_real_t _ms212 = _shared[99];
+    const trailer3_real_t _ms214 = _shared[101];
+    const trailer3_real_t _ms216 = _shared[103];
+    const trailer3_real_t _ms218 = _shared[105];
+    const trailer3_real_t _ms220 = _shared[107];
+    const trailer3_real_t _ms222 = _shared[109];
+    const trailer3_real_t _ms224 = _shared[111];
+    const trailer3_real_t _ms226 = _shared[113];
+    const trailer3_real_t _ms228 = _shared[115];
+    const trailer3_real_t _ms230 = _shared[117];
+    const trailer3_real_t _ms232 = _shared[119];
+    const trailer3_real_t _ms234 = _shared[121];
+    const trailer3_real_t _ms236 = _shared[123];
+    const trailer3_real_t _ms238 = _shared[125];
+    const trailer3_real_t _ms240 = _shared[127];
+    const trailer3_real_t _ms242 = _shared[129];
+    const trailer3_real_t _ms244 = _shared[131];
+    const trailer3_real_t _ms246 = _shared[133];
+    const trailer3_real_t _ms248 = _shared[135];
+    const trailer3_real_t _ms250 = _shared[137];
+    const trailer3_real_t _ms252 = _shared[139];
+    const trailer3_real_t _ms254 = _shared[141];
+    const trailer3_real_t _ms256 = _shared[143];
+    const trailer3_real_t _ms258 = _shared[145];
+    const trailer3_real_t _ms260 = _shared[147];
+    const trailer3_real_t _ms262 = _shared[149];
+    const trailer3_real_t _ms264 = _shared[151];
+    const trailer3_real_t _ms266 = _shared[153];
+    const trailer3_real_t _ms268 = _shared[155];
+    const trailer3_real_t _ms270 = _shared[157];
+    const trailer3_real_t _ms272 = _shared[159];
+    const trailer3_real_t _ms274 = _shared[161];
+    const trailer3_real_t _ms276 = _shared[163];
+    const trailer3_real_t _ms278 = _shared[165];
+    const trailer3_real_t _ms280 = _shared[167];
+    const trailer3_real_t _ms282 = _shared[169];
+    const trailer3_real_t _ms284 = _shared[171];
+    const trailer3_real_t _ms286 = _shared[173];
+    const trailer3_real_t _ms288 = _shared[175];
+    const trailer3_real_t _ms290 = _shared[177];
+    const trailer3_real_t _ms291 = _shared[178];
+    const trailer3_real_t _ms292 = _shared[179];
+    const trailer3_real_t _ms293 = _shared[180];
+    const trailer3_real_t _ms294 = _shared[181];
+    const trailer3_real_t _ms295 = _shared[182];
+    const trailer3_real_t _ms296 = _shared[183];
+    const trailer3_real_t _ms297 = _shared[184];
+    const trailer3_real_t _ms298 = _shared[185];
+    const trailer3_real_t _ms299 = _shared[186];
+    const trailer3_real_t _ms300 = _shared[187];
+    const trailer3_real_t _ms301 = _shared[188];
+    const trailer3_real_t _ms302 = _shared[189];
+    const trailer3_real_t _ms303 = _shared[190];
+    const trailer3_real_t _ms304 = _shared[191];
+    const trailer3_real_t _ms305 = _shared[192];
+    const trailer3_real_t _ms306 = _shared[193];
+    const trailer3_real_t _ms307 = _shared[194];
+    const trailer3_real_t _ms308 = _shared[195];
+    const trailer3_real_t _ms309 = _shared[196];
+    const trailer3_real_t _ms341 = _shared[197];
+    const trailer3_real_t _ms342 = _shared[198];
+    const trailer3_real_t _t0 = _ms128*_ms179;
+    const trailer3_real_t _t1 = _ms132*_ms180;
+    const trailer3_real_t _t2 = _ms136*_ms181;
+    const trailer3_real_t _t3 = _ms129*_ms179;
+    const trailer3_real_t _t4 = _ms133*_ms180;
+    const trailer3_real_t _t5 = _ms137*_ms181;
+    const trailer3_real_t _t6 = J_theta_cart*_ms128 + _ms132*_ms188 + _ms136*_ms189 + _ms179;
+    const trailer3_real_t _t7 = J_theta_cart*_ms129 + _ms133*_ms188 + _ms137*_ms189 + _ms185;
+    const trailer3_real_t _t8 = J_theta_cart2*_ms132 + _ms128*_ms188 + _ms136*_ms190 + _ms180;
+    const trailer3_real_t _t9 = J_theta_cart2*_ms133 + _ms129*_ms188 + _ms137*_ms190 + _ms186;
+    const trailer3_real_t _t10 = J_theta_cart3*_ms136 + _ms128*_ms189 + _ms132*_ms190 + _ms181;
+    const trailer3_real_t _t11 = J_theta_cart3*_ms137 + _ms129*_ms189 + _ms133*_ms190 + _ms187;
+    const trailer3_real_t _t12 = J_theta_cart_right*_ms144;
+    const trailer3_real_t _t13 = J_theta_cart_right*_ms145;
+    const trailer3_real_t _t14 = J_theta_cart_left*_ms148;
+    const trailer3_real_t _t15 = J_theta_cart_left*_ms149;
+    const trailer3_real_t _t16 = J_theta_cart2_right*_ms152;
+    const trailer3_real_t _t17 = J_theta_cart2_right*_ms153;
+    const trailer3_real_t _t18 = J_theta_cart2_left*_ms156;
+    const trailer3_real_t _t19 = J_theta_cart2_left*_ms157;
+    const trailer3_real_t _t20 = J_theta_cart3_right*_ms160;
+    const trailer3_real_t _t21 = J_theta_cart3_right*_ms161;
+    const trailer3_real_t _t22 = J_theta_cart3_left*_ms164;
+    const trailer3_real_t _t23 = J_theta_cart3_left*_ms165;
+    const trailer3_real_t _t24 = TRAILER3_COS(theta_tractor);
+    const trailer3_real_t _t25 = TRAILER3_SIN(theta_tractor);
+    const trailer3_real_t _t26 = _ms129*_ms182;
+    const trailer3_real_t _t27 = _ms179*_ms198 + _t26;
+    const trailer3_real_t _t28 = _ms137*_ms184;
+    const trailer3_real_t _t29 = _ms133*_ms183;
+    const trailer3_real_t _t30 = _t28 + _t29;
+    const trailer3_real_t _t31 = -theta_tractor;
+    const trailer3_real_t _t32 = _t31 + theta_cart;
+    const trailer3_real_t _t33 = TRAILER3_SIN(_t32);
+    const trailer3_real_t _t34 = K_theta_cart_x_tractor*_t33;
+    const trailer3_real_t _t35 = TRAILER3_COS(_t32);
+    const trailer3_real_t _t36 = K_theta_cart_x_tractor_2*_t35;
+    const trailer3_real_t _t37 = J_theta_cart*_ms198;
+    const trailer3_real_t _t38 = _t31 + theta_cart2;
+    const trailer3_real_t _t39 = TRAILER3_SIN(_t38);
+    const trailer3_real_t _t40 = K_theta_cart2_x_tractor*_t39;
+    const trailer3_real_t _t41 = TRAILER3_COS(_t38);
+    const trailer3_real_t _t42 = K_theta_cart2_x_tractor_2*_t41;
+    const trailer3_real_t _t43 = _ms188*_ms198;
+    const trailer3_real_t _t44 = _t31 + theta_cart3;
+    const trailer3_real_t _t45 = TRAILER3_SIN(_t44);
+    const trailer3_real_t _t46 = K_theta_cart3_x_tractor*_t45;
+    const trailer3_real_t _t47 = TRAILER3_COS(_t44);
+    const trailer3_real_t _t48 = K_theta_cart3_x_tractor_2*_t47;
+    const trailer3_real_t _t49 = _ms189*_ms198;
+    const trailer3_real_t _t50 = J_theta_cart_right*_ms230;
+    const trailer3_real_t _t51 = J_theta_cart_left*_ms234;
+    const trailer3_real_t _t52 = J_theta_cart2_right*_ms238;
+    const trailer3_real_t _t53 = J_theta_cart2_left*_ms250;
+    const trailer3_real_t _t54 = J_theta_cart3_right*_ms262;
+    const trailer3_real_t _t55 = J_theta_cart3_left*_ms278;
+    const trailer3_real_t _t56 = _ms144*_t50;
+    const trailer3_real_t _t57 = _ms148*_t51;
+    const trailer3_real_t _t58 = _ms197*_t7;
+    const trailer3_real_t _t59 = _ms228*_t13;
+    const trailer3_real_t _t60 = _ms232*_t15;
+    const trailer3_real_t _t61 = TRAILER3_LIT(0.3)*_t46 + TRAILER3_LIT(0.3)*_t48;
+    const trailer3_real_t _t62 = _ms137*_t61;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.3)*_t40 + TRAILER3_LIT(0.3)*_t42;
+    const trailer3_real_t _t64 = _ms133*_t63;
+    const trailer3_real_t _t65 = TRAILER3_LIT(0.3)*_t34 + TRAILER3_LIT(0.3)*_t36;
+    const trailer3_real_t _t66 = _ms129*_t65 + _ms185*_ms198;
+    const trailer3_real_t _t67 = _ms145*_t50;
+    const trailer3_real_t _t68 = _ms149*_t51;
+    const trailer3_real_t _t69 = _ms198*_t7;
+    const trailer3_real_t _t70 = _ms230*_t13;
+    const trailer3_real_t _t71 = _ms234*_t15;
+    const trailer3_real_t _t72 = TRAILER3_LIT(2.0)*_ms169;
+    const trailer3_real_t _t73 = K_theta_cart2_x_tractor*_t41;
+    const trailer3_real_t _t74 = K_theta_cart2_x_tractor_2*_t39;
+    const trailer3_real_t _t75 = _t72*_t73 - _t72*_t74;
+    const trailer3_real_t _t76 = TRAILER3_LIT(2.0)*_ms170;
+    const trailer3_real_t _t77 = K_theta_cart3_x_tractor*_t47;
+    const trailer3_real_t _t78 = K_theta_cart3_x_tractor_2*_t45;
+    const trailer3_real_t _t79 = _t76*_t77 - _t76*_t78;
+    const trailer3_real_t _t80 = _ms170*_ms170;
+    const trailer3_real_t _t81 = _t46*_t80;
+    const trailer3_real_t _t82 = _t48*_t80;
+    const trailer3_real_t _t83 = _t81 + _t82;
+    const trailer3_real_t _t84 = _ms169*_ms169;
+    const trailer3_real_t _t85 = _t40*_t84;
+    const trailer3_real_t _t86 = _t42*_t84;
+    const trailer3_real_t _t87 = _t85 + _t86;
+    const trailer3_real_t _t88 = TRAILER3_LIT(2.0)*_ms168;
+    const trailer3_real_t _t89 = K_theta_cart_x_tractor*_t35;
+    const trailer3_real_t _t90 = K_theta_cart_x_tractor_2*_t33;
+    const trailer3_real_t _t91 = _t88*_t89 - _t88*_t90;
+    const trailer3_real_t _t92 = _ms168*_ms168;
+    const trailer3_real_t _t93 = _ms166*_ms197 + _ms167*_ms198;
+    const trailer3_real_t _t94 = _t34*_t92 + _t36*_t92 + _t91*_t93;
+    const trailer3_real_t _t95 = TRAILER3_LIT(0.3)*_ms167*_ms167;
+    const trailer3_real_t _t96 = _t89*_t95;
+    const trailer3_real_t _t97 = _t90*_t95;
+    const trailer3_real_t _t98 = TRAILER3_LIT(1.7)*_ms169;
+    const trailer3_real_t _t99 = _t35*_t98;
+    const trailer3_real_t _t100 = TRAILER3_LIT(1.7)*K_theta_cart2_x_tractor*_ms169*_t33*_t41
+            - _t33*_t74*_t98 - _t40*_t99 - _t42*_t99;
+    const trailer3_real_t _t101 = TRAILER3_LIT(1.7)*_ms170;
+    const trailer3_real_t _t102 = _t101*_t35;
+    const trailer3_real_t _t103 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_ms170*_t33*_t47
+            - _t101*_t33*_t78 - _t102*_t46 - _t102*_t48;
+    const trailer3_real_t _t104 = _t73*_t95;
+    const trailer3_real_t _t105 = _t74*_t95;
+    const trailer3_real_t _t106 = TRAILER3_LIT(1.7)*_ms168;
+    const trailer3_real_t _t107 = _t106*_t33;
+    const trailer3_real_t _t108 = _t106*_t35;
+    const trailer3_real_t _t109 = -_t107*_t73 + _t107*_t74 + _t108*_t40 + _t108*_t42;
+    const trailer3_real_t _t110 = _t109*_t93;
+    const trailer3_real_t _t111 = _t101*_t41;
+    const trailer3_real_t _t112 = TRAILER3_LIT(1.7)*K_theta_cart3_x_tractor*_ms170*_t39*_t47
+            - _t101*_t39*_t78 - _t111*_t46 - _t111*_t48;
+    const trailer3_real_t _t113 = _t77*_t95;
+    const trailer3_real_t _t114 = _t78*_t95;
+    const trailer3_real_t _t115 = -_t107*_t77 + _t107*_t78 + _t108*_t46 + _t108*_t48;
+    const trailer3_real_t _t116 = _t115*_t93;
+    const trailer3_real_t _t117 = _t39*_t98;
+    const trailer3_real_t _t118 = _t41*_t98;
+    const trailer3_real_t _t119 = -_t117*_t77 + _t117*_t78 + _t118*_t46 + _t118*_t48;
+    const trailer3_real_t _t120 = _ms128*_ms78;
+    const trailer3_real_t _t121 = _ms197*_ms86;
+    const trailer3_real_t _t122 = _ms129*_ms78;
+    const trailer3_real_t _t123 = _ms198*_ms86;
+    const trailer3_real_t _t124 = -_ms166*_t93;
+    const trailer3_real_t _t125 = _ms204*_t124;
+    const trailer3_real_t _t126 = -_ms167*_t93;
+    const trailer3_real_t _t127 = _ms206*_t126;
+    const trailer3_real_t _t128 = -_t120 + _t121;
+    const trailer3_real_t _t129 = -TRAILER3_LIT(1.6666666666666667)*_t128;
+    const trailer3_real_t _t130 = -_t122 + _t123;
+    const trailer3_real_t _t131 = -TRAILER3_LIT(1.6666666666666667)*_t130;
+    const trailer3_real_t _t132 = _ms296*_t129 + _ms297*_t131;
+    const trailer3_real_t _t133 = _ms83*_t129;
+    const trailer3_real_t _t134 = _ms197*_ms88;
+    const trailer3_real_t _t135 = _ms128*_ms82 - _t134;
+    const trailer3_real_t _t136 = _ms83*_t131;
+    const trailer3_real_t _t137 = _ms198*_ms88;
+    const trailer3_real_t _t138 = _ms129*_ms82 - _t137;
+    const trailer3_real_t _t139 = _ms200*_ms89;
+    const trailer3_real_t _t140 = _ms202*_ms89;
+    const trailer3_real_t _t141 = _ms216*_t124;
+    const trailer3_real_t _t142 = _ms218*_t126;
+    const trailer3_real_t _t143 = TRAILER3_LIT(0.2)*_t129;
+    const trailer3_real_t _t144 = _ms128*_ms86;
+    const trailer3_real_t _t145 = _ms197*_ms78;
+    const trailer3_real_t _t146 = _t144 + _t145;
+    const trailer3_real_t _t147 = TRAILER3_LIT(0.2)*_t131;
+    const trailer3_real_t _t148 = _ms129*_ms86;
+    const trailer3_real_t _t149 = _ms198*_ms78;
+    const trailer3_real_t _t150 = _t148 + _t149;
+    const trailer3_real_t _t151 = -_ms75 - _t121;
+    const trailer3_real_t _t152 = -TRAILER3_LIT(1.6666666666666667)*_t151;
+    const trailer3_real_t _t153 = TRAILER3_LIT(0.2)*_t152;
+    const trailer3_real_t _t154 = _ms76 + _t145;
+    const trailer3_real_t _t155 = -_ms77 - _t123;
+    const trailer3_real_t _t156 = -TRAILER3_LIT(1.6666666666666667)*_t155;
+    const trailer3_real_t _t157 = TRAILER3_LIT(0.2)*_t156;
+    const trailer3_real_t _t158 = _ms240*_t124;
+    const trailer3_real_t _t159 = _ms242*_t126;
+    const trailer3_real_t _t160 = _t143 - _t146;
+    const trailer3_real_t _t161 = _ms54*_t160;
+    const trailer3_real_t _t162 = _t147 - _t150;
+    const trailer3_real_t _t163 = _ms54*_t162;
+    const trailer3_real_t _t164 = _ms296*_t161 + _ms297*_t163;
+    const trailer3_real_t _t165 = _ms252*_t124;
+    const trailer3_real_t _t166 = _ms254*_t126;
+    const trailer3_real_t _t167 = -_t143 - _t146;
+    const trailer3_real_t _t168 = _ms59*_t167;
+    const trailer3_real_t _t169 = -_t147 - _t150;
+    const trailer3_real_t _t170 = _ms59*_t169;
+    const trailer3_real_t _t171 = _ms296*_t168 + _ms297*_t170;
+    const trailer3_real_t _t172 = -_t133 - _t135;
+    const trailer3_real_t _t173 = -TRAILER3_LIT(1.6666666666666667)*_t172;
+    const trailer3_real_t _t174 = TRAILER3_LIT(0.2)*_t173;
+    const trailer3_real_t _t175 = _ms89*_t129;
+    const trailer3_real_t _t176 = _ms128*_ms88;
+    const trailer3_real_t _t177 = _ms197*_ms82;
+    const trailer3_real_t _t178 = _t176 + _t177;
+    const trailer3_real_t _t179 = _t175 + _t178;
+    const trailer3_real_t _t180 = -_t136 - _t138;
+    const trailer3_real_t _t181 = -TRAILER3_LIT(1.6666666666666667)*_t180;
+    const trailer3_real_t _t182 = TRAILER3_LIT(0.2)*_t181;
+    const trailer3_real_t _t183 = _ms89*_t131;
+    const trailer3_real_t _t184 = _ms129*_ms88;
+    const trailer3_real_t _t185 = _ms198*_ms82;
+    const trailer3_real_t _t186 = _t184 + _t185;
+    const trailer3_real_t _t187 = _t183 + _t186;
+    const trailer3_real_t _t188 = -_ms83*_t152 + _t139;
+    const trailer3_real_t _t189 = -TRAILER3_LIT(1.6666666666666667)*_t188;
+    const trailer3_real_t _t190 = TRAILER3_LIT(0.2)*_t189;
+    const trailer3_real_t _t191 = _ms200*_ms83;
+    const trailer3_real_t _t192 = _ms89*_t152 + _t191;
+    const trailer3_real_t _t193 = -_ms83*_t156 + _t140;
+    const trailer3_real_t _t194 = -TRAILER3_LIT(1.6666666666666667)*_t193;
+    const trailer3_real_t _t195 = TRAILER3_LIT(0.2)*_t194;
+    const trailer3_real_t _t196 = _ms202*_ms83;
+    const trailer3_real_t _t197 = _ms89*_t156 + _t196;
+    const trailer3_real_t _t198 = -_ms79 - _t134 - _t139;
+    const trailer3_real_t _t199 = -TRAILER3_LIT(1.6666666666666667)*_t198;
+    const trailer3_real_t _t200 = TRAILER3_LIT(0.2)*_t199;
+    const trailer3_real_t _t201 = _ms80 + _t177 + _t191;
+    const trailer3_real_t _t202 = -_ms81 - _t137 - _t140;
+    const trailer3_real_t _t203 = -TRAILER3_LIT(1.6666666666666667)*_t202;
+    const trailer3_real_t _t204 = TRAILER3_LIT(0.2)*_t203;
+    const trailer3_real_t _t205 = -_ms87 + _t185 + _t196;
+    const trailer3_real_t _t206 = _ms264*_t124;
+    const trailer3_real_t _t207 = _ms266*_t126;
+    const trailer3_real_t _t208 = _ms280*_t124;
+    const trailer3_real_t _t209 = _ms282*_t126;
+    const trailer3_real_t _t210 = _ms182*_ms293;
+    const trailer3_real_t _t211 = _ms183*_ms300;
+    const trailer3_real_t _t212 = _ms184*_ms303;
+    const trailer3_real_t _t213 = J_theta_cart2_left*_ms248;
+    const trailer3_real_t _t214 = J_theta_cart2_right*_ms236;
+    const trailer3_real_t _t215 = J_theta_cart3_left*_ms276;
+    const trailer3_real_t _t216 = J_theta_cart3_right*_ms260;
+    const trailer3_real_t _t217 = -_ms148*_ms291 - _ms149*_ms292 + _ms232*_t124 + _ms234*_t126;
+    const trailer3_real_t _t218 = _t14*_t217;
+    const trailer3_real_t _t219 = J_theta_cart_left*_ms232;
+    const trailer3_real_t _t220 = _ms305*_t219;
+    const trailer3_real_t _t221 = -_ms144*_ms291 - _ms145*_ms292 + _ms228*_t124 + _ms230*_t126;
+    const trailer3_real_t _t222 = _t12*_t221;
+    const trailer3_real_t _t223 = J_theta_cart_right*_ms228;
+    const trailer3_real_t _t224 = _ms304*_t223;
+    const trailer3_real_t _t225 = _ms294*_t0;
+    const trailer3_real_t _t226 = _ms294*_t1;
+    const trailer3_real_t _t227 = _ms294*_t2;
+    const trailer3_real_t _t228 = -_ms128*_ms291 - _ms129*_ms292 + _ms197*_t124 + _ms198*_t126;
+    const trailer3_real_t _t229 = _t228*_t6;
+    const trailer3_real_t _t230 = J_theta_cart*_ms293 + _ms182*_ms294 + _ms188*_ms300
+            + _ms189*_ms303 + _ms194;
+    const trailer3_real_t _t231 = _ms197*_t230;
+    const trailer3_real_t _t232 = J_theta_cart2*_ms300 + _ms183*_ms294 + _ms188*_ms293
+            + _ms190*_ms303 + _ms195;
+    const trailer3_real_t _t233 = J_theta_cart3*_ms303 + _ms184*_ms294 + _ms189*_ms293
+            + _ms190*_ms300 + _ms196;
+    const trailer3_real_t _t234 = TRAILER3_LIT(0.3)*_t84;
+    const trailer3_real_t _t235 = _t234*_t73;
+    const trailer3_real_t _t236 = _t234*_t74;
+    const trailer3_real_t _t237 = TRAILER3_LIT(0.3)*_t80;
+    const trailer3_real_t _t238 = _t237*_t77;
+    const trailer3_real_t _t239 = _t237*_t78;
+    const trailer3_real_t _t240 = TRAILER3_LIT(0.3)*_t92;
+    const trailer3_real_t _t241 = _t240*_t89;
+    const trailer3_real_t _t242 = _t240*_t90;
+    const trailer3_real_t _t243 = TRAILER3_LIT(0.6)*_ms168;
+    const trailer3_real_t _t244 = -_t243*_t34 - _t243*_t36;
+    const trailer3_real_t _t245 = _t244*_t93;
+    const trailer3_real_t _t246 = TRAILER3_LIT(0.6)*_ms169;
+    const trailer3_real_t _t247 = -_t246*_t40 - _t246*_t42;
+    const trailer3_real_t _t248 = TRAILER3_LIT(0.6)*_ms170;
+    const trailer3_real_t _t249 = -_t248*_t46 - _t248*_t48;
+    const trailer3_real_t _t250 = _ms293*_t65;
+    const trailer3_real_t _t251 = _ms300*_t63;
+    const trailer3_real_t _t252 = _ms303*_t61;
+    const trailer3_real_t _t253 = _t15*_t217;
+    const trailer3_real_t _t254 = _ms305*_t51;
+    const trailer3_real_t _t255 = _t13*_t221;
+    const trailer3_real_t _t256 = _ms304*_t50;
+    const trailer3_real_t _t257 = _ms294*_t3;
+    const trailer3_real_t _t258 = _ms294*_t4;
+    const trailer3_real_t _t259 = _ms294*_t5;
+    const trailer3_real_t _t260 = _t228*_t7;
+    const trailer3_real_t _t261 = _ms198*_t230;
+    const trailer3_real_t _t262 = _ms179*_ms197;
+    const trailer3_real_t _t263 = _ms128*_ms182;
+    const trailer3_real_t _t264 = _ms132*_ms183;
+    const trailer3_real_t _t265 = _ms136*_ms184;
+    const trailer3_real_t _t266 = _t263 + _t264 + _t265;
+    const trailer3_real_t _t267 = J_theta_cart*_ms197;
+    const trailer3_real_t _t268 = _ms188*_ms197;
+    const trailer3_real_t _t269 = _ms189*_ms197;
+    const trailer3_real_t _t270 = _ms144*_t223;
+    const trailer3_real_t _t271 = _ms148*_t219;
+    const trailer3_real_t _t272 = _ms197*_t6;
+    const trailer3_real_t _t273 = _ms228*_t12;
+    const trailer3_real_t _t274 = _ms232*_t14;
+    const trailer3_real_t _t275 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t276 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t _t277 = K_theta_tractor_x_tractor_2 + _t3 + _t4 + _t5;
+    const trailer3_real_t _t278 = TRAILER3_LIT(0.207)*_t275;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t _t279 = J_theta_right*_t278;
+    const trailer3_real_t _t280 = -TRAILER3_LIT(0.207)*_t276;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t _t281 = J_theta_left*_t280;
+    const trailer3_real_t _t282 = _ms128*_t7 + _ms132*_t9 + _ms136*_t11 + _ms144*_t13 + _ms148*_t15
+            + _ms152*_t17 + _ms156*_t19 + _ms160*_t21 + _ms164*_t23 + _t275*_t279 + _t276*_t281
+            + _t277;
+    const trailer3_real_t _t283 = TRAILER3_LIT(2.0)*_t282;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t _t284 = J_x_tractor + _t0 + _t1 + _t2;
+    const trailer3_real_t _t285 = J_theta_right*_t275;
+    const trailer3_real_t _t286 = J_theta_left*_t276;
+    const trailer3_real_t _t287 = _ms128*_t6 + _ms132*_t8 + _ms136*_t10 + _ms144*_t12 + _ms148*_t14
+            + _ms152*_t16 + _ms156*_t18 + _ms160*_t20 + _ms164*_t22 + _t275*_t285 + _t276*_t286
+            + _t284;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t _t288 = J_theta_tractor + _ms129*_ms185 + _ms133*_ms186 + _ms137*_ms187;
+    const trailer3_real_t _t289 = _ms129*_t7 + _ms133*_t9 + _ms137*_t11 + _ms145*_t13 + _ms149*_t15
+            + _ms153*_t17 + _ms157*_t19 + _ms161*_t21 + _ms165*_t23 + _t278*_t279 + _t280*_t281
+            + _t288;
+    const trailer3_real_t _t290 = -_t282*_t282 + _t287*_t289;
+    const trailer3_real_t _t291 = TRAILER3_LIT(1.0)/_t290;
+    const trailer3_real_t _t292 = _t291*_t291;
+    const trailer3_real_t _t293 = _t291;
+    const trailer3_real_t _t294 = _t282*_t293;
     const trailer3_real_t tau_right = tau[0];
     const trailer3_real_t tau_left = tau[1];
-    const trailer3_real_t _t562 = _t512*tau_right + _t513*tau_left - _t561;
-    const trailer3_real_t _t563 = _t530*_t562;
-    const trailer3_real_t _t564 = _t526*_t530;
-    const trailer3_real_t _t565 = -_t102*_t110 - _t102*_t111 - _t106*_t96 - _t107*_t96 - _t108*_t99
-            - _t109*_t99;
-    const trailer3_real_t _t566 = -K_theta_tractor_x_tractor*_t204 + _t219*_t274 + _t223*_t277
-            + _t226*_t280 + _t23*_t281 + _t234*_t466 + _t241*_t461 + _t248*_t537 + _t255*_t542
-            + _t262*_t551 + _t269*_t560 + _t284*_t33 + _t287*_t52 + _t565;
-    const trailer3_real_t _t567 = _t515*tau_right + _t517*tau_left - _t566;
-    const trailer3_real_t _t568 = _t530*_t567;
-    const trailer3_real_t _t569 = -_t519*_t567 + _t526*_t562;
-    const trailer3_real_t _t570 = _t524*_t530;
-    const trailer3_real_t _t571 = -_t519*_t562 + _t524*_t567;
-    const trailer3_real_t _t572 = -_t116 + _t117 + _t118 + _t119;
-    const trailer3_real_t _t573 = _t33*_t572;
-    const trailer3_real_t _t574 = -_t120 + _t121 + _t124 + _t125;
-    const trailer3_real_t _t575 = _t52*_t574;
-    const trailer3_real_t _t576 = _t23*_t572;
-    const trailer3_real_t _t577 = _t23*_t574;
-    const trailer3_real_t _t578 = J_theta_cart2_right*_t391;
-    const trailer3_real_t _t579 = J_theta_cart2_left*_t402;
-    const trailer3_real_t _t580 = J_theta_cart3_right*_t435;
-    const trailer3_real_t _t581 = J_theta_cart3_left*_t441;
-    const trailer3_real_t _t582 = _t10*_t100 - _t10*_t104 + _t114*_t9 + _t115*_t9;
-    const trailer3_real_t _t583 = -_t10*_t103 + _t10*_t97 + _t112*_t9 + _t113*_t9;
-    const trailer3_real_t _t584 = _t102*_t72 + _t102*_t73 + _t102*_t74 - _t102*_t76;
-    const trailer3_real_t _t585 = _t102*_t77 + _t102*_t78 + _t102*_t79 - _t102*_t81;
-    const trailer3_real_t _t586 = -TRAILER3_LIT(2.0)*_t161 + TRAILER3_LIT(2.0)*_t21;
-    const trailer3_real_t _t587 = -TRAILER3_LIT(1.6666666666666667)*_t586;
-    const trailer3_real_t _t588 = TRAILER3_LIT(0.2)*_t587;
-    const trailer3_real_t _t589 = TRAILER3_LIT(2.0)*_t129 + TRAILER3_LIT(2.0)*_t40;
-    const trailer3_real_t _t590 = -TRAILER3_LIT(2.0)*_t164 + TRAILER3_LIT(2.0)*_t24;
-    const trailer3_real_t _t591 = -TRAILER3_LIT(1.6666666666666667)*_t590;
-    const trailer3_real_t _t592 = TRAILER3_LIT(0.2)*_t591;
-    const trailer3_real_t _t593 = TRAILER3_LIT(2.0)*_t132 + TRAILER3_LIT(2.0)*_t42;
-    const trailer3_real_t _t594 = -TRAILER3_LIT(2.0)*_t174 + TRAILER3_LIT(2.0)*_t20*_t26
-            - _t28*_t587;
-    const trailer3_real_t _t595 = -TRAILER3_LIT(1.6666666666666667)*_t594;
-    const trailer3_real_t _t596 = TRAILER3_LIT(0.2)*_t595;
-    const trailer3_real_t _t597 = TRAILER3_LIT(2.0)*_t136 + TRAILER3_LIT(2.0)*_t48 - _t49*_t587;
-    const trailer3_real_t _t598 = -TRAILER3_LIT(2.0)*_t179 + TRAILER3_LIT(2.0)*_t23*_t26
-            - _t28*_t591;
-    const trailer3_real_t _t599 = -TRAILER3_LIT(1.6666666666666667)*_t598;
-    const trailer3_real_t _t600 = TRAILER3_LIT(0.2)*_t599;
-    const trailer3_real_t _t601 = TRAILER3_LIT(2.0)*_t140 - _t49*_t591 + TRAILER3_LIT(2.0)*_t54;
-    const trailer3_real_t _t602 = _t184 - _t377;
-    const trailer3_real_t _t603 = -TRAILER3_LIT(1.6666666666666667)*_t602;
-    const trailer3_real_t _t604 = TRAILER3_LIT(0.2)*_t603;
-    const trailer3_real_t _t605 = _t145 + _t412;
-    const trailer3_real_t _t606 = _t189 - _t378;
-    const trailer3_real_t _t607 = -TRAILER3_LIT(1.6666666666666667)*_t606;
-    const trailer3_real_t _t608 = TRAILER3_LIT(0.2)*_t607;
-    const trailer3_real_t _t609 = _t149 + _t417;
-    const trailer3_real_t _t610 = TRAILER3_LIT(1.6666666666666667)*_t186;
-    const trailer3_real_t _t611 = TRAILER3_LIT(0.2)*_t610;
-    const trailer3_real_t _t612 = TRAILER3_LIT(1.6666666666666667)*_t191;
-    const trailer3_real_t _t613 = TRAILER3_LIT(0.2)*_t612;
-    const trailer3_real_t _t614 = J_theta_cart2_left*_t399;
-    const trailer3_real_t _t615 = J_theta_cart2_right*_t388;
-    const trailer3_real_t _t616 = J_theta_cart3_left*_t438;
-    const trailer3_real_t _t617 = J_theta_cart3_right*_t432;
-    const trailer3_real_t _t618 = _t572*(_t20*_t277 + _t274*_t29);
-    const trailer3_real_t _t619 = _t574*(_t20*_t280 + _t274*_t45);
-    const trailer3_real_t _t620 = _t572*(_t23*_t277 + _t274*_t33);
-    const trailer3_real_t _t621 = _t574*(_t23*_t280 + _t274*_t52);
-    const trailer3_real_t _t622 = _t29*_t572;
-    const trailer3_real_t _t623 = _t45*_t574;
-    const trailer3_real_t _t624 = _t20*_t572;
-    const trailer3_real_t _t625 = _t20*_t574;
-    const trailer3_real_t _t626 = -_t122 + _t123 + _t126 + _t127;
-    const trailer3_real_t _t627 = _t52*_t626;
-    const trailer3_real_t _t628 = _t33*_t626;
-    const trailer3_real_t _t629 = J_theta_cart2_right*_t536;
-    const trailer3_real_t _t630 = J_theta_cart2_left*_t541;
-    const trailer3_real_t _t631 = J_theta_cart3_right*_t546;
-    const trailer3_real_t _t632 = J_theta_cart3_left*_t555;
-    const trailer3_real_t _t633 = _t100*_t84 - _t104*_t84 + _t114*_t82 + _t115*_t82;
-    const trailer3_real_t _t634 = _t83*_t96 + _t85*_t96 + _t86*_t96 - _t87*_t96;
-    const trailer3_real_t _t635 = TRAILER3_LIT(2.0)*_t194 + TRAILER3_LIT(2.0)*_t30;
-    const trailer3_real_t _t636 = -TRAILER3_LIT(1.6666666666666667)*_t635;
-    const trailer3_real_t _t637 = TRAILER3_LIT(0.2)*_t636;
-    const trailer3_real_t _t638 = TRAILER3_LIT(2.0)*_t153;
-    const trailer3_real_t _t639 = TRAILER3_LIT(2.0)*_t198 + TRAILER3_LIT(2.0)*_t34;
-    const trailer3_real_t _t640 = -TRAILER3_LIT(1.6666666666666667)*_t639;
-    const trailer3_real_t _t641 = TRAILER3_LIT(0.2)*_t640;
-    const trailer3_real_t _t642 = TRAILER3_LIT(2.0)*_t156;
-    const trailer3_real_t _t643 = TRAILER3_LIT(1.6666666666666667)*_t195;
-    const trailer3_real_t _t644 = TRAILER3_LIT(0.2)*_t643;
-    const trailer3_real_t _t645 = TRAILER3_LIT(1.6666666666666667)*_t199;
-    const trailer3_real_t _t646 = TRAILER3_LIT(0.2)*_t645;
-    const trailer3_real_t _t647 = J_theta_cart2_left*_t539;
-    const trailer3_real_t _t648 = J_theta_cart2_right*_t534;
-    const trailer3_real_t _t649 = J_theta_cart3_left*_t553;
-    const trailer3_real_t _t650 = J_theta_cart3_right*_t544;
-    const trailer3_real_t _t651 = _t626*(_t277*_t45 + _t280*_t29);
-    const trailer3_real_t _t652 = _t626*(_t277*_t52 + _t280*_t33);
-    const trailer3_real_t _t653 = _t45*_t626;
-    const trailer3_real_t _t654 = _t29*_t626;
-    const trailer3_real_t _t655 = J_theta_cart3_right*_t550;
-    const trailer3_real_t _t656 = J_theta_cart3_left*_t559;
-    const trailer3_real_t _t657 = J_theta_cart3_left*_t557;
-    const trailer3_real_t _t658 = J_theta_cart3_right*_t548;
-    const trailer3_real_t _t659 = TRAILER3_LIT(2.0)*_t90;
-    const trailer3_real_t _t660 = _t659*_t88;
-    const trailer3_real_t _t661 = TRAILER3_LIT(0.6)*_t90;
-    const trailer3_real_t _t662 = _t57*_t661 + _t58*_t661;
-    const trailer3_real_t _t663 = _t59*_t661 + _t60*_t661;
-    const trailer3_real_t _t664 = _t61*_t661 + _t62*_t661;
-    const trailer3_real_t _t665 = _t88*_t94;
-    const trailer3_real_t _t666 = _t20*_t92 + _t23*_t88;
-    const trailer3_real_t _t667 = _t666*_t94;
-    const trailer3_real_t _t668 = -_t101;
-    const trailer3_real_t _t669 = _t668 + _t90;
-    const trailer3_real_t _t670 = _t666*_t90;
-    const trailer3_real_t _t671 = _t659 + _t668;
-    const trailer3_real_t _t672 = -K_theta_tractor_x_tractor + _t290 + _t294;
-    const trailer3_real_t _t673 = _t659*_t89;
-    const trailer3_real_t _t674 = _t89*_t94;
-    const trailer3_real_t _t675 = _t20*_t93 + _t23*_t89;
-    const trailer3_real_t _t676 = _t675*_t94;
-    const trailer3_real_t _t677 = _t675*_t90;
-    const trailer3_real_t _t678 = _t512*_t92 + _t515*_t88;
-    const trailer3_real_t _t679 = _t513*_t92 + _t517*_t88;
-    const trailer3_real_t _t680 = _t512*_t93 + _t515*_t89;
-    const trailer3_real_t _t681 = _t513*_t93 + _t517*_t89;
-    const trailer3_real_t _t682 = _t288*_t94;
-    const trailer3_real_t _t683 = _t289*_t94;
-    const trailer3_real_t _t684 = _t288*_t92;
-    const trailer3_real_t _t685 = _t288*_t93;
-    const trailer3_real_t _t686 = _t289*_t92;
-    const trailer3_real_t _t687 = _t289*_t93;
-    const trailer3_real_t _t688 = _t137*_t94 + _t141*_t90;
-    const trailer3_real_t _t689 = _t144*_t94 + _t148*_t90;
-    const trailer3_real_t _t690 = _t152*_t94 + _t155*_t90;
-    const trailer3_real_t _t691 = _t29*_t92 + _t33*_t88;
-    const trailer3_real_t _t692 = _t29*_t93 + _t33*_t89;
-    const trailer3_real_t _t693 = _t172*_t94 + _t177*_t90;
-    const trailer3_real_t _t694 = _t182*_t94 + _t187*_t90;
-    const trailer3_real_t _t695 = _t192*_t94 + _t196*_t90;
-    const trailer3_real_t _t696 = _t200*_t94 + _t202*_t90;
-    const trailer3_real_t _t697 = _t45*_t92 + _t52*_t88;
-    const trailer3_real_t _t698 = _t45*_t93 + _t52*_t89;
-    const trailer3_real_t _t699 = _t299*_t90 + _t320*_t94;
-    const trailer3_real_t _t700 = _t230*_t92 + _t233*_t88;
-    const trailer3_real_t _t701 = _t230*_t93 + _t233*_t89;
-    const trailer3_real_t _t702 = _t302*_t90 + _t323*_t94;
-    const trailer3_real_t _t703 = _t237*_t92 + _t240*_t88;
-    const trailer3_real_t _t704 = _t237*_t93 + _t240*_t89;
-    const trailer3_real_t _t705 = _t305*_t90 + _t450*_t94;
-    const trailer3_real_t _t706 = _t388*_t94 + _t391*_t90;
-    const trailer3_real_t _t707 = _t534*_t94 + _t536*_t90;
-    const trailer3_real_t _t708 = _t244*_t92 + _t247*_t88;
-    const trailer3_real_t _t709 = _t244*_t93 + _t247*_t89;
-    const trailer3_real_t _t710 = _t308*_t90 + _t447*_t94;
-    const trailer3_real_t _t711 = _t399*_t94 + _t402*_t90;
-    const trailer3_real_t _t712 = _t539*_t94 + _t541*_t90;
-    const trailer3_real_t _t713 = _t251*_t92 + _t254*_t88;
-    const trailer3_real_t _t714 = _t251*_t93 + _t254*_t89;
-    const trailer3_real_t _t715 = _t311*_t90 + _t456*_t94;
-    const trailer3_real_t _t716 = _t432*_t94 + _t435*_t90;
-    const trailer3_real_t _t717 = _t544*_t94 + _t546*_t90;
-    const trailer3_real_t _t718 = _t548*_t94 + _t550*_t90;
-    const trailer3_real_t _t719 = _t258*_t92 + _t261*_t88;
-    const trailer3_real_t _t720 = _t258*_t93 + _t261*_t89;
-    const trailer3_real_t _t721 = _t314*_t90 + _t453*_t94;
-    const trailer3_real_t _t722 = _t438*_t94 + _t441*_t90;
-    const trailer3_real_t _t723 = _t553*_t94 + _t555*_t90;
-    const trailer3_real_t _t724 = _t557*_t94 + _t559*_t90;
-    const trailer3_real_t _t725 = _t265*_t92 + _t268*_t88;
-    const trailer3_real_t _t726 = _t265*_t93 + _t268*_t89;
-    const trailer3_real_t _t727 = _t141*_t209 + _t177*_t211 + _t291 + _t294;
-    const trailer3_real_t _t728 = _t141*_t216 + _t177*_t217 + _t295 + _t329;
-    const trailer3_real_t _t729 = J_theta_cart2*_t141 + _t177*_t221 + _t296 + _t327;
-    const trailer3_real_t _t730 = J_theta_cart3*_t177 + _t141*_t221 + _t297 + _t325;
-    const trailer3_real_t _t731 = _t137*_t224 + _t172*_t227 + _t20*_t728 + _t244*_t306 + _t248*_t450
-            + _t251*_t309 + _t255*_t447 + _t258*_t312 + _t262*_t456 + _t265*_t315 + _t269*_t453
-            + _t29*_t729 + _t316 + _t317 + _t318 + _t321 + _t324 + _t45*_t730 + _t727;
-    const trailer3_real_t _t732 = _t141*_t223 + _t177*_t226 + _t326 + _t328 + _t330;
-    const trailer3_real_t _t733 = _t141*_t224 + _t177*_t227 + _t23*_t728 + _t247*_t306 + _t248*_t305
-            + _t254*_t309 + _t255*_t308 + _t261*_t312 + _t262*_t311 + _t268*_t315 + _t269*_t314
-            + _t33*_t729 + _t331 + _t332 + _t333 + _t334 + _t335 + _t52*_t730 + _t732;
-    const trailer3_real_t _t734 = _t337*_t688 + _t339*_t693 + _t340 + _t341 + _t345;
-    const trailer3_real_t _t735 = -_t346 + _t347 + _t350*_t688 + _t353*_t693;
-    const trailer3_real_t _t736 = -_t354 + _t355 + _t360 + _t362*_t693;
-    const trailer3_real_t _t737 = -_t363 + _t364 + _t366 + _t369*_t688;
-    const trailer3_real_t _t738 = _t688*_t94;
-    const trailer3_real_t _t739 = _t688*_t90;
-    const trailer3_real_t _t740 = _t152*_t738 + _t155*_t739 - _t204*_t29 + _t275*_t383 + _t276*_t385
-            - _t33*_t91 - _t371 - _t373 + _t376;
-    const trailer3_real_t _t741 = _t693*_t94;
-    const trailer3_real_t _t742 = _t693*_t90;
-    const trailer3_real_t _t743 = _t192*_t738 + _t196*_t739 + _t200*_t741 + _t202*_t742 - _t204*_t45
-            + _t205*_t410 + _t206*_t415 + _t275*_t420 + _t276*_t424 + _t278*_t427 + _t279*_t429
-            - _t379 - _t380 - _t52*_t91;
-    const trailer3_real_t _t744 = _t130 + _t384;
-    const trailer3_real_t _t745 = _t242*_t744;
-    const trailer3_real_t _t746 = _t133 + _t386;
-    const trailer3_real_t _t747 = _t242*_t746;
-    const trailer3_real_t _t748 = -_t204*_t244 - _t247*_t91 + _t275*_t745 + _t276*_t747 - _t389
-            - _t392 + _t397 + _t534*_t738 + _t536*_t739;
-    const trailer3_real_t _t749 = _t130 - _t384;
-    const trailer3_real_t _t750 = _t249*_t749;
-    const trailer3_real_t _t751 = _t132 - _t17 - _t386;
-    const trailer3_real_t _t752 = _t249*_t751;
-    const trailer3_real_t _t753 = -_t204*_t251 - _t254*_t91 + _t275*_t750 + _t276*_t752 - _t400
-            - _t403 + _t408 + _t539*_t738 + _t541*_t739;
-    const trailer3_real_t _t754 = _t411 - _t413;
-    const trailer3_real_t _t755 = _t256*_t754;
-    const trailer3_real_t _t756 = _t416 - _t418;
-    const trailer3_real_t _t757 = _t256*_t756;
-    const trailer3_real_t _t758 = _t421 - _t422;
-    const trailer3_real_t _t759 = _t256*_t758;
-    const trailer3_real_t _t760 = _t425 - _t426;
-    const trailer3_real_t _t761 = _t256*_t760;
-    const trailer3_real_t _t762 = _t139 + _t428;
-    const trailer3_real_t _t763 = _t256*_t762;
-    const trailer3_real_t _t764 = _t143 + _t430;
-    const trailer3_real_t _t765 = _t256*_t764;
-    const trailer3_real_t _t766 = -_t204*_t258 + _t205*_t755 + _t206*_t757 - _t261*_t91
-            + _t275*_t759 + _t276*_t761 + _t278*_t763 + _t279*_t765 - _t433 - _t436 + _t544*_t738
-            + _t546*_t739 + _t548*_t741 + _t550*_t742;
-    const trailer3_real_t _t767 = -_t411 - _t413;
-    const trailer3_real_t _t768 = _t263*_t767;
-    const trailer3_real_t _t769 = -_t416 - _t418;
-    const trailer3_real_t _t770 = _t263*_t769;
-    const trailer3_real_t _t771 = -_t421 - _t422;
-    const trailer3_real_t _t772 = _t263*_t771;
-    const trailer3_real_t _t773 = -_t425 - _t426;
-    const trailer3_real_t _t774 = _t263*_t773;
-    const trailer3_real_t _t775 = _t139 - _t428;
-    const trailer3_real_t _t776 = _t263*_t775;
-    const trailer3_real_t _t777 = _t143 - _t430;
-    const trailer3_real_t _t778 = _t263*_t777;
-    const trailer3_real_t _t779 = -_t204*_t265 + _t205*_t768 + _t206*_t770 - _t268*_t91
-            + _t275*_t772 + _t276*_t774 + _t278*_t776 + _t279*_t778 - _t439 - _t442 + _t553*_t738
-            + _t555*_t739 + _t557*_t741 + _t559*_t742;
-    const trailer3_real_t _t780 = _t137*_t284 + _t172*_t287 + _t20*_t735 + _t222*_t740 + _t225*_t743
-            + _t245*_t748 + _t252*_t753 + _t259*_t766 + _t266*_t779 + _t29*_t736 + _t443 + _t444
-            + _t445 + _t448*_t542 + _t45*_t737 + _t451*_t537 + _t454*_t560 + _t457*_t551 + _t459
-            + _t462 + _t464 + _t467 - _t468 - _t469 - _t470 + _t472 + _t473 + _t734;
-    const trailer3_real_t _t781 = _t474 - _t475 + _t476 - _t477 + _t478 - _t479 + _t482
-            + _t484*_t688 + _t486*_t693;
-    const trailer3_real_t _t782 = _t141*_t284 + _t177*_t287 + _t224*_t740 + _t227*_t743 + _t23*_t735
-            + _t248*_t748 + _t255*_t753 + _t262*_t766 + _t269*_t779 + _t306*_t537 + _t309*_t542
-            + _t312*_t551 + _t315*_t560 + _t33*_t736 + _t487 + _t488 + _t489 + _t490 + _t491 + _t492
-            + _t493 - _t494 - _t495 - _t496 + _t497 + _t498 + _t52*_t737 + _t781;
-    const trailer3_real_t _t783 = _t137*_t209 + _t172*_t211 + _t499 + _t503;
-    const trailer3_real_t _t784 = _t137*_t216 + _t172*_t217 + _t270 + _t504;
-    const trailer3_real_t _t785 = J_theta_cart2*_t137 + _t172*_t221 + _t282 + _t505;
-    const trailer3_real_t _t786 = J_theta_cart3*_t172 + _t137*_t221 + _t285 + _t506;
-    const trailer3_real_t _t787 = _t137*_t222 + _t172*_t225 + _t20*_t784 + _t244*_t451 + _t245*_t450
-            + _t251*_t448 + _t252*_t447 + _t258*_t457 + _t259*_t456 + _t265*_t454 + _t266*_t453
-            + _t29*_t785 + _t45*_t786 + _t507 + _t508 + _t509 + _t510 + _t511 + _t783;
-    const trailer3_real_t _t788 = -_t520*_t731 + _t524*_t733 + _t526*_t787;
-    const trailer3_real_t _t789 = -_t529*_t788;
-    const trailer3_real_t _t790 = _t531*_t782 + _t563*_t733 - _t564*_t780 - _t568*_t731
-            + _t569*_t789;
-    const trailer3_real_t _t791 = _t531*_t780 - _t563*_t731 + _t568*_t787 - _t570*_t782
-            + _t571*_t789;
-    const trailer3_real_t _t792 = _t512*_t790 + _t515*_t791;
-    const trailer3_real_t _t793 = _t148*_t209 + _t187*_t211 - _t291;
-    const trailer3_real_t _t794 = _t148*_t216 + _t187*_t217 - _t295 - _t329 + _t573 + _t575;
-    const trailer3_real_t _t795 = J_theta_cart2*_t148 + _t187*_t221 - _t296 + _t576;
-    const trailer3_real_t _t796 = J_theta_cart3*_t187 + _t148*_t221 - _t297 + _t577;
-    const trailer3_real_t _t797 = _t144*_t224 + _t182*_t227 + _t20*_t794 + _t244*_t578 + _t248*_t388
-            + _t251*_t579 + _t255*_t399 + _t258*_t580 + _t262*_t432 + _t265*_t581 + _t269*_t438
-            + _t29*_t795 - _t316 - _t317 - _t318 - _t321 - _t324 + _t45*_t796 + _t793;
-    const trailer3_real_t _t798 = _t148*_t223 + _t187*_t226 - _t330;
-    const trailer3_real_t _t799 = _t148*_t224 + _t187*_t227 + _t23*_t794 + _t247*_t578 + _t248*_t391
-            + _t254*_t579 + _t255*_t402 + _t261*_t580 + _t262*_t435 + _t268*_t581 + _t269*_t441
-            + _t33*_t795 - _t331 - _t332 - _t333 - _t334 - _t335 + _t52*_t796 + _t798;
-    const trailer3_real_t _t800 = _t337*_t689 + _t339*_t694 - _t345;
-    const trailer3_real_t _t801 = _t346 - _t347 + _t350*_t689 + _t353*_t694 + _t582 + _t583;
-    const trailer3_real_t _t802 = -_t360 + _t362*_t694 - _t584;
-    const trailer3_real_t _t803 = -_t366 + _t369*_t689 - _t585;
-    const trailer3_real_t _t804 = _t689*_t94;
-    const trailer3_real_t _t805 = _t689*_t90;
-    const trailer3_real_t _t806 = _t152*_t804 + _t155*_t805 + _t204*_t374 + _t205*_t587
-            + _t206*_t591 + _t275*_t374 + _t276*_t375 + _t371 + _t373 + _t375*_t91;
-    const trailer3_real_t _t807 = _t694*_t94;
-    const trailer3_real_t _t808 = _t694*_t90;
-    const trailer3_real_t _t809 = _t192*_t804 + _t196*_t805 + _t200*_t807 + _t202*_t808
-            + _t204*_t410 + _t205*_t595 + _t206*_t599 + _t275*_t603 + _t276*_t607 + _t278*_t610
-            + _t279*_t612 + _t379 + _t380 + _t415*_t91;
-    const trailer3_real_t _t810 = _t588 + _t589;
-    const trailer3_real_t _t811 = _t242*_t810;
-    const trailer3_real_t _t812 = _t592 + _t593;
-    const trailer3_real_t _t813 = _t242*_t812;
-    const trailer3_real_t _t814 = _t204*_t394 + _t205*_t811 + _t206*_t813 + _t275*_t394
-            + _t276*_t396 + _t389 + _t392 + _t396*_t91 + _t534*_t804 + _t536*_t805;
-    const trailer3_real_t _t815 = -_t588 + _t589;
-    const trailer3_real_t _t816 = _t249*_t815;
-    const trailer3_real_t _t817 = -_t592 + _t593;
-    const trailer3_real_t _t818 = _t249*_t817;
-    const trailer3_real_t _t819 = _t204*_t405 + _t205*_t816 + _t206*_t818 + _t275*_t405
-            + _t276*_t407 + _t400 + _t403 + _t407*_t91 + _t539*_t804 + _t541*_t805;
-    const trailer3_real_t _t820 = _t596 + _t597;
-    const trailer3_real_t _t821 = _t256*_t820;
-    const trailer3_real_t _t822 = _t600 + _t601;
-    const trailer3_real_t _t823 = _t256*_t822;
-    const trailer3_real_t _t824 = _t604 - _t605;
-    const trailer3_real_t _t825 = _t256*_t824;
-    const trailer3_real_t _t826 = _t608 - _t609;
-    const trailer3_real_t _t827 = _t256*_t826;
-    const trailer3_real_t _t828 = -_t147 + _t611;
-    const trailer3_real_t _t829 = _t256*_t828;
-    const trailer3_real_t _t830 = -_t151 + _t613;
-    const trailer3_real_t _t831 = _t256*_t830;
-    const trailer3_real_t _t832 = _t204*_t755 + _t205*_t821 + _t206*_t823 + _t275*_t825
-            + _t276*_t827 + _t278*_t829 + _t279*_t831 + _t433 + _t436 + _t544*_t804 + _t546*_t805
-            + _t548*_t807 + _t550*_t808 + _t757*_t91;
-    const trailer3_real_t _t833 = -_t596 + _t597;
-    const trailer3_real_t _t834 = _t263*_t833;
-    const trailer3_real_t _t835 = -_t600 + _t601;
-    const trailer3_real_t _t836 = _t263*_t835;
-    const trailer3_real_t _t837 = -_t604 - _t605;
-    const trailer3_real_t _t838 = _t263*_t837;
-    const trailer3_real_t _t839 = -_t608 - _t609;
-    const trailer3_real_t _t840 = _t263*_t839;
-    const trailer3_real_t _t841 = -_t147 - _t611;
-    const trailer3_real_t _t842 = _t263*_t841;
-    const trailer3_real_t _t843 = -_t151 - _t613;
-    const trailer3_real_t _t844 = _t263*_t843;
-    const trailer3_real_t _t845 = _t204*_t768 + _t205*_t834 + _t206*_t836 + _t275*_t838
-            + _t276*_t840 + _t278*_t842 + _t279*_t844 + _t439 + _t442 + _t553*_t804 + _t555*_t805
-            + _t557*_t807 + _t559*_t808 + _t770*_t91;
-    const trailer3_real_t _t846 = _t144*_t284 + _t182*_t287 + _t20*_t801 + _t222*_t806 + _t225*_t809
-            + _t245*_t814 + _t252*_t819 + _t259*_t832 + _t266*_t845 + _t29*_t802 - _t443
-            + _t45*_t803 - _t459 - _t462 - _t464 - _t467 + _t468 - _t472 - _t473 + _t537*_t615
-            + _t542*_t614 + _t551*_t617 + _t560*_t616 + _t618 + _t619 + _t800;
-    const trailer3_real_t _t847 = -_t478 + _t479 - _t482 + _t484*_t689 + _t486*_t694;
-    const trailer3_real_t _t848 = _t148*_t284 + _t187*_t287 + _t224*_t806 + _t227*_t809 + _t23*_t801
-            + _t248*_t814 + _t255*_t819 + _t262*_t832 + _t269*_t845 + _t33*_t802 - _t487 - _t490
-            - _t491 - _t492 - _t493 + _t494 - _t497 - _t498 + _t52*_t803 + _t537*_t578 + _t542*_t579
-            + _t551*_t580 + _t560*_t581 + _t620 + _t621 + _t847;
-    const trailer3_real_t _t849 = _t144*_t209 + _t182*_t211 - _t499 - _t500;
-    const trailer3_real_t _t850 = _t144*_t216 + _t182*_t217 - _t270 - _t504 + _t622 + _t623;
-    const trailer3_real_t _t851 = J_theta_cart2*_t144 + _t182*_t221 - _t505 + _t624;
-    const trailer3_real_t _t852 = J_theta_cart3*_t182 + _t144*_t221 - _t506 + _t625;
-    const trailer3_real_t _t853 = _t144*_t222 + _t182*_t225 + _t20*_t850 + _t244*_t615 + _t245*_t388
-            + _t251*_t614 + _t252*_t399 + _t258*_t617 + _t259*_t432 + _t265*_t616 + _t266*_t438
-            + _t29*_t851 + _t45*_t852 - _t507 - _t508 - _t509 - _t510 - _t511 + _t849;
-    const trailer3_real_t _t854 = -_t520*_t797 + _t524*_t799 + _t526*_t853;
-    const trailer3_real_t _t855 = -_t529*_t854;
-    const trailer3_real_t _t856 = _t531*_t848 + _t563*_t799 - _t564*_t846 - _t568*_t797
-            + _t569*_t855;
-    const trailer3_real_t _t857 = _t531*_t846 - _t563*_t797 + _t568*_t853 - _t570*_t848
-            + _t571*_t855;
-    const trailer3_real_t _t858 = _t512*_t856 + _t515*_t857;
-    const trailer3_real_t _t859 = _t155*_t209 + _t196*_t211 - _t293;
-    const trailer3_real_t _t860 = _t155*_t216 + _t196*_t217 - _t573;
-    const trailer3_real_t _t861 = J_theta_cart2*_t155 + _t196*_t221 - _t327 - _t576 + _t627;
-    const trailer3_real_t _t862 = J_theta_cart3*_t196 + _t155*_t221 + _t628;
-    const trailer3_real_t _t863 = _t152*_t224 + _t192*_t227 + _t20*_t860 + _t244*_t629 + _t248*_t534
-            + _t251*_t630 + _t255*_t539 + _t258*_t631 + _t262*_t544 + _t265*_t632 + _t269*_t553
-            + _t29*_t861 + _t45*_t862 + _t859;
-    const trailer3_real_t _t864 = _t155*_t223 + _t196*_t226 - _t328;
-    const trailer3_real_t _t865 = _t155*_t224 + _t196*_t227 + _t23*_t860 + _t247*_t629 + _t248*_t536
-            + _t254*_t630 + _t255*_t541 + _t261*_t631 + _t262*_t546 + _t268*_t632 + _t269*_t555
-            + _t33*_t861 + _t52*_t862 + _t864;
-    const trailer3_real_t _t866 = _t337*_t690 + _t339*_t695 - _t341;
-    const trailer3_real_t _t867 = _t350*_t690 + _t353*_t695 - _t583;
-    const trailer3_real_t _t868 = _t354 - _t355 + _t362*_t695 + _t584 + _t633;
-    const trailer3_real_t _t869 = _t369*_t690 - _t634;
-    const trailer3_real_t _t870 = _t690*_t94;
-    const trailer3_real_t _t871 = _t690*_t90;
-    const trailer3_real_t _t872 = _t152*_t870 + _t155*_t871 + _t204*_t383 - _t275*_t29 - _t276*_t33
-            + _t376 + _t385*_t91;
-    const trailer3_real_t _t873 = _t695*_t94;
-    const trailer3_real_t _t874 = _t695*_t90;
-    const trailer3_real_t _t875 = _t192*_t870 + _t196*_t871 + _t200*_t873 + _t202*_t874
-            + _t204*_t420 + _t205*_t603 + _t206*_t607 + _t275*_t636 + _t276*_t640 + _t278*_t643
-            + _t279*_t645 + _t424*_t91;
-    const trailer3_real_t _t876 = _t204*_t745 - _t244*_t275 - _t247*_t276 + _t397 + _t534*_t870
-            + _t536*_t871 + _t747*_t91;
-    const trailer3_real_t _t877 = _t204*_t750 - _t251*_t275 - _t254*_t276 + _t408 + _t539*_t870
-            + _t541*_t871 + _t752*_t91;
-    const trailer3_real_t _t878 = TRAILER3_LIT(2.0)*_t50 + _t637 - _t638;
-    const trailer3_real_t _t879 = _t256*_t878;
-    const trailer3_real_t _t880 = TRAILER3_LIT(2.0)*_t55 + _t641 - _t642;
-    const trailer3_real_t _t881 = _t256*_t880;
-    const trailer3_real_t _t882 = _t153 - _t50 + _t644;
-    const trailer3_real_t _t883 = _t256*_t882;
-    const trailer3_real_t _t884 = _t156 - _t55 + _t646;
-    const trailer3_real_t _t885 = _t256*_t884;
-    const trailer3_real_t _t886 = _t204*_t759 + _t205*_t825 + _t206*_t827 + _t275*_t879
-            + _t276*_t881 + _t278*_t883 + _t279*_t885 + _t544*_t870 + _t546*_t871 + _t548*_t873
-            + _t550*_t874 + _t761*_t91;
-    const trailer3_real_t _t887 = TRAILER3_LIT(2.0)*_t29*_t49 - _t637 - _t638;
-    const trailer3_real_t _t888 = _t263*_t887;
-    const trailer3_real_t _t889 = TRAILER3_LIT(2.0)*_t33*_t49 - _t641 - _t642;
-    const trailer3_real_t _t890 = _t263*_t889;
-    const trailer3_real_t _t891 = -_t154 - _t644;
-    const trailer3_real_t _t892 = _t263*_t891;
-    const trailer3_real_t _t893 = -_t157 - _t646;
-    const trailer3_real_t _t894 = _t263*_t893;
-    const trailer3_real_t _t895 = _t204*_t772 + _t205*_t838 + _t206*_t840 + _t275*_t888
-            + _t276*_t890 + _t278*_t892 + _t279*_t894 + _t553*_t870 + _t555*_t871 + _t557*_t873
-            + _t559*_t874 + _t774*_t91;
-    const trailer3_real_t _t896 = _t152*_t284 + _t192*_t287 + _t20*_t867 + _t222*_t872 + _t225*_t875
-            + _t245*_t876 + _t252*_t877 + _t259*_t886 + _t266*_t895 + _t29*_t868 - _t444
-            + _t45*_t869 + _t469 + _t537*_t648 + _t542*_t647 + _t551*_t650 + _t560*_t649 - _t618
-            + _t651 + _t866;
-    const trailer3_real_t _t897 = -_t474 + _t475 + _t484*_t690 + _t486*_t695;
-    const trailer3_real_t _t898 = _t155*_t284 + _t196*_t287 + _t224*_t872 + _t227*_t875 + _t23*_t867
-            + _t248*_t876 + _t255*_t877 + _t262*_t886 + _t269*_t895 + _t33*_t868 - _t488 + _t495
-            + _t52*_t869 + _t537*_t629 + _t542*_t630 + _t551*_t631 + _t560*_t632 - _t620 + _t652
-            + _t897;
-    const trailer3_real_t _t899 = _t152*_t209 + _t192*_t211 - _t501;
-    const trailer3_real_t _t900 = _t152*_t216 + _t192*_t217 - _t622;
-    const trailer3_real_t _t901 = J_theta_cart2*_t152 + _t192*_t221 - _t282 - _t624 + _t653;
-    const trailer3_real_t _t902 = J_theta_cart3*_t192 + _t152*_t221 + _t654;
-    const trailer3_real_t _t903 = _t152*_t222 + _t192*_t225 + _t20*_t900 + _t244*_t648 + _t245*_t534
-            + _t251*_t647 + _t252*_t539 + _t258*_t650 + _t259*_t544 + _t265*_t649 + _t266*_t553
-            + _t29*_t901 + _t45*_t902 + _t899;
-    const trailer3_real_t _t904 = -_t520*_t863 + _t524*_t865 + _t526*_t903;
-    const trailer3_real_t _t905 = -_t529*_t904;
-    const trailer3_real_t _t906 = _t531*_t898 + _t563*_t865 - _t564*_t896 - _t568*_t863
-            + _t569*_t905;
-    const trailer3_real_t _t907 = _t531*_t896 - _t563*_t863 + _t568*_t903 - _t570*_t898
-            + _t571*_t905;
-    const trailer3_real_t _t908 = _t512*_t906 + _t515*_t907;
-    const trailer3_real_t _t909 = _t202*_t211 - _t292;
-    const trailer3_real_t _t910 = _t202*_t217 - _t575;
-    const trailer3_real_t _t911 = _t202*_t221 - _t627;
-    const trailer3_real_t _t912 = J_theta_cart3*_t202 - _t325 - _t577 - _t628;
-    const trailer3_real_t _t913 = _t20*_t910 + _t200*_t227 + _t258*_t655 + _t262*_t548 + _t265*_t656
-            + _t269*_t557 + _t29*_t911 + _t45*_t912 + _t909;
-    const trailer3_real_t _t914 = _t202*_t226 - _t326;
-    const trailer3_real_t _t915 = _t202*_t227 + _t23*_t910 + _t261*_t655 + _t262*_t550 + _t268*_t656
-            + _t269*_t559 + _t33*_t911 + _t52*_t912 + _t914;
-    const trailer3_real_t _t916 = _t339*_t696 - _t340;
-    const trailer3_real_t _t917 = _t353*_t696 - _t582;
-    const trailer3_real_t _t918 = _t362*_t696 - _t633;
-    const trailer3_real_t _t919 = _t363 - _t364 + _t585 + _t634;
-    const trailer3_real_t _t920 = _t696*_t94;
-    const trailer3_real_t _t921 = _t696*_t90;
-    const trailer3_real_t _t922 = _t200*_t920 + _t202*_t921 + _t204*_t427 + _t205*_t610
-            + _t206*_t612 + _t275*_t643 + _t276*_t645 - _t278*_t45 - _t279*_t52 + _t429*_t91;
-    const trailer3_real_t _t923 = _t204*_t763 + _t205*_t829 + _t206*_t831 - _t258*_t278
-            - _t261*_t279 + _t275*_t883 + _t276*_t885 + _t548*_t920 + _t550*_t921 + _t765*_t91;
-    const trailer3_real_t _t924 = _t204*_t776 + _t205*_t842 + _t206*_t844 - _t265*_t278
-            - _t268*_t279 + _t275*_t892 + _t276*_t894 + _t557*_t920 + _t559*_t921 + _t778*_t91;
-    const trailer3_real_t _t925 = _t20*_t917 + _t200*_t287 + _t225*_t922 + _t259*_t923 + _t266*_t924
-            + _t29*_t918 - _t445 + _t45*_t919 + _t470 + _t551*_t658 + _t560*_t657 - _t619 - _t651
-            + _t916;
-    const trailer3_real_t _t926 = -_t476 + _t477 + _t486*_t696;
-    const trailer3_real_t _t927 = _t202*_t287 + _t227*_t922 + _t23*_t917 + _t262*_t923 + _t269*_t924
-            + _t33*_t918 - _t489 + _t496 + _t52*_t919 + _t551*_t655 + _t560*_t656 - _t621 - _t652
-            + _t926;
-    const trailer3_real_t _t928 = _t200*_t211 - _t502;
-    const trailer3_real_t _t929 = _t200*_t217 - _t623;
-    const trailer3_real_t _t930 = _t200*_t221 - _t653;
-    const trailer3_real_t _t931 = J_theta_cart3*_t200 - _t285 - _t625 - _t654;
-    const trailer3_real_t _t932 = _t20*_t929 + _t200*_t225 + _t258*_t658 + _t259*_t548 + _t265*_t657
-            + _t266*_t557 + _t29*_t930 + _t45*_t931 + _t928;
-    const trailer3_real_t _t933 = -_t520*_t913 + _t524*_t915 + _t526*_t932;
-    const trailer3_real_t _t934 = -_t529*_t933;
-    const trailer3_real_t _t935 = _t531*_t927 + _t563*_t915 - _t564*_t925 - _t568*_t913
-            + _t569*_t934;
-    const trailer3_real_t _t936 = _t531*_t925 - _t563*_t913 + _t568*_t932 - _t570*_t927
-            + _t571*_t934;
-    const trailer3_real_t _t937 = _t512*_t935 + _t515*_t936;
-    const trailer3_real_t _t938 = K_theta_tractor_x_tractor*_t660 + _t337*_t691 + _t339*_t697
-            + _t343*_t666;
-    const trailer3_real_t _t939 = _t350*_t691 + _t353*_t697 + _t662*_t88;
-    const trailer3_real_t _t940 = _t359*_t666 + _t362*_t697 + _t663*_t88;
-    const trailer3_real_t _t941 = _t365*_t666 + _t369*_t691 + _t664*_t88;
-    const trailer3_real_t _t942 = _t665 - _t667 + _t669*_t92;
-    const trailer3_real_t _t943 = -_t670 + _t671*_t88;
-    const trailer3_real_t _t944 = _t128*_t942 + _t131*_t943;
-    const trailer3_real_t _t945 = _t665 + _t90*_t92;
-    const trailer3_real_t _t946 = _t101*_t92 + _t667;
-    const trailer3_real_t _t947 = _t101*_t88 + _t670;
-    const trailer3_real_t _t948 = _t691*_t94 + _t92*_t95;
-    const trailer3_real_t _t949 = _t691*_t90 + _t88*_t95;
-    const trailer3_real_t _t950 = _t137*_t945 + _t141*_t660 + _t144*_t946 + _t148*_t947
-            + _t152*_t948 + _t155*_t949;
-    const trailer3_real_t _t951 = _t697*_t94 + _t92*_t98;
-    const trailer3_real_t _t952 = _t697*_t90 + _t88*_t98;
-    const trailer3_real_t _t953 = _t172*_t945 + _t177*_t660 + _t182*_t946 + _t187*_t947
-            + _t192*_t948 + _t196*_t949 + _t200*_t951 + _t202*_t952;
-    const trailer3_real_t _t954 = _t299*_t943 + _t320*_t942;
-    const trailer3_real_t _t955 = _t302*_t943 + _t323*_t942;
-    const trailer3_real_t _t956 = _t305*_t660 + _t388*_t946 + _t391*_t947 + _t450*_t945
-            + _t534*_t948 + _t536*_t949;
-    const trailer3_real_t _t957 = _t308*_t660 + _t399*_t946 + _t402*_t947 + _t447*_t945
-            + _t539*_t948 + _t541*_t949;
-    const trailer3_real_t _t958 = _t311*_t660 + _t432*_t946 + _t435*_t947 + _t456*_t945
-            + _t544*_t948 + _t546*_t949 + _t548*_t951 + _t550*_t952;
-    const trailer3_real_t _t959 = _t314*_t660 + _t438*_t946 + _t441*_t947 + _t453*_t945
-            + _t553*_t948 + _t555*_t949 + _t557*_t951 + _t559*_t952;
-    const trailer3_real_t _t960 = _t20*_t939 + _t218*_t944 + _t222*_t950 + _t225*_t953 + _t231*_t954
-            + _t238*_t955 + _t245*_t956 + _t252*_t957 + _t259*_t958 + _t266*_t959 + _t29*_t940
-            + _t45*_t941 + _t503*_t945 + _t938;
-    const trailer3_real_t _t961 = _t481*_t666 + _t484*_t691 + _t486*_t697;
-    const trailer3_real_t _t962 = _t220*_t944 + _t224*_t950 + _t227*_t953 + _t23*_t939 + _t234*_t954
-            + _t241*_t955 + _t248*_t956 + _t255*_t957 + _t262*_t958 + _t269*_t959 + _t33*_t940
-            + _t52*_t941 + _t672*_t945 + _t961;
-    const trailer3_real_t _t963 = _t531*_t962 - _t564*_t960;
-    const trailer3_real_t _t964 = _t519*_t530*_t960 - _t570*_t962;
-    const trailer3_real_t _t965 = _t512*_t963 + _t515*_t964;
-    const trailer3_real_t _t966 = K_theta_tractor_x_tractor*_t673 + _t337*_t692 + _t339*_t698
-            + _t343*_t675;
-    const trailer3_real_t _t967 = _t350*_t692 + _t353*_t698 + _t662*_t89;
-    const trailer3_real_t _t968 = _t359*_t675 + _t362*_t698 + _t663*_t89;
-    const trailer3_real_t _t969 = _t365*_t675 + _t369*_t692 + _t664*_t89;
-    const trailer3_real_t _t970 = _t669*_t93 + _t674 - _t676;
-    const trailer3_real_t _t971 = _t671*_t89 - _t677;
-    const trailer3_real_t _t972 = _t128*_t970 + _t131*_t971;
-    const trailer3_real_t _t973 = _t674 + _t90*_t93;
-    const trailer3_real_t _t974 = _t101*_t93 + _t676;
-    const trailer3_real_t _t975 = _t101*_t89 + _t677;
-    const trailer3_real_t _t976 = _t692*_t94 + _t93*_t95;
-    const trailer3_real_t _t977 = _t692*_t90 + _t89*_t95;
-    const trailer3_real_t _t978 = _t137*_t973 + _t141*_t673 + _t144*_t974 + _t148*_t975
-            + _t152*_t976 + _t155*_t977;
-    const trailer3_real_t _t979 = _t698*_t94 + _t93*_t98;
-    const trailer3_real_t _t980 = _t698*_t90 + _t89*_t98;
-    const trailer3_real_t _t981 = _t172*_t973 + _t177*_t673 + _t182*_t974 + _t187*_t975
-            + _t192*_t976 + _t196*_t977 + _t200*_t979 + _t202*_t980;
-    const trailer3_real_t _t982 = _t299*_t971 + _t320*_t970;
-    const trailer3_real_t _t983 = _t302*_t971 + _t323*_t970;
-    const trailer3_real_t _t984 = _t305*_t673 + _t388*_t974 + _t391*_t975 + _t450*_t973
-            + _t534*_t976 + _t536*_t977;
-    const trailer3_real_t _t985 = _t308*_t673 + _t399*_t974 + _t402*_t975 + _t447*_t973
-            + _t539*_t976 + _t541*_t977;
-    const trailer3_real_t _t986 = _t311*_t673 + _t432*_t974 + _t435*_t975 + _t456*_t973
-            + _t544*_t976 + _t546*_t977 + _t548*_t979 + _t550*_t980;
-    const trailer3_real_t _t987 = _t314*_t673 + _t438*_t974 + _t441*_t975 + _t453*_t973
-            + _t553*_t976 + _t555*_t977 + _t557*_t979 + _t559*_t980;
-    const trailer3_real_t _t988 = _t20*_t967 + _t218*_t972 + _t222*_t978 + _t225*_t981 + _t231*_t982
-            + _t238*_t983 + _t245*_t984 + _t252*_t985 + _t259*_t986 + _t266*_t987 + _t29*_t968
-            + _t45*_t969 + _t503*_t973 + _t966;
-    const trailer3_real_t _t989 = _t481*_t675 + _t484*_t692 + _t486*_t698;
-    const trailer3_real_t _t990 = _t220*_t972 + _t224*_t978 + _t227*_t981 + _t23*_t967 + _t234*_t982
-            + _t241*_t983 + _t248*_t984 + _t255*_t985 + _t262*_t986 + _t269*_t987 + _t33*_t968
-            + _t52*_t969 + _t672*_t973 + _t989;
-    const trailer3_real_t _t991 = _t531*_t990 - _t564*_t988;
-    const trailer3_real_t _t992 = _t519*_t530*_t988 - _t570*_t990;
-    const trailer3_real_t _t993 = _t512*_t991 + _t515*_t992;
-    const trailer3_real_t _t994 = _t513*_t790 + _t517*_t791;
-    const trailer3_real_t _t995 = _t513*_t856 + _t517*_t857;
-    const trailer3_real_t _t996 = _t513*_t906 + _t517*_t907;
-    const trailer3_real_t _t997 = _t513*_t935 + _t517*_t936;
-    const trailer3_real_t _t998 = _t513*_t963 + _t517*_t964;
-    const trailer3_real_t _t999 = _t513*_t991 + _t517*_t992;
-    const trailer3_real_t _t1000 = _t512*_t564 - _t515*_t531;
-    const trailer3_real_t _t1001 = -_t512*_t531 + _t515*_t524*_t530;
-    const trailer3_real_t _t1002 = _t1000*_t512 + _t1001*_t515;
-    const trailer3_real_t _t1003 = _t513*_t564 - _t517*_t531;
-    const trailer3_real_t _t1004 = -_t513*_t531 + _t517*_t524*_t530;
-    const trailer3_real_t _t1005 = _t1003*_t512 + _t1004*_t515;
-    const trailer3_real_t _t1006 = _t1000*_t513 + _t1001*_t517;
-    const trailer3_real_t _t1007 = _t1003*_t513 + _t1004*_t517;
+    const trailer3_real_t _t295 = -_ms341 + _t275*tau_right + _t276*tau_left;
+    const trailer3_real_t _t296 = _t293*_t295;
+    const trailer3_real_t _t297 = _t289*_t293;
+    const trailer3_real_t _t298 = -_ms342 + _t278*tau_right + _t280*tau_left;
+    const trailer3_real_t _t299 = _t293*_t298;
+    const trailer3_real_t _t300 = -_t282*_t298 + _t289*_t295;
+    const trailer3_real_t _t301 = _t287*_t293;
+    const trailer3_real_t _t302 = -_t282*_t295 + _t287*_t298;
+    const trailer3_real_t _t303 = TRAILER3_LIT(0.85)*_t33;
+    const trailer3_real_t _t304 = TRAILER3_LIT(0.85)*_t35;
+    const trailer3_real_t _t305 = -_t303*_t73 + _t303*_t74 + _t304*_t40 + _t304*_t42;
+    const trailer3_real_t _t306 = _ms133*_t305;
+    const trailer3_real_t _t307 = -_t303*_t77 + _t303*_t78 + _t304*_t46 + _t304*_t48;
+    const trailer3_real_t _t308 = _ms137*_t307;
+    const trailer3_real_t _t309 = _ms129*_t305;
+    const trailer3_real_t _t310 = _ms129*_t307;
+    const trailer3_real_t _t311 = J_theta_cart2_right*_ms242;
+    const trailer3_real_t _t312 = J_theta_cart2_left*_ms254;
+    const trailer3_real_t _t313 = J_theta_cart3_right*_ms266;
+    const trailer3_real_t _t314 = J_theta_cart3_left*_ms282;
+    const trailer3_real_t _t315 = _t304*_t80;
+    const trailer3_real_t _t316 = _t303*_t81 + _t303*_t82 + _t315*_t77 - _t315*_t78;
+    const trailer3_real_t _t317 = _t304*_t84;
+    const trailer3_real_t _t318 = _t303*_t85 + _t303*_t86 + _t317*_t73 - _t317*_t74;
+    const trailer3_real_t _t319 = _t304*_t92;
+    const trailer3_real_t _t320 = _t303*_t92;
+    const trailer3_real_t _t321 = _t319*_t73 - _t319*_t74 + _t320*_t40 + _t320*_t42;
+    const trailer3_real_t _t322 = _t319*_t77 - _t319*_t78 + _t320*_t46 + _t320*_t48;
+    const trailer3_real_t _t323 = _ms204*_ms89;
+    const trailer3_real_t _t324 = _ms206*_ms89;
+    const trailer3_real_t _t325 = TRAILER3_LIT(2.0)*_t120 - TRAILER3_LIT(2.0)*_t121;
+    const trailer3_real_t _t326 = -TRAILER3_LIT(1.6666666666666667)*_t325;
+    const trailer3_real_t _t327 = TRAILER3_LIT(0.2)*_t326;
+    const trailer3_real_t _t328 = TRAILER3_LIT(2.0)*_t144 + TRAILER3_LIT(2.0)*_t145;
+    const trailer3_real_t _t329 = TRAILER3_LIT(2.0)*_t122 - TRAILER3_LIT(2.0)*_t123;
+    const trailer3_real_t _t330 = -TRAILER3_LIT(1.6666666666666667)*_t329;
+    const trailer3_real_t _t331 = TRAILER3_LIT(0.2)*_t330;
+    const trailer3_real_t _t332 = TRAILER3_LIT(2.0)*_t148 + TRAILER3_LIT(2.0)*_t149;
+    const trailer3_real_t _t333 = TRAILER3_LIT(2.0)*_ms128*_ms82 - _ms83*_t326
+            - TRAILER3_LIT(2.0)*_t134;
+    const trailer3_real_t _t334 = -TRAILER3_LIT(1.6666666666666667)*_t333;
+    const trailer3_real_t _t335 = TRAILER3_LIT(0.2)*_t334;
+    const trailer3_real_t _t336 = -_ms89*_t326 + TRAILER3_LIT(2.0)*_t176 + TRAILER3_LIT(2.0)*_t177;
+    const trailer3_real_t _t337 = TRAILER3_LIT(2.0)*_ms129*_ms82 - _ms83*_t330
+            - TRAILER3_LIT(2.0)*_t137;
+    const trailer3_real_t _t338 = -TRAILER3_LIT(1.6666666666666667)*_t337;
+    const trailer3_real_t _t339 = TRAILER3_LIT(0.2)*_t338;
+    const trailer3_real_t _t340 = -_ms89*_t330 + TRAILER3_LIT(2.0)*_t184 + TRAILER3_LIT(2.0)*_t185;
+    const trailer3_real_t _t341 = -_t133 + _t323;
+    const trailer3_real_t _t342 = -TRAILER3_LIT(1.6666666666666667)*_t341;
+    const trailer3_real_t _t343 = TRAILER3_LIT(0.2)*_t342;
+    const trailer3_real_t _t344 = _ms204*_ms83;
+    const trailer3_real_t _t345 = _t175 + _t344;
+    const trailer3_real_t _t346 = -_t136 + _t324;
+    const trailer3_real_t _t347 = -TRAILER3_LIT(1.6666666666666667)*_t346;
+    const trailer3_real_t _t348 = TRAILER3_LIT(0.2)*_t347;
+    const trailer3_real_t _t349 = _ms206*_ms83;
+    const trailer3_real_t _t350 = _t183 + _t349;
+    const trailer3_real_t _t351 = -_t135 - _t323;
+    const trailer3_real_t _t352 = -TRAILER3_LIT(1.6666666666666667)*_t351;
+    const trailer3_real_t _t353 = TRAILER3_LIT(0.2)*_t352;
+    const trailer3_real_t _t354 = _t178 - _t344;
+    const trailer3_real_t _t355 = -_t138 - _t324;
+    const trailer3_real_t _t356 = -TRAILER3_LIT(1.6666666666666667)*_t355;
+    const trailer3_real_t _t357 = TRAILER3_LIT(0.2)*_t356;
+    const trailer3_real_t _t358 = _t186 - _t349;
+    const trailer3_real_t _t359 = J_theta_cart2_left*_ms252;
+    const trailer3_real_t _t360 = J_theta_cart2_right*_ms240;
+    const trailer3_real_t _t361 = J_theta_cart3_left*_ms280;
+    const trailer3_real_t _t362 = J_theta_cart3_right*_ms264;
+    const trailer3_real_t _t363 = _t305*(_ms128*_ms300 + _ms132*_ms293);
+    const trailer3_real_t _t364 = _t307*(_ms128*_ms303 + _ms136*_ms293);
+    const trailer3_real_t _t365 = _t305*(_ms129*_ms300 + _ms133*_ms293);
+    const trailer3_real_t _t366 = _t307*(_ms129*_ms303 + _ms137*_ms293);
+    const trailer3_real_t _t367 = _ms132*_t305;
+    const trailer3_real_t _t368 = _ms136*_t307;
+    const trailer3_real_t _t369 = _ms128*_t305;
+    const trailer3_real_t _t370 = _ms128*_t307;
+    const trailer3_real_t _t371 = TRAILER3_LIT(0.85)*_t39;
+    const trailer3_real_t _t372 = TRAILER3_LIT(0.85)*_t41;
+    const trailer3_real_t _t373 = -_t371*_t77 + _t371*_t78 + _t372*_t46 + _t372*_t48;
+    const trailer3_real_t _t374 = _ms137*_t373;
+    const trailer3_real_t _t375 = _ms133*_t373;
+    const trailer3_real_t _t376 = J_theta_cart2_right*_ms246;
+    const trailer3_real_t _t377 = J_theta_cart2_left*_ms258;
+    const trailer3_real_t _t378 = J_theta_cart3_right*_ms270;
+    const trailer3_real_t _t379 = J_theta_cart3_left*_ms286;
+    const trailer3_real_t _t380 = _t372*_t80;
+    const trailer3_real_t _t381 = _t371*_t81 + _t371*_t82 + _t380*_t77 - _t380*_t78;
+    const trailer3_real_t _t382 = _t372*_t84;
+    const trailer3_real_t _t383 = _t371*_t84;
+    const trailer3_real_t _t384 = _t382*_t77 - _t382*_t78 + _t383*_t46 + _t383*_t48;
+    const trailer3_real_t _t385 = _ms132*_ms83;
+    const trailer3_real_t _t386 = _ms208*_ms89;
+    const trailer3_real_t _t387 = _ms133*_ms83;
+    const trailer3_real_t _t388 = _ms210*_ms89;
+    const trailer3_real_t _t389 = TRAILER3_LIT(2.0)*_t385 + TRAILER3_LIT(2.0)*_t386;
+    const trailer3_real_t _t390 = -TRAILER3_LIT(1.6666666666666667)*_t389;
+    const trailer3_real_t _t391 = TRAILER3_LIT(0.2)*_t390;
+    const trailer3_real_t _t392 = _ms132*_ms89;
+    const trailer3_real_t _t393 = _ms208*_ms83;
+    const trailer3_real_t _t394 = TRAILER3_LIT(2.0)*_t393;
+    const trailer3_real_t _t395 = TRAILER3_LIT(2.0)*_t387 + TRAILER3_LIT(2.0)*_t388;
+    const trailer3_real_t _t396 = -TRAILER3_LIT(1.6666666666666667)*_t395;
+    const trailer3_real_t _t397 = TRAILER3_LIT(0.2)*_t396;
+    const trailer3_real_t _t398 = _ms133*_ms89;
+    const trailer3_real_t _t399 = _ms210*_ms83;
+    const trailer3_real_t _t400 = TRAILER3_LIT(2.0)*_t399;
+    const trailer3_real_t _t401 = -_t385 - _t386;
+    const trailer3_real_t _t402 = -TRAILER3_LIT(1.6666666666666667)*_t401;
+    const trailer3_real_t _t403 = TRAILER3_LIT(0.2)*_t402;
+    const trailer3_real_t _t404 = -_t387 - _t388;
+    const trailer3_real_t _t405 = -TRAILER3_LIT(1.6666666666666667)*_t404;
+    const trailer3_real_t _t406 = TRAILER3_LIT(0.2)*_t405;
+    const trailer3_real_t _t407 = J_theta_cart2_left*_ms256;
+    const trailer3_real_t _t408 = J_theta_cart2_right*_ms244;
+    const trailer3_real_t _t409 = J_theta_cart3_left*_ms284;
+    const trailer3_real_t _t410 = J_theta_cart3_right*_ms268;
+    const trailer3_real_t _t411 = _t373*(_ms132*_ms303 + _ms136*_ms300);
+    const trailer3_real_t _t412 = _t373*(_ms133*_ms303 + _ms137*_ms300);
+    const trailer3_real_t _t413 = _ms136*_t373;
+    const trailer3_real_t _t414 = _ms132*_t373;
+    const trailer3_real_t _t415 = J_theta_cart3_right*_ms274;
+    const trailer3_real_t _t416 = J_theta_cart3_left*_ms290;
+    const trailer3_real_t _t417 = J_theta_cart3_left*_ms288;
+    const trailer3_real_t _t418 = J_theta_cart3_right*_ms272;
+    const trailer3_real_t _t419 = TRAILER3_LIT(2.0)*_ms167;
+    const trailer3_real_t _t420 = _ms26*_t419;
+    const trailer3_real_t _t421 = TRAILER3_LIT(0.6)*_ms167;
+    const trailer3_real_t _t422 = _t34*_t421 + _t36*_t421;
+    const trailer3_real_t _t423 = _t40*_t421 + _t42*_t421;
+    const trailer3_real_t _t424 = _t421*_t46 + _t421*_t48;
+    const trailer3_real_t _t425 = _ms166*_ms26;
+    const trailer3_real_t _t426 = _ms128*_ms90 + _ms129*_ms26;
+    const trailer3_real_t _t427 = _ms166*_t426;
+    const trailer3_real_t _t428 = -_ms168;
+    const trailer3_real_t _t429 = _ms167 + _t428;
+    const trailer3_real_t _t430 = _ms167*_t426;
+    const trailer3_real_t _t431 = _t419 + _t428;
+    const trailer3_real_t _t432 = -K_theta_tractor_x_tractor + _t26 + _t30;
+    const trailer3_real_t _t433 = _ms27*_t419;
+    const trailer3_real_t _t434 = _ms166*_ms27;
+    const trailer3_real_t _t435 = _ms128*_ms91 + _ms129*_ms27;
+    const trailer3_real_t _t436 = _ms166*_t435;
+    const trailer3_real_t _t437 = _ms167*_t435;
+    const trailer3_real_t _t438 = _ms26*_t278 + _ms90*_t275;
+    const trailer3_real_t _t439 = _ms26*_t280 + _ms90*_t276;
+    const trailer3_real_t _t440 = _ms27*_t278 + _ms91*_t275;
+    const trailer3_real_t _t441 = _ms27*_t280 + _ms91*_t276;
+    const trailer3_real_t _t442 = _ms166*_t24;
+    const trailer3_real_t _t443 = _ms166*_t25;
+    const trailer3_real_t _t444 = _ms90*_t24;
+    const trailer3_real_t _t445 = _ms91*_t24;
+    const trailer3_real_t _t446 = _ms90*_t25;
+    const trailer3_real_t _t447 = _ms91*_t25;
+    const trailer3_real_t _t448 = _ms166*_ms200 + _ms167*_ms202;
+    const trailer3_real_t _t449 = _ms166*_ms204 + _ms167*_ms206;
+    const trailer3_real_t _t450 = _ms166*_ms208 + _ms167*_ms210;
+    const trailer3_real_t _t451 = _ms132*_ms90 + _ms133*_ms26;
+    const trailer3_real_t _t452 = _ms132*_ms91 + _ms133*_ms27;
+    const trailer3_real_t _t453 = _ms166*_ms212 + _ms167*_ms214;
+    const trailer3_real_t _t454 = _ms166*_ms216 + _ms167*_ms218;
+    const trailer3_real_t _t455 = _ms166*_ms220 + _ms167*_ms222;
+    const trailer3_real_t _t456 = _ms166*_ms224 + _ms167*_ms226;
+    const trailer3_real_t _t457 = _ms136*_ms90 + _ms137*_ms26;
+    const trailer3_real_t _t458 = _ms136*_ms91 + _ms137*_ms27;
+    const trailer3_real_t _t459 = _ms166*_ms228 + _ms167*_ms230;
+    const trailer3_real_t _t460 = _ms144*_ms90 + _ms145*_ms26;
+    const trailer3_real_t _t461 = _ms144*_ms91 + _ms145*_ms27;
+    const trailer3_real_t _t462 = _ms166*_ms232 + _ms167*_ms234;
+    const trailer3_real_t _t463 = _ms148*_ms90 + _ms149*_ms26;
+    const trailer3_real_t _t464 = _ms148*_ms91 + _ms149*_ms27;
+    const trailer3_real_t _t465 = _ms166*_ms236 + _ms167*_ms238;
+    const trailer3_real_t _t466 = _ms166*_ms240 + _ms167*_ms242;
+    const trailer3_real_t _t467 = _ms166*_ms244 + _ms167*_ms246;
+    const trailer3_real_t _t468 = _ms152*_ms90 + _ms153*_ms26;
+    const trailer3_real_t _t469 = _ms152*_ms91 + _ms153*_ms27;
+    const trailer3_real_t _t470 = _ms166*_ms248 + _ms167*_ms250;
+    const trailer3_real_t _t471 = _ms166*_ms252 + _ms167*_ms254;
+    const trailer3_real_t _t472 = _ms166*_ms256 + _ms167*_ms258;
+    const trailer3_real_t _t473 = _ms156*_ms90 + _ms157*_ms26;
+    const trailer3_real_t _t474 = _ms156*_ms91 + _ms157*_ms27;
+    const trailer3_real_t _t475 = _ms166*_ms260 + _ms167*_ms262;
+    const trailer3_real_t _t476 = _ms166*_ms264 + _ms167*_ms266;
+    const trailer3_real_t _t477 = _ms166*_ms268 + _ms167*_ms270;
+    const trailer3_real_t _t478 = _ms166*_ms272 + _ms167*_ms274;
+    const trailer3_real_t _t479 = _ms160*_ms90 + _ms161*_ms26;
+    const trailer3_real_t _t480 = _ms160*_ms91 + _ms161*_ms27;
+    const trailer3_real_t _t481 = _ms166*_ms276 + _ms167*_ms278;
+    const trailer3_real_t _t482 = _ms166*_ms280 + _ms167*_ms282;
+    const trailer3_real_t _t483 = _ms166*_ms284 + _ms167*_ms286;
+    const trailer3_real_t _t484 = _ms166*_ms288 + _ms167*_ms290;
+    const trailer3_real_t _t485 = _ms164*_ms90 + _ms165*_ms26;
+    const trailer3_real_t _t486 = _ms164*_ms91 + _ms165*_ms27;
+    const trailer3_real_t _t487 = _ms180*_ms202 + _ms181*_ms214 + _t27 + _t30;
+    const trailer3_real_t _t488 = _ms188*_ms202 + _ms189*_ms214 + _t37 + _t65;
+    const trailer3_real_t _t489 = J_theta_cart2*_ms202 + _ms190*_ms214 + _t43 + _t63;
+    const trailer3_real_t _t490 = J_theta_cart3*_ms214 + _ms190*_ms202 + _t49 + _t61;
+    const trailer3_real_t _t491 = _ms128*_t488 + _ms132*_t489 + _ms136*_t490 + _ms152*_t52
+            + _ms156*_t53 + _ms160*_t54 + _ms164*_t55 + _ms200*_t9 + _ms212*_t11 + _ms236*_t17
+            + _ms248*_t19 + _ms260*_t21 + _ms276*_t23 + _t487 + _t56 + _t57 + _t58 + _t59 + _t60;
+    const trailer3_real_t _t492 = _ms186*_ms202 + _ms187*_ms214 + _t62 + _t64 + _t66;
+    const trailer3_real_t _t493 = _ms129*_t488 + _ms133*_t489 + _ms137*_t490 + _ms153*_t52
+            + _ms157*_t53 + _ms161*_t54 + _ms165*_t55 + _ms202*_t9 + _ms214*_t11 + _ms238*_t17
+            + _ms250*_t19 + _ms262*_t21 + _ms278*_t23 + _t492 + _t67 + _t68 + _t69 + _t70 + _t71;
+    const trailer3_real_t _t494 = _t448*_t75 + _t453*_t79 + _t83 + _t87 + _t94;
+    const trailer3_real_t _t495 = _t100*_t448 + _t103*_t453 - _t96 + _t97;
+    const trailer3_real_t _t496 = -_t104 + _t105 + _t110 + _t112*_t453;
+    const trailer3_real_t _t497 = -_t113 + _t114 + _t116 + _t119*_t448;
+    const trailer3_real_t _t498 = _ms166*_t448;
+    const trailer3_real_t _t499 = _ms167*_t448;
+    const trailer3_real_t _t500 = -_ms132*_ms294 - _ms133*_ms295 + _ms208*_t498 + _ms210*_t499
+            + _ms298*_t152 + _ms299*_t156 - _t125 - _t127 + _t132;
+    const trailer3_real_t _t501 = _ms166*_t453;
+    const trailer3_real_t _t502 = _ms167*_t453;
+    const trailer3_real_t _t503 = -_ms136*_ms294 - _ms137*_ms295 + _ms220*_t498 + _ms222*_t499
+            + _ms224*_t501 + _ms226*_t502 + _ms296*_t173 + _ms297*_t181 + _ms298*_t189
+            + _ms299*_t194 + _ms301*_t199 + _ms302*_t203 - _t141 - _t142;
+    const trailer3_real_t _t504 = _t153 + _t154;
+    const trailer3_real_t _t505 = _ms54*_t504;
+    const trailer3_real_t _t506 = -_ms85 + _t149 + _t157;
+    const trailer3_real_t _t507 = _ms54*_t506;
+    const trailer3_real_t _t508 = -_ms152*_ms294 - _ms153*_ms295 + _ms244*_t498 + _ms246*_t499
+            + _ms298*_t505 + _ms299*_t507 - _t158 - _t159 + _t164;
+    const trailer3_real_t _t509 = -_t153 + _t154;
+    const trailer3_real_t _t510 = _ms59*_t509;
+    const trailer3_real_t _t511 = -_ms85 + _t149 - _t157;
+    const trailer3_real_t _t512 = _ms59*_t511;
+    const trailer3_real_t _t513 = -_ms156*_ms294 - _ms157*_ms295 + _ms256*_t498 + _ms258*_t499
+            + _ms298*_t510 + _ms299*_t512 - _t165 - _t166 + _t171;
+    const trailer3_real_t _t514 = _t174 - _t179;
+    const trailer3_real_t _t515 = _ms64*_t514;
+    const trailer3_real_t _t516 = _t182 - _t187;
+    const trailer3_real_t _t517 = _ms64*_t516;
+    const trailer3_real_t _t518 = _t190 - _t192;
+    const trailer3_real_t _t519 = _ms64*_t518;
+    const trailer3_real_t _t520 = _t195 - _t197;
+    const trailer3_real_t _t521 = _ms64*_t520;
+    const trailer3_real_t _t522 = _t200 + _t201;
+    const trailer3_real_t _t523 = _ms64*_t522;
+    const trailer3_real_t _t524 = _t204 + _t205;
+    const trailer3_real_t _t525 = _ms64*_t524;
+    const trailer3_real_t _t526 = -_ms160*_ms294 - _ms161*_ms295 + _ms268*_t498 + _ms270*_t499
+            + _ms272*_t501 + _ms274*_t502 + _ms296*_t515 + _ms297*_t517 + _ms298*_t519
+            + _ms299*_t521 + _ms301*_t523 + _ms302*_t525 - _t206 - _t207;
+    const trailer3_real_t _t527 = -_t174 - _t179;
+    const trailer3_real_t _t528 = _ms69*_t527;
+    const trailer3_real_t _t529 = -_t182 - _t187;
+    const trailer3_real_t _t530 = _ms69*_t529;
+    const trailer3_real_t _t531 = -_t190 - _t192;
+    const trailer3_real_t _t532 = _ms69*_t531;
+    const trailer3_real_t _t533 = -_t195 - _t197;
+    const trailer3_real_t _t534 = _ms69*_t533;
+    const trailer3_real_t _t535 = -_t200 + _t201;
+    const trailer3_real_t _t536 = _ms69*_t535;
+    const trailer3_real_t _t537 = -_t204 + _t205;
+    const trailer3_real_t _t538 = _ms69*_t537;
+    const trailer3_real_t _t539 = -_ms164*_ms294 - _ms165*_ms295 + _ms284*_t498 + _ms286*_t499
+            + _ms288*_t501 + _ms290*_t502 + _ms296*_t528 + _ms297*_t530 + _ms298*_t532
+            + _ms299*_t534 + _ms301*_t536 + _ms302*_t538 - _t208 - _t209;
+    const trailer3_real_t _t540 = _ms128*_t495 + _ms132*_t496 + _ms136*_t497 + _ms200*_t232
+            + _ms212*_t233 + _ms306*_t214 + _ms307*_t213 + _ms308*_t216 + _ms309*_t215 + _t10*_t503
+            + _t16*_t508 + _t18*_t513 + _t20*_t526 + _t210 + _t211 + _t212 + _t218 + _t22*_t539
+            + _t220 + _t222 + _t224 - _t225 - _t226 - _t227 + _t229 + _t231 + _t494 + _t500*_t8;
+    const trailer3_real_t _t541 = _t235 - _t236 + _t238 - _t239 + _t241 - _t242 + _t245
+            + _t247*_t448 + _t249*_t453;
+    const trailer3_real_t _t542 = _ms129*_t495 + _ms133*_t496 + _ms137*_t497 + _ms202*_t232
+            + _ms214*_t233 + _ms306*_t52 + _ms307*_t53 + _ms308*_t54 + _ms309*_t55 + _t11*_t503
+            + _t17*_t508 + _t19*_t513 + _t21*_t526 + _t23*_t539 + _t250 + _t251 + _t252 + _t253
+            + _t254 + _t255 + _t256 - _t257 - _t258 - _t259 + _t260 + _t261 + _t500*_t9 + _t541;
+    const trailer3_real_t _t543 = _ms180*_ms200 + _ms181*_ms212 + _t262 + _t266;
+    const trailer3_real_t _t544 = _ms182 + _ms188*_ms200 + _ms189*_ms212 + _t267;
+    const trailer3_real_t _t545 = J_theta_cart2*_ms200 + _ms183 + _ms190*_ms212 + _t268;
+    const trailer3_real_t _t546 = J_theta_cart3*_ms212 + _ms184 + _ms190*_ms200 + _t269;
+    const trailer3_real_t _t547 = _ms128*_t544 + _ms132*_t545 + _ms136*_t546 + _ms152*_t214
+            + _ms156*_t213 + _ms160*_t216 + _ms164*_t215 + _ms200*_t8 + _ms212*_t10 + _ms236*_t16
+            + _ms248*_t18 + _ms260*_t20 + _ms276*_t22 + _t270 + _t271 + _t272 + _t273 + _t274
+            + _t543;
+    const trailer3_real_t _t548 = -_t283*_t491 + _t287*_t493 + _t289*_t547;
+    const trailer3_real_t _t549 = -_t292*_t548;
+    const trailer3_real_t _t550 = _t294*_t542 + _t296*_t493 - _t297*_t540 - _t299*_t491
+            + _t300*_t549;
+    const trailer3_real_t _t551 = _t294*_t540 - _t296*_t491 + _t299*_t547 - _t301*_t542
+            + _t302*_t549;
+    const trailer3_real_t _t552 = _t275*_t550 + _t278*_t551;
+    const trailer3_real_t _t553 = _ms180*_ms206 + _ms181*_ms218 - _t27;
+    const trailer3_real_t _t554 = _ms188*_ms206 + _ms189*_ms218 + _t306 + _t308 - _t37 - _t65;
+    const trailer3_real_t _t555 = J_theta_cart2*_ms206 + _ms190*_ms218 + _t309 - _t43;
+    const trailer3_real_t _t556 = J_theta_cart3*_ms218 + _ms190*_ms206 + _t310 - _t49;
+    const trailer3_real_t _t557 = _ms128*_t554 + _ms132*_t555 + _ms136*_t556 + _ms152*_t311
+            + _ms156*_t312 + _ms160*_t313 + _ms164*_t314 + _ms204*_t9 + _ms216*_t11 + _ms240*_t17
+            + _ms252*_t19 + _ms264*_t21 + _ms280*_t23 + _t553 - _t56 - _t57 - _t58 - _t59 - _t60;
+    const trailer3_real_t _t558 = _ms186*_ms206 + _ms187*_ms218 - _t66;
+    const trailer3_real_t _t559 = _ms129*_t554 + _ms133*_t555 + _ms137*_t556 + _ms153*_t311
+            + _ms157*_t312 + _ms161*_t313 + _ms165*_t314 + _ms206*_t9 + _ms218*_t11 + _ms242*_t17
+            + _ms254*_t19 + _ms266*_t21 + _ms282*_t23 + _t558 - _t67 - _t68 - _t69 - _t70 - _t71;
+    const trailer3_real_t _t560 = _t449*_t75 + _t454*_t79 - _t94;
+    const trailer3_real_t _t561 = _t100*_t449 + _t103*_t454 + _t316 + _t318 + _t96 - _t97;
+    const trailer3_real_t _t562 = -_t110 + _t112*_t454 - _t321;
+    const trailer3_real_t _t563 = -_t116 + _t119*_t449 - _t322;
+    const trailer3_real_t _t564 = _ms166*_t449;
+    const trailer3_real_t _t565 = _ms167*_t449;
+    const trailer3_real_t _t566 = _ms208*_t564 + _ms210*_t565 + _ms294*_t129 + _ms295*_t131
+            + _ms296*_t326 + _ms297*_t330 + _ms298*_t129 + _ms299*_t131 + _t125 + _t127;
+    const trailer3_real_t _t567 = _ms166*_t454;
+    const trailer3_real_t _t568 = _ms167*_t454;
+    const trailer3_real_t _t569 = _ms220*_t564 + _ms222*_t565 + _ms224*_t567 + _ms226*_t568
+            + _ms294*_t173 + _ms295*_t181 + _ms296*_t334 + _ms297*_t338 + _ms298*_t342
+            + _ms299*_t347 + _ms301*_t352 + _ms302*_t356 + _t141 + _t142;
+    const trailer3_real_t _t570 = _t327 + _t328;
+    const trailer3_real_t _t571 = _ms54*_t570;
+    const trailer3_real_t _t572 = _t331 + _t332;
+    const trailer3_real_t _t573 = _ms54*_t572;
+    const trailer3_real_t _t574 = _ms244*_t564 + _ms246*_t565 + _ms294*_t161 + _ms295*_t163
+            + _ms296*_t571 + _ms297*_t573 + _ms298*_t161 + _ms299*_t163 + _t158 + _t159;
+    const trailer3_real_t _t575 = -_t327 + _t328;
+    const trailer3_real_t _t576 = _ms59*_t575;
+    const trailer3_real_t _t577 = -_t331 + _t332;
+    const trailer3_real_t _t578 = _ms59*_t577;
+    const trailer3_real_t _t579 = _ms256*_t564 + _ms258*_t565 + _ms294*_t168 + _ms295*_t170
+            + _ms296*_t576 + _ms297*_t578 + _ms298*_t168 + _ms299*_t170 + _t165 + _t166;
+    const trailer3_real_t _t580 = _t335 + _t336;
+    const trailer3_real_t _t581 = _ms64*_t580;
+    const trailer3_real_t _t582 = _t339 + _t340;
+    const trailer3_real_t _t583 = _ms64*_t582;
+    const trailer3_real_t _t584 = _t343 - _t345;
+    const trailer3_real_t _t585 = _ms64*_t584;
+    const trailer3_real_t _t586 = _t348 - _t350;
+    const trailer3_real_t _t587 = _ms64*_t586;
+    const trailer3_real_t _t588 = _t353 - _t354;
+    const trailer3_real_t _t589 = _ms64*_t588;
+    const trailer3_real_t _t590 = _t357 - _t358;
+    const trailer3_real_t _t591 = _ms64*_t590;
+    const trailer3_real_t _t592 = _ms268*_t564 + _ms270*_t565 + _ms272*_t567 + _ms274*_t568
+            + _ms294*_t515 + _ms295*_t517 + _ms296*_t581 + _ms297*_t583 + _ms298*_t585
+            + _ms299*_t587 + _ms301*_t589 + _ms302*_t591 + _t206 + _t207;
+    const trailer3_real_t _t593 = -_t335 + _t336;
+    const trailer3_real_t _t594 = _ms69*_t593;
+    const trailer3_real_t _t595 = -_t339 + _t340;
+    const trailer3_real_t _t596 = _ms69*_t595;
+    const trailer3_real_t _t597 = -_t343 - _t345;
+    const trailer3_real_t _t598 = _ms69*_t597;
+    const trailer3_real_t _t599 = -_t348 - _t350;
+    const trailer3_real_t _t600 = _ms69*_t599;
+    const trailer3_real_t _t601 = -_t353 - _t354;
+    const trailer3_real_t _t602 = _ms69*_t601;
+    const trailer3_real_t _t603 = -_t357 - _t358;
+    const trailer3_real_t _t604 = _ms69*_t603;
+    const trailer3_real_t _t605 = _ms284*_t564 + _ms286*_t565 + _ms288*_t567 + _ms290*_t568
+            + _ms294*_t528 + _ms295*_t530 + _ms296*_t594 + _ms297*_t596 + _ms298*_t598
+            + _ms299*_t600 + _ms301*_t602 + _ms302*_t604 + _t208 + _t209;
+    const trailer3_real_t _t606 = _ms128*_t561 + _ms132*_t562 + _ms136*_t563 + _ms204*_t232
+            + _ms216*_t233 + _ms306*_t360 + _ms307*_t359 + _ms308*_t362 + _ms309*_t361 + _t10*_t569
+            + _t16*_t574 + _t18*_t579 + _t20*_t592 - _t210 - _t218 + _t22*_t605 - _t220 - _t222
+            - _t224 + _t225 - _t229 - _t231 + _t363 + _t364 + _t560 + _t566*_t8;
+    const trailer3_real_t _t607 = -_t241 + _t242 - _t245 + _t247*_t449 + _t249*_t454;
+    const trailer3_real_t _t608 = _ms129*_t561 + _ms133*_t562 + _ms137*_t563 + _ms206*_t232
+            + _ms218*_t233 + _ms306*_t311 + _ms307*_t312 + _ms308*_t313 + _ms309*_t314 + _t11*_t569
+            + _t17*_t574 + _t19*_t579 + _t21*_t592 + _t23*_t605 - _t250 - _t253 - _t254 - _t255
+            - _t256 + _t257 - _t260 - _t261 + _t365 + _t366 + _t566*_t9 + _t607;
+    const trailer3_real_t _t609 = _ms180*_ms204 + _ms181*_ms216 - _t262 - _t263;
+    const trailer3_real_t _t610 = -_ms182 + _ms188*_ms204 + _ms189*_ms216 - _t267 + _t367 + _t368;
+    const trailer3_real_t _t611 = J_theta_cart2*_ms204 + _ms190*_ms216 - _t268 + _t369;
+    const trailer3_real_t _t612 = J_theta_cart3*_ms216 + _ms190*_ms204 - _t269 + _t370;
+    const trailer3_real_t _t613 = _ms128*_t610 + _ms132*_t611 + _ms136*_t612 + _ms152*_t360
+            + _ms156*_t359 + _ms160*_t362 + _ms164*_t361 + _ms204*_t8 + _ms216*_t10 + _ms240*_t16
+            + _ms252*_t18 + _ms264*_t20 + _ms280*_t22 - _t270 - _t271 - _t272 - _t273 - _t274
+            + _t609;
+    const trailer3_real_t _t614 = -_t283*_t557 + _t287*_t559 + _t289*_t613;
+    const trailer3_real_t _t615 = -_t292*_t614;
+    const trailer3_real_t _t616 = _t294*_t608 + _t296*_t559 - _t297*_t606 - _t299*_t557
+            + _t300*_t615;
+    const trailer3_real_t _t617 = _t294*_t606 - _t296*_t557 + _t299*_t613 - _t301*_t608
+            + _t302*_t615;
+    const trailer3_real_t _t618 = _t275*_t616 + _t278*_t617;
+    const trailer3_real_t _t619 = _ms180*_ms210 + _ms181*_ms222 - _t29;
+    const trailer3_real_t _t620 = _ms188*_ms210 + _ms189*_ms222 - _t306;
+    const trailer3_real_t _t621 = J_theta_cart2*_ms210 + _ms190*_ms222 - _t309 + _t374 - _t63;
+    const trailer3_real_t _t622 = J_theta_cart3*_ms222 + _ms190*_ms210 + _t375;
+    const trailer3_real_t _t623 = _ms128*_t620 + _ms132*_t621 + _ms136*_t622 + _ms152*_t376
+            + _ms156*_t377 + _ms160*_t378 + _ms164*_t379 + _ms208*_t9 + _ms220*_t11 + _ms244*_t17
+            + _ms256*_t19 + _ms268*_t21 + _ms284*_t23 + _t619;
+    const trailer3_real_t _t624 = _ms186*_ms210 + _ms187*_ms222 - _t64;
+    const trailer3_real_t _t625 = _ms129*_t620 + _ms133*_t621 + _ms137*_t622 + _ms153*_t376
+            + _ms157*_t377 + _ms161*_t378 + _ms165*_t379 + _ms210*_t9 + _ms222*_t11 + _ms246*_t17
+            + _ms258*_t19 + _ms270*_t21 + _ms286*_t23 + _t624;
+    const trailer3_real_t _t626 = _t450*_t75 + _t455*_t79 - _t87;
+    const trailer3_real_t _t627 = _t100*_t450 + _t103*_t455 - _t318;
+    const trailer3_real_t _t628 = _t104 - _t105 + _t112*_t455 + _t321 + _t381;
+    const trailer3_real_t _t629 = _t119*_t450 - _t384;
+    const trailer3_real_t _t630 = _ms166*_t450;
+    const trailer3_real_t _t631 = _ms167*_t450;
+    const trailer3_real_t _t632 = -_ms132*_ms298 - _ms133*_ms299 + _ms208*_t630 + _ms210*_t631
+            + _ms294*_t152 + _ms295*_t156 + _t132;
+    const trailer3_real_t _t633 = _ms166*_t455;
+    const trailer3_real_t _t634 = _ms167*_t455;
+    const trailer3_real_t _t635 = _ms220*_t630 + _ms222*_t631 + _ms224*_t633 + _ms226*_t634
+            + _ms294*_t189 + _ms295*_t194 + _ms296*_t342 + _ms297*_t347 + _ms298*_t390
+            + _ms299*_t396 + _ms301*_t402 + _ms302*_t405;
+    const trailer3_real_t _t636 = -_ms152*_ms298 - _ms153*_ms299 + _ms244*_t630 + _ms246*_t631
+            + _ms294*_t505 + _ms295*_t507 + _t164;
+    const trailer3_real_t _t637 = -_ms156*_ms298 - _ms157*_ms299 + _ms256*_t630 + _ms258*_t631
+            + _ms294*_t510 + _ms295*_t512 + _t171;
+    const trailer3_real_t _t638 = _t391 + TRAILER3_LIT(2.0)*_t392 - _t394;
+    const trailer3_real_t _t639 = _ms64*_t638;
+    const trailer3_real_t _t640 = _t397 + TRAILER3_LIT(2.0)*_t398 - _t400;
+    const trailer3_real_t _t641 = _ms64*_t640;
+    const trailer3_real_t _t642 = -_t392 + _t393 + _t403;
+    const trailer3_real_t _t643 = _ms64*_t642;
+    const trailer3_real_t _t644 = -_t398 + _t399 + _t406;
+    const trailer3_real_t _t645 = _ms64*_t644;
+    const trailer3_real_t _t646 = _ms268*_t630 + _ms270*_t631 + _ms272*_t633 + _ms274*_t634
+            + _ms294*_t519 + _ms295*_t521 + _ms296*_t585 + _ms297*_t587 + _ms298*_t639
+            + _ms299*_t641 + _ms301*_t643 + _ms302*_t645;
+    const trailer3_real_t _t647 = TRAILER3_LIT(2.0)*_ms132*_ms89 - _t391 - _t394;
+    const trailer3_real_t _t648 = _ms69*_t647;
+    const trailer3_real_t _t649 = TRAILER3_LIT(2.0)*_ms133*_ms89 - _t397 - _t400;
+    const trailer3_real_t _t650 = _ms69*_t649;
+    const trailer3_real_t _t651 = _ms208*_ms83 - _t392 - _t403;
+    const trailer3_real_t _t652 = _ms69*_t651;
+    const trailer3_real_t _t653 = _ms210*_ms83 - _t398 - _t406;
+    const trailer3_real_t _t654 = _ms69*_t653;
+    const trailer3_real_t _t655 = _ms284*_t630 + _ms286*_t631 + _ms288*_t633 + _ms290*_t634
+            + _ms294*_t532 + _ms295*_t534 + _ms296*_t598 + _ms297*_t600 + _ms298*_t648
+            + _ms299*_t650 + _ms301*_t652 + _ms302*_t654;
+    const trailer3_real_t _t656 = _ms128*_t627 + _ms132*_t628 + _ms136*_t629 + _ms208*_t232
+            + _ms220*_t233 + _ms306*_t408 + _ms307*_t407 + _ms308*_t410 + _ms309*_t409 + _t10*_t635
+            + _t16*_t636 + _t18*_t637 + _t20*_t646 - _t211 + _t22*_t655 + _t226 - _t363 + _t411
+            + _t626 + _t632*_t8;
+    const trailer3_real_t _t657 = -_t235 + _t236 + _t247*_t450 + _t249*_t455;
+    const trailer3_real_t _t658 = _ms129*_t627 + _ms133*_t628 + _ms137*_t629 + _ms210*_t232
+            + _ms222*_t233 + _ms306*_t376 + _ms307*_t377 + _ms308*_t378 + _ms309*_t379 + _t11*_t635
+            + _t17*_t636 + _t19*_t637 + _t21*_t646 + _t23*_t655 - _t251 + _t258 - _t365 + _t412
+            + _t632*_t9 + _t657;
+    const trailer3_real_t _t659 = _ms180*_ms208 + _ms181*_ms220 - _t264;
+    const trailer3_real_t _t660 = _ms188*_ms208 + _ms189*_ms220 - _t367;
+    const trailer3_real_t _t661 = J_theta_cart2*_ms208 - _ms183 + _ms190*_ms220 - _t369 + _t413;
+    const trailer3_real_t _t662 = J_theta_cart3*_ms220 + _ms190*_ms208 + _t414;
+    const trailer3_real_t _t663 = _ms128*_t660 + _ms132*_t661 + _ms136*_t662 + _ms152*_t408
+            + _ms156*_t407 + _ms160*_t410 + _ms164*_t409 + _ms208*_t8 + _ms220*_t10 + _ms244*_t16
+            + _ms256*_t18 + _ms268*_t20 + _ms284*_t22 + _t659;
+    const trailer3_real_t _t664 = -_t283*_t623 + _t287*_t625 + _t289*_t663;
+    const trailer3_real_t _t665 = -_t292*_t664;
+    const trailer3_real_t _t666 = _t294*_t658 + _t296*_t625 - _t297*_t656 - _t299*_t623
+            + _t300*_t665;
+    const trailer3_real_t _t667 = _t294*_t656 - _t296*_t623 + _t299*_t663 - _t301*_t658
+            + _t302*_t665;
+    const trailer3_real_t _t668 = _t275*_t666 + _t278*_t667;
+    const trailer3_real_t _t669 = _ms181*_ms226 - _t28;
+    const trailer3_real_t _t670 = _ms189*_ms226 - _t308;
+    const trailer3_real_t _t671 = _ms190*_ms226 - _t374;
+    const trailer3_real_t _t672 = J_theta_cart3*_ms226 - _t310 - _t375 - _t61;
+    const trailer3_real_t _t673 = _ms128*_t670 + _ms132*_t671 + _ms136*_t672 + _ms160*_t415
+            + _ms164*_t416 + _ms224*_t11 + _ms272*_t21 + _ms288*_t23 + _t669;
+    const trailer3_real_t _t674 = _ms187*_ms226 - _t62;
+    const trailer3_real_t _t675 = _ms129*_t670 + _ms133*_t671 + _ms137*_t672 + _ms161*_t415
+            + _ms165*_t416 + _ms226*_t11 + _ms274*_t21 + _ms290*_t23 + _t674;
+    const trailer3_real_t _t676 = _t456*_t79 - _t83;
+    const trailer3_real_t _t677 = _t103*_t456 - _t316;
+    const trailer3_real_t _t678 = _t112*_t456 - _t381;
+    const trailer3_real_t _t679 = _t113 - _t114 + _t322 + _t384;
+    const trailer3_real_t _t680 = _ms166*_t456;
+    const trailer3_real_t _t681 = _ms167*_t456;
+    const trailer3_real_t _t682 = -_ms136*_ms301 - _ms137*_ms302 + _ms224*_t680 + _ms226*_t681
+            + _ms294*_t199 + _ms295*_t203 + _ms296*_t352 + _ms297*_t356 + _ms298*_t402
+            + _ms299*_t405;
+    const trailer3_real_t _t683 = -_ms160*_ms301 - _ms161*_ms302 + _ms272*_t680 + _ms274*_t681
+            + _ms294*_t523 + _ms295*_t525 + _ms296*_t589 + _ms297*_t591 + _ms298*_t643
+            + _ms299*_t645;
+    const trailer3_real_t _t684 = -_ms164*_ms301 - _ms165*_ms302 + _ms288*_t680 + _ms290*_t681
+            + _ms294*_t536 + _ms295*_t538 + _ms296*_t602 + _ms297*_t604 + _ms298*_t652
+            + _ms299*_t654;
+    const trailer3_real_t _t685 = _ms128*_t677 + _ms132*_t678 + _ms136*_t679 + _ms224*_t233
+            + _ms308*_t418 + _ms309*_t417 + _t10*_t682 + _t20*_t683 - _t212 + _t22*_t684 + _t227
+            - _t364 - _t411 + _t676;
+    const trailer3_real_t _t686 = -_t238 + _t239 + _t249*_t456;
+    const trailer3_real_t _t687 = _ms129*_t677 + _ms133*_t678 + _ms137*_t679 + _ms226*_t233
+            + _ms308*_t415 + _ms309*_t416 + _t11*_t682 + _t21*_t683 + _t23*_t684 - _t252 + _t259
+            - _t366 - _t412 + _t686;
+    const trailer3_real_t _t688 = _ms181*_ms224 - _t265;
+    const trailer3_real_t _t689 = _ms189*_ms224 - _t368;
+    const trailer3_real_t _t690 = _ms190*_ms224 - _t413;
+    const trailer3_real_t _t691 = J_theta_cart3*_ms224 - _ms184 - _t370 - _t414;
+    const trailer3_real_t _t692 = _ms128*_t689 + _ms132*_t690 + _ms136*_t691 + _ms160*_t418
+            + _ms164*_t417 + _ms224*_t10 + _ms272*_t20 + _ms288*_t22 + _t688;
+    const trailer3_real_t _t693 = -_t283*_t673 + _t287*_t675 + _t289*_t692;
+    const trailer3_real_t _t694 = -_t292*_t693;
+    const trailer3_real_t _t695 = _t294*_t687 + _t296*_t675 - _t297*_t685 - _t299*_t673
+            + _t300*_t694;
+    const trailer3_real_t _t696 = _t294*_t685 - _t296*_t673 + _t299*_t692 - _t301*_t687
+            + _t302*_t694;
+    const trailer3_real_t _t697 = _t275*_t695 + _t278*_t696;
+    const trailer3_real_t _t698 = K_theta_tractor_x_tractor*_t420 + _t426*_t91 + _t451*_t75
+            + _t457*_t79;
+    const trailer3_real_t _t699 = _ms26*_t422 + _t100*_t451 + _t103*_t457;
+    const trailer3_real_t _t700 = _ms26*_t423 + _t109*_t426 + _t112*_t457;
+    const trailer3_real_t _t701 = _ms26*_t424 + _t115*_t426 + _t119*_t451;
+    const trailer3_real_t _t702 = _ms90*_t429 + _t425 - _t427;
+    const trailer3_real_t _t703 = _ms26*_t431 - _t430;
+    const trailer3_real_t _t704 = _ms197*_t702 + _ms198*_t703;
+    const trailer3_real_t _t705 = _ms167*_ms90 + _t425;
+    const trailer3_real_t _t706 = _ms168*_ms90 + _t427;
+    const trailer3_real_t _t707 = _ms168*_ms26 + _t430;
+    const trailer3_real_t _t708 = _ms166*_t451 + _ms169*_ms90;
+    const trailer3_real_t _t709 = _ms167*_t451 + _ms169*_ms26;
+    const trailer3_real_t _t710 = _ms200*_t705 + _ms202*_t420 + _ms204*_t706 + _ms206*_t707
+            + _ms208*_t708 + _ms210*_t709;
+    const trailer3_real_t _t711 = _ms166*_t457 + _ms170*_ms90;
+    const trailer3_real_t _t712 = _ms167*_t457 + _ms170*_ms26;
+    const trailer3_real_t _t713 = _ms212*_t705 + _ms214*_t420 + _ms216*_t706 + _ms218*_t707
+            + _ms220*_t708 + _ms222*_t709 + _ms224*_t711 + _ms226*_t712;
+    const trailer3_real_t _t714 = _ms228*_t702 + _ms230*_t703;
+    const trailer3_real_t _t715 = _ms232*_t702 + _ms234*_t703;
+    const trailer3_real_t _t716 = _ms236*_t705 + _ms238*_t420 + _ms240*_t706 + _ms242*_t707
+            + _ms244*_t708 + _ms246*_t709;
+    const trailer3_real_t _t717 = _ms248*_t705 + _ms250*_t420 + _ms252*_t706 + _ms254*_t707
+            + _ms256*_t708 + _ms258*_t709;
+    const trailer3_real_t _t718 = _ms260*_t705 + _ms262*_t420 + _ms264*_t706 + _ms266*_t707
+            + _ms268*_t708 + _ms270*_t709 + _ms272*_t711 + _ms274*_t712;
+    const trailer3_real_t _t719 = _ms276*_t705 + _ms278*_t420 + _ms280*_t706 + _ms282*_t707
+            + _ms284*_t708 + _ms286*_t709 + _ms288*_t711 + _ms290*_t712;
+    const trailer3_real_t _t720 = _ms128*_t699 + _ms132*_t700 + _ms136*_t701 + _t10*_t713
+            + _t12*_t714 + _t14*_t715 + _t16*_t716 + _t18*_t717 + _t20*_t718 + _t22*_t719
+            + _t266*_t705 + _t6*_t704 + _t698 + _t710*_t8;
+    const trailer3_real_t _t721 = _t244*_t426 + _t247*_t451 + _t249*_t457;
+    const trailer3_real_t _t722 = _ms129*_t699 + _ms133*_t700 + _ms137*_t701 + _t11*_t713
+            + _t13*_t714 + _t15*_t715 + _t17*_t716 + _t19*_t717 + _t21*_t718 + _t23*_t719
+            + _t432*_t705 + _t7*_t704 + _t710*_t9 + _t721;
+    const trailer3_real_t _t723 = _t294*_t722 - _t297*_t720;
+    const trailer3_real_t _t724 = _t282*_t293*_t720 - _t301*_t722;
+    const trailer3_real_t _t725 = _t275*_t723 + _t278*_t724;
+    const trailer3_real_t _t726 = K_theta_tractor_x_tractor*_t433 + _t435*_t91 + _t452*_t75
+            + _t458*_t79;
+    const trailer3_real_t _t727 = _ms27*_t422 + _t100*_t452 + _t103*_t458;
+    const trailer3_real_t _t728 = _ms27*_t423 + _t109*_t435 + _t112*_t458;
+    const trailer3_real_t _t729 = _ms27*_t424 + _t115*_t435 + _t119*_t452;
+    const trailer3_real_t _t730 = _ms91*_t429 + _t434 - _t436;
+    const trailer3_real_t _t731 = _ms27*_t431 - _t437;
+    const trailer3_real_t _t732 = _ms197*_t730 + _ms198*_t731;
+    const trailer3_real_t _t733 = _ms167*_ms91 + _t434;
+    const trailer3_real_t _t734 = _ms168*_ms91 + _t436;
+    const trailer3_real_t _t735 = _ms168*_ms27 + _t437;
+    const trailer3_real_t _t736 = _ms166*_t452 + _ms169*_ms91;
+    const trailer3_real_t _t737 = _ms167*_t452 + _ms169*_ms27;
+    const trailer3_real_t _t738 = _ms200*_t733 + _ms202*_t433 + _ms204*_t734 + _ms206*_t735
+            + _ms208*_t736 + _ms210*_t737;
+    const trailer3_real_t _t739 = _ms166*_t458 + _ms170*_ms91;
+    const trailer3_real_t _t740 = _ms167*_t458 + _ms170*_ms27;
+    const trailer3_real_t _t741 = _ms212*_t733 + _ms214*_t433 + _ms216*_t734 + _ms218*_t735
+            + _ms220*_t736 + _ms222*_t737 + _ms224*_t739 + _ms226*_t740;
+    const trailer3_real_t _t742 = _ms228*_t730 + _ms230*_t731;
+    const trailer3_real_t _t743 = _ms232*_t730 + _ms234*_t731;
+    const trailer3_real_t _t744 = _ms236*_t733 + _ms238*_t433 + _ms240*_t734 + _ms242*_t735
+            + _ms244*_t736 + _ms246*_t737;
+    const trailer3_real_t _t745 = _ms248*_t733 + _ms250*_t433 + _ms252*_t734 + _ms254*_t735
+            + _ms256*_t736 + _ms258*_t737;
+    const trailer3_real_t _t746 = _ms260*_t733 + _ms262*_t433 + _ms264*_t734 + _ms266*_t735
+            + _ms268*_t736 + _ms270*_t737 + _ms272*_t739 + _ms274*_t740;
+    const trailer3_real_t _t747 = _ms276*_t733 + _ms278*_t433 + _ms280*_t734 + _ms282*_t735
+            + _ms284*_t736 + _ms286*_t737 + _ms288*_t739 + _ms290*_t740;
+    const trailer3_real_t _t748 = _ms128*_t727 + _ms132*_t728 + _ms136*_t729 + _t10*_t741
+            + _t12*_t742 + _t14*_t743 + _t16*_t744 + _t18*_t745 + _t20*_t746 + _t22*_t747
+            + _t266*_t733 + _t6*_t732 + _t726 + _t738*_t8;
+    const trailer3_real_t _t749 = _t244*_t435 + _t247*_t452 + _t249*_t458;
+    const trailer3_real_t _t750 = _ms129*_t727 + _ms133*_t728 + _ms137*_t729 + _t11*_t741
+            + _t13*_t742 + _t15*_t743 + _t17*_t744 + _t19*_t745 + _t21*_t746 + _t23*_t747
+            + _t432*_t733 + _t7*_t732 + _t738*_t9 + _t749;
+    const trailer3_real_t _t751 = _t294*_t750 - _t297*_t748;
+    const trailer3_real_t _t752 = _t282*_t293*_t748 - _t301*_t750;
+    const trailer3_real_t _t753 = _t275*_t751 + _t278*_t752;
+    const trailer3_real_t _t754 = _t276*_t550 + _t280*_t551;
+    const trailer3_real_t _t755 = _t276*_t616 + _t280*_t617;
+    const trailer3_real_t _t756 = _t276*_t666 + _t280*_t667;
+    const trailer3_real_t _t757 = _t276*_t695 + _t280*_t696;
+    const trailer3_real_t _t758 = _t276*_t723 + _t280*_t724;
+    const trailer3_real_t _t759 = _t276*_t751 + _t280*_t752;
+    const trailer3_real_t _t760 = _t275*_t297 - _t278*_t294;
+    const trailer3_real_t _t761 = -_t275*_t294 + _t278*_t287*_t293;
+    const trailer3_real_t _t762 = _t275*_t760 + _t278*_t761;
+    const trailer3_real_t _t763 = _t276*_t297 - _t280*_t294;
+    const trailer3_real_t _t764 = -_t276*_t294 + _t280*_t287*_t293;
+    const trailer3_real_t _t765 = _t275*_t763 + _t278*_t764;
+    const trailer3_real_t _t766 = _t276*_t760 + _t280*_t761;
+    const trailer3_real_t _t767 = _t276*_t763 + _t280*_t764;
     A[0] = TRAILER3_LIT(0.0);
     A[1] = TRAILER3_LIT(0.0);
-    A[2] = -_t683;
+    A[2] = -_t443;
     A[3] = TRAILER3_LIT(0.0);
     A[4] = TRAILER3_LIT(0.0);
     A[5] = TRAILER3_LIT(0.0);
@@ -3563,11 +2866,11 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[11] = TRAILER3_LIT(0.0);
     A[12] = TRAILER3_LIT(0.0);
     A[13] = TRAILER3_LIT(0.0);
-    A[14] = _t684;
-    A[15] = _t685;
+    A[14] = _t444;
+    A[15] = _t445;
     A[16] = TRAILER3_LIT(0.0);
     A[17] = TRAILER3_LIT(0.0);
-    A[18] = _t682;
+    A[18] = _t442;
     A[19] = TRAILER3_LIT(0.0);
     A[20] = TRAILER3_LIT(0.0);
     A[21] = TRAILER3_LIT(0.0);
@@ -3579,8 +2882,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[27] = TRAILER3_LIT(0.0);
     A[28] = TRAILER3_LIT(0.0);
     A[29] = TRAILER3_LIT(0.0);
-    A[30] = _t686;
-    A[31] = _t687;
+    A[30] = _t446;
+    A[31] = _t447;
     A[32] = TRAILER3_LIT(0.0);
     A[33] = TRAILER3_LIT(0.0);
     A[34] = TRAILER3_LIT(0.0);
@@ -3595,12 +2898,12 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[43] = TRAILER3_LIT(0.0);
     A[44] = TRAILER3_LIT(0.0);
     A[45] = TRAILER3_LIT(0.0);
-    A[46] = _t88;
-    A[47] = _t89;
+    A[46] = _ms26;
+    A[47] = _ms27;
     A[48] = TRAILER3_LIT(0.0);
     A[49] = TRAILER3_LIT(0.0);
-    A[50] = _t344;
-    A[51] = -_t344;
+    A[50] = _t93;
+    A[51] = -_t93;
     A[52] = TRAILER3_LIT(0.0);
     A[53] = TRAILER3_LIT(0.0);
     A[54] = TRAILER3_LIT(0.0);
@@ -3611,13 +2914,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[59] = TRAILER3_LIT(0.0);
     A[60] = TRAILER3_LIT(0.0);
     A[61] = TRAILER3_LIT(0.0);
-    A[62] = _t666;
-    A[63] = _t675;
+    A[62] = _t426;
+    A[63] = _t435;
     A[64] = TRAILER3_LIT(0.0);
     A[65] = TRAILER3_LIT(0.0);
-    A[66] = _t688;
-    A[67] = _t689;
-    A[68] = _t690;
+    A[66] = _t448;
+    A[67] = _t449;
+    A[68] = _t450;
     A[69] = TRAILER3_LIT(0.0);
     A[70] = TRAILER3_LIT(0.0);
     A[71] = TRAILER3_LIT(0.0);
@@ -3627,14 +2930,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[75] = TRAILER3_LIT(0.0);
     A[76] = TRAILER3_LIT(0.0);
     A[77] = TRAILER3_LIT(0.0);
-    A[78] = _t691;
-    A[79] = _t692;
+    A[78] = _t451;
+    A[79] = _t452;
     A[80] = TRAILER3_LIT(0.0);
     A[81] = TRAILER3_LIT(0.0);
-    A[82] = _t693;
-    A[83] = _t694;
-    A[84] = _t695;
-    A[85] = _t696;
+    A[82] = _t453;
+    A[83] = _t454;
+    A[84] = _t455;
+    A[85] = _t456;
     A[86] = TRAILER3_LIT(0.0);
     A[87] = TRAILER3_LIT(0.0);
     A[88] = TRAILER3_LIT(0.0);
@@ -3643,8 +2946,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[91] = TRAILER3_LIT(0.0);
     A[92] = TRAILER3_LIT(0.0);
     A[93] = TRAILER3_LIT(0.0);
-    A[94] = _t697;
-    A[95] = _t698;
+    A[94] = _t457;
+    A[95] = _t458;
     A[96] = TRAILER3_LIT(0.0);
     A[97] = TRAILER3_LIT(0.0);
     A[98] = TRAILER3_LIT(0.0);
@@ -3659,8 +2962,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[107] = TRAILER3_LIT(0.0);
     A[108] = TRAILER3_LIT(0.0);
     A[109] = TRAILER3_LIT(0.0);
-    A[110] = _t678;
-    A[111] = _t680;
+    A[110] = _t438;
+    A[111] = _t440;
     A[112] = TRAILER3_LIT(0.0);
     A[113] = TRAILER3_LIT(0.0);
     A[114] = TRAILER3_LIT(0.0);
@@ -3675,12 +2978,12 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[123] = TRAILER3_LIT(0.0);
     A[124] = TRAILER3_LIT(0.0);
     A[125] = TRAILER3_LIT(0.0);
-    A[126] = _t679;
-    A[127] = _t681;
+    A[126] = _t439;
+    A[127] = _t441;
     A[128] = TRAILER3_LIT(0.0);
     A[129] = TRAILER3_LIT(0.0);
-    A[130] = _t699;
-    A[131] = -_t699;
+    A[130] = _t459;
+    A[131] = -_t459;
     A[132] = TRAILER3_LIT(0.0);
     A[133] = TRAILER3_LIT(0.0);
     A[134] = TRAILER3_LIT(0.0);
@@ -3691,12 +2994,12 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[139] = TRAILER3_LIT(0.0);
     A[140] = TRAILER3_LIT(0.0);
     A[141] = TRAILER3_LIT(0.0);
-    A[142] = _t700;
-    A[143] = _t701;
+    A[142] = _t460;
+    A[143] = _t461;
     A[144] = TRAILER3_LIT(0.0);
     A[145] = TRAILER3_LIT(0.0);
-    A[146] = _t702;
-    A[147] = -_t702;
+    A[146] = _t462;
+    A[147] = -_t462;
     A[148] = TRAILER3_LIT(0.0);
     A[149] = TRAILER3_LIT(0.0);
     A[150] = TRAILER3_LIT(0.0);
@@ -3707,13 +3010,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[155] = TRAILER3_LIT(0.0);
     A[156] = TRAILER3_LIT(0.0);
     A[157] = TRAILER3_LIT(0.0);
-    A[158] = _t703;
-    A[159] = _t704;
+    A[158] = _t463;
+    A[159] = _t464;
     A[160] = TRAILER3_LIT(0.0);
     A[161] = TRAILER3_LIT(0.0);
-    A[162] = _t705;
-    A[163] = _t706;
-    A[164] = _t707;
+    A[162] = _t465;
+    A[163] = _t466;
+    A[164] = _t467;
     A[165] = TRAILER3_LIT(0.0);
     A[166] = TRAILER3_LIT(0.0);
     A[167] = TRAILER3_LIT(0.0);
@@ -3723,13 +3026,13 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[171] = TRAILER3_LIT(0.0);
     A[172] = TRAILER3_LIT(0.0);
     A[173] = TRAILER3_LIT(0.0);
-    A[174] = _t708;
-    A[175] = _t709;
+    A[174] = _t468;
+    A[175] = _t469;
     A[176] = TRAILER3_LIT(0.0);
     A[177] = TRAILER3_LIT(0.0);
-    A[178] = _t710;
-    A[179] = _t711;
-    A[180] = _t712;
+    A[178] = _t470;
+    A[179] = _t471;
+    A[180] = _t472;
     A[181] = TRAILER3_LIT(0.0);
     A[182] = TRAILER3_LIT(0.0);
     A[183] = TRAILER3_LIT(0.0);
@@ -3739,14 +3042,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[187] = TRAILER3_LIT(0.0);
     A[188] = TRAILER3_LIT(0.0);
     A[189] = TRAILER3_LIT(0.0);
-    A[190] = _t713;
-    A[191] = _t714;
+    A[190] = _t473;
+    A[191] = _t474;
     A[192] = TRAILER3_LIT(0.0);
     A[193] = TRAILER3_LIT(0.0);
-    A[194] = _t715;
-    A[195] = _t716;
-    A[196] = _t717;
-    A[197] = _t718;
+    A[194] = _t475;
+    A[195] = _t476;
+    A[196] = _t477;
+    A[197] = _t478;
     A[198] = TRAILER3_LIT(0.0);
     A[199] = TRAILER3_LIT(0.0);
     A[200] = TRAILER3_LIT(0.0);
@@ -3755,14 +3058,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[203] = TRAILER3_LIT(0.0);
     A[204] = TRAILER3_LIT(0.0);
     A[205] = TRAILER3_LIT(0.0);
-    A[206] = _t719;
-    A[207] = _t720;
+    A[206] = _t479;
+    A[207] = _t480;
     A[208] = TRAILER3_LIT(0.0);
     A[209] = TRAILER3_LIT(0.0);
-    A[210] = _t721;
-    A[211] = _t722;
-    A[212] = _t723;
-    A[213] = _t724;
+    A[210] = _t481;
+    A[211] = _t482;
+    A[212] = _t483;
+    A[213] = _t484;
     A[214] = TRAILER3_LIT(0.0);
     A[215] = TRAILER3_LIT(0.0);
     A[216] = TRAILER3_LIT(0.0);
@@ -3771,14 +3074,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[219] = TRAILER3_LIT(0.0);
     A[220] = TRAILER3_LIT(0.0);
     A[221] = TRAILER3_LIT(0.0);
-    A[222] = _t725;
-    A[223] = _t726;
+    A[222] = _t485;
+    A[223] = _t486;
     A[224] = TRAILER3_LIT(0.0);
     A[225] = TRAILER3_LIT(0.0);
-    A[226] = _t792;
-    A[227] = _t858;
-    A[228] = _t908;
-    A[229] = _t937;
+    A[226] = _t552;
+    A[227] = _t618;
+    A[228] = _t668;
+    A[229] = _t697;
     A[230] = TRAILER3_LIT(0.0);
     A[231] = TRAILER3_LIT(0.0);
     A[232] = TRAILER3_LIT(0.0);
@@ -3787,14 +3090,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[235] = TRAILER3_LIT(0.0);
     A[236] = TRAILER3_LIT(0.0);
     A[237] = TRAILER3_LIT(0.0);
-    A[238] = _t965;
-    A[239] = _t993;
+    A[238] = _t725;
+    A[239] = _t753;
     A[240] = TRAILER3_LIT(0.0);
     A[241] = TRAILER3_LIT(0.0);
-    A[242] = _t994;
-    A[243] = _t995;
-    A[244] = _t996;
-    A[245] = _t997;
+    A[242] = _t754;
+    A[243] = _t755;
+    A[244] = _t756;
+    A[245] = _t757;
     A[246] = TRAILER3_LIT(0.0);
     A[247] = TRAILER3_LIT(0.0);
     A[248] = TRAILER3_LIT(0.0);
@@ -3803,8 +3106,8 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     A[251] = TRAILER3_LIT(0.0);
     A[252] = TRAILER3_LIT(0.0);
     A[253] = TRAILER3_LIT(0.0);
-    A[254] = _t998;
-    A[255] = _t999;
+    A[254] = _t758;
+    A[255] = _t759;
     B[0] = TRAILER3_LIT(0.0);
     B[1] = TRAILER3_LIT(0.0);
     B[2] = TRAILER3_LIT(0.0);
@@ -3833,14 +3136,14 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
     B[25] = TRAILER3_LIT(0.0);
     B[26] = TRAILER3_LIT(0.0);
     B[27] = TRAILER3_LIT(0.0);
-    B[28] = _t1002;
-    B[29] = _t1005;
-    B[30] = _t1006;
-    B[31] = _t1007;
+    B[28] = _t762;
+    B[29] = _t765;
+    B[30] = _t766;
+    B[31] = _t767;
 }
 
 /* trailer3_wheel_contact_forces: documented in trailer3_model.h.
-   operations after CSE: 517 add, 722 mul, 9 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 413 add, 602 mul, 9 div, 12 sin/cos, 0 sqrt */
 trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
     trailer3_real_t *longitudinal, trailer3_real_t *lateral)
@@ -3907,534 +3210,192 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
             & TRAILER3_EXP_CARRY_TOP) != 0u) {
         return TRAILER3_ERR_NONFINITE_INPUT;
     }
-    const trailer3_real_t _t0 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t1 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t2 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t3 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t4 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t6 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t7 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t8 = _t6*thetadot_right + _t7*thetadot_left;
-    const trailer3_real_t _t9 = _t8*thetadot_right;
-    const trailer3_real_t _t10 = _t8*thetadot_left;
-    const trailer3_real_t _t11 = -theta_tractor;
-    const trailer3_real_t _t12 = _t11 + theta_cart;
-    const trailer3_real_t _t13 = TRAILER3_SIN(_t12);
-    const trailer3_real_t _t14 = -_t13;
-    const trailer3_real_t _t15 = TRAILER3_COS(_t12);
-    const trailer3_real_t _t16 = TRAILER3_LIT(0.3)*_t15;
-    const trailer3_real_t _t17 = -_t16;
-    const trailer3_real_t _t18 = _t11 + theta_cart2;
-    const trailer3_real_t _t19 = TRAILER3_SIN(_t18);
-    const trailer3_real_t _t20 = -_t19;
-    const trailer3_real_t _t21 = TRAILER3_COS(_t18);
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t21;
-    const trailer3_real_t _t23 = -_t22;
-    const trailer3_real_t _t24 = TRAILER3_LIT(0.85)*_t13;
-    const trailer3_real_t _t25 = TRAILER3_LIT(0.85)*_t15;
-    const trailer3_real_t _t26 = -_t19*_t24 - _t21*_t25;
-    const trailer3_real_t _t27 = _t11 + theta_cart3;
-    const trailer3_real_t _t28 = TRAILER3_SIN(_t27);
-    const trailer3_real_t _t29 = -_t28;
-    const trailer3_real_t _t30 = TRAILER3_COS(_t27);
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.3)*_t30;
-    const trailer3_real_t _t32 = -_t31;
-    const trailer3_real_t _t33 = -_t24*_t28 - _t25*_t30;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.85)*_t30;
-    const trailer3_real_t _t35 = -TRAILER3_LIT(0.85)*_t19*_t28 - _t21*_t34;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.3)*_t19;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.85)*_t15*_t19 - _t21*_t24;
-    const trailer3_real_t _t39 = TRAILER3_LIT(0.3)*_t28;
-    const trailer3_real_t _t40 = TRAILER3_LIT(0.85)*_t15*_t28 - _t24*_t30;
-    const trailer3_real_t _t41 = -_t19*_t34 + TRAILER3_LIT(0.85)*_t21*_t28;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t43 = _t14*_t42 + _t17*_t6;
-    const trailer3_real_t _t44 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t45 = _t14*_t44 + _t17*_t7;
-    const trailer3_real_t _t46 = TRAILER3_LIT(1.6666666666666667)*_t43;
-    const trailer3_real_t _t47 = _t26*_t46;
-    const trailer3_real_t _t48 = _t20*_t42 + _t23*_t6;
-    const trailer3_real_t _t49 = _t47 + _t48;
-    const trailer3_real_t _t50 = TRAILER3_LIT(1.6666666666666667)*_t45;
-    const trailer3_real_t _t51 = _t26*_t50;
-    const trailer3_real_t _t52 = _t20*_t44 + _t23*_t7;
-    const trailer3_real_t _t53 = _t51 + _t52;
-    const trailer3_real_t _t54 = TRAILER3_LIT(1.6666666666666667)*_t49;
-    const trailer3_real_t _t55 = _t35*_t54;
-    const trailer3_real_t _t56 = _t33*_t46;
-    const trailer3_real_t _t57 = _t29*_t42 + _t32*_t6;
-    const trailer3_real_t _t58 = _t55 + _t56 + _t57;
-    const trailer3_real_t _t59 = TRAILER3_LIT(1.6666666666666667)*_t53;
-    const trailer3_real_t _t60 = _t35*_t59;
-    const trailer3_real_t _t61 = _t33*_t50;
-    const trailer3_real_t _t62 = _t29*_t44 + _t32*_t7;
-    const trailer3_real_t _t63 = _t60 + _t61 + _t62;
-    const trailer3_real_t _t64 = TRAILER3_LIT(0.2)*_t46;
-    const trailer3_real_t _t65 = _t15*_t42;
-    const trailer3_real_t _t66 = _t36*_t6;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.2)*_t50;
-    const trailer3_real_t _t68 = _t15*_t44;
-    const trailer3_real_t _t69 = _t36*_t7;
-    const trailer3_real_t _t70 = -_t65 + _t66;
-    const trailer3_real_t _t71 = -_t68 + _t69;
-    const trailer3_real_t _t72 = TRAILER3_LIT(0.2)*_t54;
-    const trailer3_real_t _t73 = _t37*_t6;
-    const trailer3_real_t _t74 = _t38*_t46;
-    const trailer3_real_t _t75 = _t21*_t42;
-    const trailer3_real_t _t76 = _t73 + _t74 - _t75;
-    const trailer3_real_t _t77 = TRAILER3_LIT(0.2)*_t59;
-    const trailer3_real_t _t78 = _t37*_t7;
-    const trailer3_real_t _t79 = _t38*_t50;
-    const trailer3_real_t _t80 = _t21*_t44;
-    const trailer3_real_t _t81 = _t78 + _t79 - _t80;
-    const trailer3_real_t _t82 = TRAILER3_LIT(1.6666666666666667)*_t58;
-    const trailer3_real_t _t83 = TRAILER3_LIT(0.2)*_t82;
-    const trailer3_real_t _t84 = _t39*_t6;
-    const trailer3_real_t _t85 = _t40*_t46;
-    const trailer3_real_t _t86 = _t41*_t54;
-    const trailer3_real_t _t87 = _t30*_t42;
-    const trailer3_real_t _t88 = _t84 + _t85 + _t86 - _t87;
-    const trailer3_real_t _t89 = TRAILER3_LIT(1.6666666666666667)*_t63;
-    const trailer3_real_t _t90 = TRAILER3_LIT(0.2)*_t89;
-    const trailer3_real_t _t91 = _t39*_t7;
-    const trailer3_real_t _t92 = _t40*_t50;
-    const trailer3_real_t _t93 = _t41*_t59;
-    const trailer3_real_t _t94 = _t30*_t44;
-    const trailer3_real_t _t95 = _t91 + _t92 + _t93 - _t94;
-    const trailer3_real_t _t96 = -TRAILER3_LIT(1.6666666666666667)*_t70;
-    const trailer3_real_t _t97 = _t26*_t96;
-    const trailer3_real_t _t98 = -TRAILER3_LIT(1.6666666666666667)*_t71;
-    const trailer3_real_t _t99 = _t26*_t98;
-    const trailer3_real_t _t100 = _t33*_t96;
-    const trailer3_real_t _t101 = _t33*_t98;
-    const trailer3_real_t _t102 = TRAILER3_LIT(0.2)*_t96;
-    const trailer3_real_t _t103 = TRAILER3_LIT(0.2)*_t98;
-    const trailer3_real_t _t104 = _t73 - _t75 - _t97;
-    const trailer3_real_t _t105 = -TRAILER3_LIT(1.6666666666666667)*_t104;
-    const trailer3_real_t _t106 = TRAILER3_LIT(0.2)*_t105;
-    const trailer3_real_t _t107 = _t38*_t96;
-    const trailer3_real_t _t108 = _t107 + _t48;
-    const trailer3_real_t _t109 = _t78 - _t80 - _t99;
-    const trailer3_real_t _t110 = -TRAILER3_LIT(1.6666666666666667)*_t109;
-    const trailer3_real_t _t111 = TRAILER3_LIT(0.2)*_t110;
-    const trailer3_real_t _t112 = _t38*_t98;
-    const trailer3_real_t _t113 = _t112 + _t52;
-    const trailer3_real_t _t114 = _t74 + _t97;
-    const trailer3_real_t _t115 = -TRAILER3_LIT(1.6666666666666667)*_t114;
-    const trailer3_real_t _t116 = TRAILER3_LIT(0.2)*_t115;
-    const trailer3_real_t _t117 = _t79 + _t99;
-    const trailer3_real_t _t118 = -TRAILER3_LIT(1.6666666666666667)*_t117;
-    const trailer3_real_t _t119 = TRAILER3_LIT(0.2)*_t118;
-    const trailer3_real_t _t120 = TRAILER3_LIT(1.6666666666666667)*_t76;
-    const trailer3_real_t _t121 = TRAILER3_LIT(0.2)*_t120;
-    const trailer3_real_t _t122 = TRAILER3_LIT(1.6666666666666667)*_t81;
-    const trailer3_real_t _t123 = TRAILER3_LIT(0.2)*_t122;
-    const trailer3_real_t _t124 = -_t100 - _t105*_t35 + _t84 - _t87;
-    const trailer3_real_t _t125 = -TRAILER3_LIT(1.6666666666666667)*_t124;
-    const trailer3_real_t _t126 = TRAILER3_LIT(0.2)*_t125;
-    const trailer3_real_t _t127 = _t40*_t96;
-    const trailer3_real_t _t128 = _t105*_t41 + _t127 + _t57;
-    const trailer3_real_t _t129 = -_t101 - _t110*_t35 + _t91 - _t94;
-    const trailer3_real_t _t130 = -TRAILER3_LIT(1.6666666666666667)*_t129;
-    const trailer3_real_t _t131 = TRAILER3_LIT(0.2)*_t130;
-    const trailer3_real_t _t132 = _t40*_t98;
-    const trailer3_real_t _t133 = _t110*_t41 + _t132 + _t62;
-    const trailer3_real_t _t134 = _t100 - _t115*_t35 + _t85;
-    const trailer3_real_t _t135 = -TRAILER3_LIT(1.6666666666666667)*_t134;
-    const trailer3_real_t _t136 = TRAILER3_LIT(0.2)*_t135;
-    const trailer3_real_t _t137 = _t115*_t41 - _t127 + _t56;
-    const trailer3_real_t _t138 = _t101 - _t118*_t35 + _t92;
-    const trailer3_real_t _t139 = -TRAILER3_LIT(1.6666666666666667)*_t138;
-    const trailer3_real_t _t140 = TRAILER3_LIT(0.2)*_t139;
-    const trailer3_real_t _t141 = _t118*_t41 - _t132 + _t61;
-    const trailer3_real_t _t142 = -_t120*_t35 + _t86;
-    const trailer3_real_t _t143 = -TRAILER3_LIT(1.6666666666666667)*_t142;
-    const trailer3_real_t _t144 = TRAILER3_LIT(0.2)*_t143;
-    const trailer3_real_t _t145 = _t120*_t41 + _t55;
-    const trailer3_real_t _t146 = -_t122*_t35 + _t93;
-    const trailer3_real_t _t147 = -TRAILER3_LIT(1.6666666666666667)*_t146;
-    const trailer3_real_t _t148 = TRAILER3_LIT(0.2)*_t147;
-    const trailer3_real_t _t149 = _t122*_t41 + _t60;
-    const trailer3_real_t _t150 = TRAILER3_LIT(1.6666666666666667)*_t88;
-    const trailer3_real_t _t151 = TRAILER3_LIT(0.2)*_t150;
-    const trailer3_real_t _t152 = TRAILER3_LIT(1.6666666666666667)*_t95;
-    const trailer3_real_t _t153 = TRAILER3_LIT(0.2)*_t152;
-    const trailer3_real_t _t154 = K_theta_cart_x_tractor*_t13;
-    const trailer3_real_t _t155 = K_theta_cart_x_tractor_2*_t15;
-    const trailer3_real_t _t156 = _t154 + _t155;
-    const trailer3_real_t _t157 = K_theta_cart2_x_tractor*_t19;
-    const trailer3_real_t _t158 = K_theta_cart2_x_tractor_2*_t21;
-    const trailer3_real_t _t159 = _t157 + _t158;
-    const trailer3_real_t _t160 = K_theta_cart3_x_tractor*_t28;
-    const trailer3_real_t _t161 = K_theta_cart3_x_tractor_2*_t30;
-    const trailer3_real_t _t162 = _t160 + _t161;
-    const trailer3_real_t _t163 = K_theta_cart_x_tractor*_t15;
-    const trailer3_real_t _t164 = K_theta_cart2_x_tractor*_t21;
-    const trailer3_real_t _t165 = K_theta_cart3_x_tractor*_t30;
-    const trailer3_real_t _t166 = K_theta_cart_x_tractor*_t16 - K_theta_cart_x_tractor_2*_t36;
-    const trailer3_real_t _t167 = K_theta_cart2_x_tractor*_t22 - K_theta_cart2_x_tractor_2*_t37;
-    const trailer3_real_t _t168 = K_theta_cart3_x_tractor*_t31 - K_theta_cart3_x_tractor_2*_t39;
-    const trailer3_real_t _t169 = K_theta_cart2_x_tractor_2*_t19;
-    const trailer3_real_t _t170 = _t157*_t24 + _t158*_t24 + _t164*_t25 - _t169*_t25;
-    const trailer3_real_t _t171 = K_theta_cart3_x_tractor_2*_t28;
-    const trailer3_real_t _t172 = _t160*_t24 + _t161*_t24 + _t165*_t25 - _t171*_t25;
-    const trailer3_real_t _t173 = TRAILER3_LIT(0.85)*_t19;
-    const trailer3_real_t _t174 = TRAILER3_LIT(0.85)*_t21;
-    const trailer3_real_t _t175 = _t160*_t173 + _t161*_t173 + _t165*_t174 - _t171*_t174;
-    const trailer3_real_t _t176 = _t8*_t8;
-    const trailer3_real_t _t177 = _t54*thetadot_right + _t59*thetadot_left;
-    const trailer3_real_t _t178 = _t177*_t177;
-    const trailer3_real_t _t179 = _t82*thetadot_right + _t89*thetadot_left;
-    const trailer3_real_t _t180 = _t179*_t179;
-    const trailer3_real_t _t181 = _t165*_t180;
-    const trailer3_real_t _t182 = _t46*thetadot_right + _t50*thetadot_left;
-    const trailer3_real_t _t183 = _t182*_t182;
-    const trailer3_real_t _t184 = _t169*_t178;
-    const trailer3_real_t _t185 = _t171*_t180;
-    const trailer3_real_t _t186 = _t157*_t178;
-    const trailer3_real_t _t187 = _t158*_t178;
-    const trailer3_real_t _t188 = _t160*_t180;
-    const trailer3_real_t _t189 = _t161*_t180;
-    const trailer3_real_t _t190 = K_theta_cart2_x_tractor*_t37;
-    const trailer3_real_t _t191 = K_theta_cart2_x_tractor_2*_t22;
-    const trailer3_real_t _t192 = K_theta_cart3_x_tractor*_t39;
-    const trailer3_real_t _t193 = K_theta_cart3_x_tractor_2*_t31;
-    const trailer3_real_t _t194 = _t183*_t24;
-    const trailer3_real_t _t195 = _t183*_t25;
-    const trailer3_real_t _t196 = _t173*_t178;
-    const trailer3_real_t _t197 = _t174*_t178;
-    const trailer3_real_t _t198 = _t182*thetadot_right;
-    const trailer3_real_t _t199 = _t182*thetadot_left;
-    const trailer3_real_t _t200 = _t64 + _t65 - _t66;
-    const trailer3_real_t _t201 = _t0*_t200;
-    const trailer3_real_t _t202 = J_theta_cart_right*_t201;
-    const trailer3_real_t _t203 = _t67 + _t68 - _t69;
-    const trailer3_real_t _t204 = _t0*_t203;
-    const trailer3_real_t _t205 = J_theta_cart_right*_t204;
-    const trailer3_real_t _t206 = -_t64 - _t70;
-    const trailer3_real_t _t207 = _t1*_t206;
-    const trailer3_real_t _t208 = J_theta_cart_left*_t207;
-    const trailer3_real_t _t209 = -_t67 - _t71;
-    const trailer3_real_t _t210 = _t1*_t209;
-    const trailer3_real_t _t211 = J_theta_cart_left*_t210;
-    const trailer3_real_t _t212 = _t72 - _t76;
-    const trailer3_real_t _t213 = _t2*_t212;
-    const trailer3_real_t _t214 = J_theta_cart2_right*_t213;
-    const trailer3_real_t _t215 = _t77 - _t81;
-    const trailer3_real_t _t216 = _t2*_t215;
-    const trailer3_real_t _t217 = J_theta_cart2_right*_t216;
-    const trailer3_real_t _t218 = -_t72 - _t76;
-    const trailer3_real_t _t219 = _t218*_t3;
-    const trailer3_real_t _t220 = J_theta_cart2_left*_t219;
-    const trailer3_real_t _t221 = -_t77 - _t81;
-    const trailer3_real_t _t222 = _t221*_t3;
-    const trailer3_real_t _t223 = J_theta_cart2_left*_t222;
-    const trailer3_real_t _t224 = _t83 - _t88;
-    const trailer3_real_t _t225 = _t224*_t4;
-    const trailer3_real_t _t226 = J_theta_cart3_right*_t225;
-    const trailer3_real_t _t227 = _t90 - _t95;
-    const trailer3_real_t _t228 = _t227*_t4;
-    const trailer3_real_t _t229 = J_theta_cart3_right*_t228;
-    const trailer3_real_t _t230 = -_t83 - _t88;
-    const trailer3_real_t _t231 = _t230*_t5;
-    const trailer3_real_t _t232 = J_theta_cart3_left*_t231;
-    const trailer3_real_t _t233 = -_t90 - _t95;
-    const trailer3_real_t _t234 = _t233*_t5;
-    const trailer3_real_t _t235 = J_theta_cart3_left*_t234;
-    const trailer3_real_t _t236 = -K_theta_cart_x_tractor_2*_t13*_t183
-            + K_theta_tractor_x_tractor*_t176 + _t163*_t183 + _t164*_t178 + _t181 - _t184 - _t185;
-    const trailer3_real_t _t237 = -_t198 + _t9;
-    const trailer3_real_t _t238 = _t10 - _t199;
-    const trailer3_real_t _t239 = _t237*_t96 + _t238*_t98;
-    const trailer3_real_t _t240 = _t177*thetadot_right;
-    const trailer3_real_t _t241 = _t177*thetadot_left;
-    const trailer3_real_t _t242 = _t10*_t110 + _t105*_t9 + _t115*_t198 + _t118*_t199 + _t120*_t240
-            + _t122*_t241;
-    const trailer3_real_t _t243 = _t179*thetadot_right;
-    const trailer3_real_t _t244 = _t179*thetadot_left;
-    const trailer3_real_t _t245 = _t10*_t130 + _t125*_t9 + _t135*_t198 + _t139*_t199 + _t143*_t240
-            + _t147*_t241 + _t150*_t243 + _t152*_t244;
-    const trailer3_real_t _t246 = _t156*_t239 + _t159*_t242 + _t162*_t245 + _t236;
-    const trailer3_real_t _t247 = K_theta_cart_x_tractor_2*_t13 - _t163;
-    const trailer3_real_t _t248 = TRAILER3_LIT(0.85)*K_theta_cart2_x_tractor*_t13*_t178*_t21
-            + TRAILER3_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t180*_t30
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor*_t13*_t176
-            + TRAILER3_LIT(0.3)*K_theta_cart_x_tractor_2*_t15*_t176 - _t184*_t24 - _t185*_t24
-            - _t186*_t25 - _t187*_t25 - _t188*_t25 - _t189*_t25;
-    const trailer3_real_t _t249 = _t10*_t44 + _t42*_t9;
-    const trailer3_real_t _t250 = _t247*_t249 + _t248;
-    const trailer3_real_t _t251 = J_theta_cart*_t239 + _t170*_t242 + _t172*_t245 + _t250;
-    const trailer3_real_t _t252 = K_theta_cart2_x_tractor_2*_t19 - _t164;
-    const trailer3_real_t _t253 = _t157*_t195 + _t158*_t195 - _t164*_t194 + _t169*_t194
-            + _t173*_t181 - _t173*_t185 - _t174*_t188 - _t174*_t189 + _t176*_t190 + _t176*_t191;
-    const trailer3_real_t _t254 = _t249*_t252 + _t253;
-    const trailer3_real_t _t255 = J_theta_cart2*_t242 + _t170*_t239 + _t175*_t245 + _t254;
-    const trailer3_real_t _t256 = K_theta_cart3_x_tractor_2*_t28 - _t165;
-    const trailer3_real_t _t257 = _t160*_t195 + _t160*_t197 + _t161*_t195 + _t161*_t197
-            - _t165*_t194 - _t165*_t196 + _t171*_t194 + _t171*_t196 + _t176*_t192 + _t176*_t193;
-    const trailer3_real_t _t258 = _t249*_t256 + _t257;
-    const trailer3_real_t _t259 = J_theta_cart3*_t245 + _t172*_t239 + _t175*_t242 + _t258;
-    const trailer3_real_t _t260 = -K_theta_cart_x_tractor*_t183*_t36
-            - K_theta_cart_x_tractor_2*_t16*_t183 - _t178*_t190 - _t178*_t191 - _t180*_t192
-            - _t180*_t193;
-    const trailer3_real_t _t261 = -K_theta_tractor_x_tractor*_t249 + _t260;
-    const trailer3_real_t _t262 = _t166*_t239 + _t167*_t242 + _t168*_t245 + _t261;
-    const trailer3_real_t _t263 = J_x_tractor*_t44 + K_theta_tractor_x_tractor_2*_t7 + _t156*_t50
-            + _t159*_t59 + _t162*_t89;
-    const trailer3_real_t _t264 = J_theta_tractor*_t7 + K_theta_tractor_x_tractor_2*_t44
-            + _t166*_t50 + _t167*_t59 + _t168*_t89;
-    const trailer3_real_t _t265 = J_theta_cart*_t50 + _t156*_t44 + _t166*_t7 + _t170*_t59
-            + _t172*_t89;
-    const trailer3_real_t _t266 = J_theta_cart2*_t59 + _t159*_t44 + _t167*_t7 + _t170*_t50
-            + _t175*_t89;
-    const trailer3_real_t _t267 = J_theta_cart3*_t89 + _t162*_t44 + _t168*_t7 + _t172*_t50
-            + _t175*_t59;
-    const trailer3_real_t _t268 = _t201*_t205 + _t207*_t211 + _t213*_t217 + _t219*_t223
-            + _t225*_t229 + _t231*_t235 + _t263*_t42 + _t264*_t6 + _t265*_t46 + _t266*_t54
-            + _t267*_t82;
-    const trailer3_real_t _t269 = J_theta_left + _t204*_t205 + _t210*_t211 + _t216*_t217
-            + _t222*_t223 + _t228*_t229 + _t234*_t235 + _t263*_t44 + _t264*_t7 + _t265*_t50
-            + _t266*_t59 + _t267*_t89;
-    const trailer3_real_t _t270 = _t102 - _t43;
-    const trailer3_real_t _t271 = _t0*_t270;
-    const trailer3_real_t _t272 = _t103 - _t45;
-    const trailer3_real_t _t273 = _t0*_t272;
-    const trailer3_real_t _t274 = _t237*_t271 + _t238*_t273;
-    const trailer3_real_t _t275 = -_t102 - _t43;
-    const trailer3_real_t _t276 = _t1*_t275;
-    const trailer3_real_t _t277 = -_t103 - _t45;
-    const trailer3_real_t _t278 = _t1*_t277;
-    const trailer3_real_t _t279 = _t237*_t276 + _t238*_t278;
-    const trailer3_real_t _t280 = _t106 - _t108;
-    const trailer3_real_t _t281 = _t2*_t280;
-    const trailer3_real_t _t282 = _t111 - _t113;
-    const trailer3_real_t _t283 = _t2*_t282;
-    const trailer3_real_t _t284 = _t107 + _t116 - _t47;
-    const trailer3_real_t _t285 = _t2*_t284;
-    const trailer3_real_t _t286 = _t112 + _t119 - _t51;
-    const trailer3_real_t _t287 = _t2*_t286;
-    const trailer3_real_t _t288 = _t121 + _t49;
-    const trailer3_real_t _t289 = _t2*_t288;
-    const trailer3_real_t _t290 = _t123 + _t53;
-    const trailer3_real_t _t291 = _t2*_t290;
-    const trailer3_real_t _t292 = _t10*_t283 + _t198*_t285 + _t199*_t287 + _t240*_t289 + _t241*_t291
-            + _t281*_t9;
-    const trailer3_real_t _t293 = -_t106 - _t108;
-    const trailer3_real_t _t294 = _t293*_t3;
-    const trailer3_real_t _t295 = -_t111 - _t113;
-    const trailer3_real_t _t296 = _t295*_t3;
-    const trailer3_real_t _t297 = _t107 - _t116 - _t47;
-    const trailer3_real_t _t298 = _t297*_t3;
-    const trailer3_real_t _t299 = _t112 - _t119 - _t51;
-    const trailer3_real_t _t300 = _t299*_t3;
-    const trailer3_real_t _t301 = -_t121 + _t49;
-    const trailer3_real_t _t302 = _t3*_t301;
-    const trailer3_real_t _t303 = -_t123 + _t53;
-    const trailer3_real_t _t304 = _t3*_t303;
-    const trailer3_real_t _t305 = _t10*_t296 + _t198*_t298 + _t199*_t300 + _t240*_t302 + _t241*_t304
-            + _t294*_t9;
-    const trailer3_real_t _t306 = _t126 - _t128;
-    const trailer3_real_t _t307 = _t306*_t4;
-    const trailer3_real_t _t308 = _t131 - _t133;
-    const trailer3_real_t _t309 = _t308*_t4;
-    const trailer3_real_t _t310 = _t136 - _t137;
-    const trailer3_real_t _t311 = _t310*_t4;
-    const trailer3_real_t _t312 = _t140 - _t141;
-    const trailer3_real_t _t313 = _t312*_t4;
-    const trailer3_real_t _t314 = _t144 - _t145;
-    const trailer3_real_t _t315 = _t314*_t4;
-    const trailer3_real_t _t316 = _t148 - _t149;
-    const trailer3_real_t _t317 = _t316*_t4;
-    const trailer3_real_t _t318 = _t151 + _t58;
-    const trailer3_real_t _t319 = _t318*_t4;
-    const trailer3_real_t _t320 = _t153 + _t63;
-    const trailer3_real_t _t321 = _t320*_t4;
-    const trailer3_real_t _t322 = _t10*_t309 + _t198*_t311 + _t199*_t313 + _t240*_t315 + _t241*_t317
-            + _t243*_t319 + _t244*_t321 + _t307*_t9;
-    const trailer3_real_t _t323 = -_t126 - _t128;
-    const trailer3_real_t _t324 = _t323*_t5;
-    const trailer3_real_t _t325 = -_t131 - _t133;
-    const trailer3_real_t _t326 = _t325*_t5;
-    const trailer3_real_t _t327 = -_t136 - _t137;
-    const trailer3_real_t _t328 = _t327*_t5;
-    const trailer3_real_t _t329 = -_t140 - _t141;
-    const trailer3_real_t _t330 = _t329*_t5;
-    const trailer3_real_t _t331 = -_t144 - _t145;
-    const trailer3_real_t _t332 = _t331*_t5;
-    const trailer3_real_t _t333 = -_t148 - _t149;
-    const trailer3_real_t _t334 = _t333*_t5;
-    const trailer3_real_t _t335 = -_t151 + _t58;
-    const trailer3_real_t _t336 = _t335*_t5;
-    const trailer3_real_t _t337 = -_t153 + _t63;
-    const trailer3_real_t _t338 = _t337*_t5;
-    const trailer3_real_t _t339 = _t10*_t326 + _t198*_t328 + _t199*_t330 + _t240*_t332 + _t241*_t334
-            + _t243*_t336 + _t244*_t338 + _t324*_t9;
-    const trailer3_real_t _t340 = _t202*_t274 + _t208*_t279 + _t214*_t292 + _t220*_t305
-            + _t226*_t322 + _t232*_t339 + _t246*_t42 + _t251*_t46 + _t255*_t54 + _t259*_t82
-            + _t262*_t6;
-    const trailer3_real_t _t341 = -_t340 + tau_right;
-    const trailer3_real_t _t342 = _t205*_t274 + _t211*_t279 + _t217*_t292 + _t223*_t305
-            + _t229*_t322 + _t235*_t339 + _t246*_t44 + _t251*_t50 + _t255*_t59 + _t259*_t89
-            + _t262*_t7;
-    const trailer3_real_t _t343 = -_t342 + tau_left;
-    const trailer3_real_t _t344 = J_x_tractor*_t42 + K_theta_tractor_x_tractor_2*_t6 + _t156*_t46
-            + _t159*_t54 + _t162*_t82;
-    const trailer3_real_t _t345 = J_theta_tractor*_t6 + K_theta_tractor_x_tractor_2*_t42
-            + _t166*_t46 + _t167*_t54 + _t168*_t82;
-    const trailer3_real_t _t346 = J_theta_cart*_t46 + _t156*_t42 + _t166*_t6 + _t170*_t54
-            + _t172*_t82;
-    const trailer3_real_t _t347 = J_theta_cart2*_t54 + _t159*_t42 + _t167*_t6 + _t170*_t46
-            + _t175*_t82;
-    const trailer3_real_t _t348 = J_theta_cart3*_t82 + _t162*_t42 + _t168*_t6 + _t172*_t46
-            + _t175*_t54;
-    const trailer3_real_t _t349 = J_theta_right + _t201*_t202 + _t207*_t208 + _t213*_t214
-            + _t219*_t220 + _t225*_t226 + _t231*_t232 + _t344*_t42 + _t345*_t6 + _t346*_t46
-            + _t347*_t54 + _t348*_t82;
-    const trailer3_real_t _t350 = -_t268*_t268 + _t269*_t349;
-    const trailer3_real_t _t351 = TRAILER3_LIT(1.0)/_t350;
-    const trailer3_real_t _t352 = _t351*(-_t268*_t343 + _t269*_t341);
-    const trailer3_real_t _t353 = _t351*(-_t268*_t341 + _t343*_t349);
-    const trailer3_real_t _t354 = _t352*_t42 + _t353*_t44;
-    const trailer3_real_t _t355 = _t352*_t6 + _t353*_t7;
-    const trailer3_real_t _t356 = _t239 + _t352*_t46 + _t353*_t50;
-    const trailer3_real_t _t357 = _t242 + _t352*_t54 + _t353*_t59;
-    const trailer3_real_t _t358 = _t245 + _t352*_t82 + _t353*_t89;
-    const trailer3_real_t _t359 = -J_x_tractor*_t354 - K_theta_tractor_x_tractor_2*_t355
-            - _t156*_t356 - _t159*_t357 - _t162*_t358 - _t236;
-    const trailer3_real_t _t360 = _t225*_t352 + _t228*_t353 + _t322;
-    const trailer3_real_t _t361 = -J_theta_cart3_right*_t360;
-    const trailer3_real_t _t362 = _t361*_t4;
-    const trailer3_real_t _t363 = _t231*_t352 + _t234*_t353 + _t339;
-    const trailer3_real_t _t364 = -J_theta_cart3_left*_t363;
-    const trailer3_real_t _t365 = _t364*_t5;
-    const trailer3_real_t _t366 = -J_theta_cart3*_t358 - _t162*_t354 - _t168*_t355 - _t172*_t356
-            - _t175*_t357 - _t258;
-    const trailer3_real_t _t367 = TRAILER3_LIT(0.2)*_t362 - TRAILER3_LIT(0.2)*_t365 + _t366;
-    const trailer3_real_t _t368 = -TRAILER3_LIT(1.6666666666666667)*_t367;
-    const trailer3_real_t _t369 = _t213*_t352 + _t216*_t353 + _t292;
-    const trailer3_real_t _t370 = -J_theta_cart2_right*_t369;
-    const trailer3_real_t _t371 = _t2*_t370;
-    const trailer3_real_t _t372 = _t219*_t352 + _t222*_t353 + _t305;
-    const trailer3_real_t _t373 = -J_theta_cart2_left*_t372;
-    const trailer3_real_t _t374 = _t3*_t373;
-    const trailer3_real_t _t375 = -J_theta_cart2*_t357 - _t159*_t354 - _t167*_t355 - _t170*_t356
-            - _t175*_t358 - _t254;
-    const trailer3_real_t _t376 = -_t35*_t368 - _t362*_t41 - _t365*_t41 + TRAILER3_LIT(0.2)*_t371
-            - TRAILER3_LIT(0.2)*_t374 + _t375;
-    const trailer3_real_t _t377 = -TRAILER3_LIT(1.6666666666666667)*_t376;
-    const trailer3_real_t _t378 = _t201*_t352 + _t204*_t353 + _t274;
-    const trailer3_real_t _t379 = -J_theta_cart_right*_t378;
-    const trailer3_real_t _t380 = _t0*_t379;
-    const trailer3_real_t _t381 = _t207*_t352 + _t210*_t353 + _t279;
-    const trailer3_real_t _t382 = -J_theta_cart_left*_t381;
-    const trailer3_real_t _t383 = _t1*_t382;
-    const trailer3_real_t _t384 = -J_theta_cart*_t356 - _t156*_t354 - _t166*_t355 - _t170*_t357
-            - _t172*_t358 - _t250;
-    const trailer3_real_t _t385 = -_t26*_t377 - _t33*_t368 - _t362*_t40 - _t365*_t40 - _t371*_t38
-            - _t374*_t38 + TRAILER3_LIT(0.2)*_t380 - TRAILER3_LIT(0.2)*_t383 + _t384;
-    const trailer3_real_t _t386 = -TRAILER3_LIT(1.6666666666666667)*_t385;
-    const trailer3_real_t _t387 = _t13*_t386 + _t15*_t380 + _t15*_t383 + _t19*_t377 + _t21*_t371
-            + _t21*_t374 + _t28*_t368 + _t30*_t362 + _t30*_t365 + _t359;
-    const trailer3_real_t _t388 = TRAILER3_LIT(0.5)*_t387;
-    const trailer3_real_t _t389 = -J_theta_tractor*_t355 - K_theta_tractor_x_tractor_2*_t354
-            - _t166*_t356 - _t167*_t357 - _t168*_t358 - _t261;
-    const trailer3_real_t _t390 = TRAILER3_LIT(0.3)*_t15*_t386 + TRAILER3_LIT(0.3)*_t21*_t377
-            + TRAILER3_LIT(0.3)*_t30*_t368 - _t36*_t380 - _t36*_t383 - _t362*_t39 - _t365*_t39
-            - _t37*_t371 - _t37*_t374 + _t389;
-    const trailer3_real_t _t391 = TRAILER3_LIT(2.4154589371980677)*_t390;
-    const trailer3_real_t _t392 = TRAILER3_LIT(1.6666666666666667)*_t14;
-    const trailer3_real_t _t393 = TRAILER3_LIT(0.2)*_t392;
-    const trailer3_real_t _t394 = TRAILER3_LIT(1.6666666666666667)*_t17;
-    const trailer3_real_t _t395 = TRAILER3_LIT(0.2)*_t394;
-    const trailer3_real_t _t396 = -_t20 - _t26*_t392;
-    const trailer3_real_t _t397 = -TRAILER3_LIT(1.6666666666666667)*_t396;
-    const trailer3_real_t _t398 = TRAILER3_LIT(0.2)*_t397;
-    const trailer3_real_t _t399 = _t38*_t392;
-    const trailer3_real_t _t400 = -_t23 - _t26*_t394;
-    const trailer3_real_t _t401 = -TRAILER3_LIT(1.6666666666666667)*_t400;
-    const trailer3_real_t _t402 = TRAILER3_LIT(0.2)*_t401;
-    const trailer3_real_t _t403 = _t37 + _t38*_t394;
-    const trailer3_real_t _t404 = -_t29 - _t33*_t392 - _t35*_t397;
-    const trailer3_real_t _t405 = -TRAILER3_LIT(1.6666666666666667)*_t404;
-    const trailer3_real_t _t406 = TRAILER3_LIT(0.2)*_t405;
-    const trailer3_real_t _t407 = -_t30 + _t392*_t40 + _t397*_t41;
-    const trailer3_real_t _t408 = -_t32 - _t33*_t394 - _t35*_t401;
-    const trailer3_real_t _t409 = -TRAILER3_LIT(1.6666666666666667)*_t408;
-    const trailer3_real_t _t410 = TRAILER3_LIT(0.2)*_t409;
-    const trailer3_real_t _t411 = _t39 + _t394*_t40 + _t401*_t41;
-    const trailer3_real_t _t412 = K_theta_tractor_x_tractor_2*_t176 + _t154*_t183 + _t155*_t183
-            + _t186 + _t187 + _t188 + _t189;
-    const trailer3_real_t _t413 = -J_x_tractor*_t249 + K_theta_tractor_x_tractor*_t355 - _t247*_t356
-            - _t252*_t357 - _t256*_t358 - _t412;
-    const trailer3_real_t _t414 = _t13*_t380 + _t13*_t383 - _t15*_t386 + _t19*_t371 + _t19*_t374
-            - _t21*_t377 + _t28*_t362 + _t28*_t365 - _t30*_t368 + _t413;
-    const trailer3_real_t _t415 = -_t388 + _t391;
-    const trailer3_real_t _t416 = -_t388 - _t391;
-    const trailer3_real_t _t417 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t418 = TRAILER3_LIT(0.207)*_t417;
-    const trailer3_real_t _t419 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t420 = -TRAILER3_LIT(0.207)*_t419;
-    const trailer3_real_t _t421 = _t15 + _t393;
-    const trailer3_real_t _t422 = -_t36 + _t395;
-    const trailer3_real_t _t423 = _t0*_t421;
-    const trailer3_real_t _t424 = _t0*_t422;
-    const trailer3_real_t _t425 = _t15 - _t393;
-    const trailer3_real_t _t426 = -_t36 - _t395;
-    const trailer3_real_t _t427 = _t1*_t425;
-    const trailer3_real_t _t428 = _t1*_t426;
-    const trailer3_real_t _t429 = _t21 + _t398 - _t399;
-    const trailer3_real_t _t430 = _t402 - _t403;
-    const trailer3_real_t _t431 = _t2*_t429;
-    const trailer3_real_t _t432 = _t2*_t430;
-    const trailer3_real_t _t433 = _t21 - _t398 - _t399;
-    const trailer3_real_t _t434 = -_t402 - _t403;
-    const trailer3_real_t _t435 = _t3*_t433;
-    const trailer3_real_t _t436 = _t3*_t434;
-    const trailer3_real_t _t437 = _t406 - _t407;
-    const trailer3_real_t _t438 = _t410 - _t411;
-    const trailer3_real_t _t439 = _t4*_t437;
-    const trailer3_real_t _t440 = _t4*_t438;
-    const trailer3_real_t _t441 = -_t406 - _t407;
-    const trailer3_real_t _t442 = -_t410 - _t411;
-    const trailer3_real_t _t443 = _t441*_t5;
-    const trailer3_real_t _t444 = _t442*_t5;
-    const trailer3_real_t _t445 = J_x_tractor + _t156*_t392 + _t159*_t397 + _t162*_t405;
-    const trailer3_real_t _t446 = K_theta_tractor_x_tractor_2 + _t156*_t394 + _t159*_t401
-            + _t162*_t409;
-    const trailer3_real_t _t447 = J_theta_tractor + _t166*_t394 + _t167*_t401 + _t168*_t409;
-    const trailer3_real_t _t448 = J_theta_cart*_t392 + _t156 + _t170*_t397 + _t172*_t405;
-    const trailer3_real_t _t449 = J_theta_cart*_t394 + _t166 + _t170*_t401 + _t172*_t409;
-    const trailer3_real_t _t450 = J_theta_cart2*_t397 + _t159 + _t170*_t392 + _t175*_t405;
-    const trailer3_real_t _t451 = J_theta_cart2*_t401 + _t167 + _t170*_t394 + _t175*_t409;
-    const trailer3_real_t _t452 = J_theta_cart3*_t405 + _t162 + _t172*_t392 + _t175*_t397;
-    const trailer3_real_t _t453 = J_theta_cart3*_t409 + _t168 + _t172*_t394 + _t175*_t401;
-    const trailer3_real_t _t454 = J_theta_right*_t417;
-    const trailer3_real_t _t455 = J_theta_right*_t418;
-    const trailer3_real_t _t456 = J_theta_left*_t419;
-    const trailer3_real_t _t457 = J_theta_left*_t420;
-    const trailer3_real_t _t458 = J_theta_cart_right*_t423;
-    const trailer3_real_t _t459 = J_theta_cart_right*_t424;
-    const trailer3_real_t _t460 = J_theta_cart_left*_t427;
-    const trailer3_real_t _t461 = J_theta_cart_left*_t428;
-    const trailer3_real_t _t462 = J_theta_cart2_right*_t431;
-    const trailer3_real_t _t463 = J_theta_cart2_right*_t432;
-    const trailer3_real_t _t464 = J_theta_cart2_left*_t435;
-    const trailer3_real_t _t465 = J_theta_cart2_left*_t436;
-    const trailer3_real_t _t466 = J_theta_cart3_right*_t439;
-    const trailer3_real_t _t467 = J_theta_cart3_right*_t440;
-    const trailer3_real_t _t468 = J_theta_cart3_left*_t443;
-    const trailer3_real_t _t469 = J_theta_cart3_left*_t444;
-    const trailer3_real_t _t470 = _t392*_t448 + _t397*_t450 + _t405*_t452 + _t417*_t454
-            + _t419*_t456 + _t423*_t458 + _t427*_t460 + _t431*_t462 + _t435*_t464 + _t439*_t466
-            + _t443*_t468 + _t445;
-    const trailer3_real_t _t471 = _t392*_t449 + _t397*_t451 + _t405*_t453 + _t417*_t455
-            + _t419*_t457 + _t423*_t459 + _t427*_t461 + _t431*_t463 + _t435*_t465 + _t439*_t467
-            + _t443*_t469 + _t446;
-    const trailer3_real_t _t472 = _t394*_t449 + _t401*_t451 + _t409*_t453 + _t418*_t455
-            + _t420*_t457 + _t424*_t459 + _t428*_t461 + _t432*_t463 + _t436*_t465 + _t440*_t467
-            + _t444*_t469 + _t447;
+    (void)thetadot_left;
+    (void)thetadot_right;
+    trailer3_real_t _shared[199];
+    trailer3_staged_quantities(p, q, wheel_rates, _shared);
+    const trailer3_real_t _ms44 = _shared[2];
+    const trailer3_real_t _ms49 = _shared[3];
+    const trailer3_real_t _ms54 = _shared[4];
+    const trailer3_real_t _ms59 = _shared[5];
+    const trailer3_real_t _ms64 = _shared[6];
+    const trailer3_real_t _ms69 = _shared[7];
+    const trailer3_real_t _ms128 = _shared[28];
+    const trailer3_real_t _ms129 = _shared[29];
+    const trailer3_real_t _ms132 = _shared[32];
+    const trailer3_real_t _ms133 = _shared[33];
+    const trailer3_real_t _ms136 = _shared[36];
+    const trailer3_real_t _ms137 = _shared[37];
+    const trailer3_real_t _ms144 = _shared[40];
+    const trailer3_real_t _ms145 = _shared[41];
+    const trailer3_real_t _ms148 = _shared[44];
+    const trailer3_real_t _ms149 = _shared[45];
+    const trailer3_real_t _ms152 = _shared[48];
+    const trailer3_real_t _ms153 = _shared[49];
+    const trailer3_real_t _ms156 = _shared[52];
+    const trailer3_real_t _ms157 = _shared[53];
+    const trailer3_real_t _ms160 = _shared[56];
+    const trailer3_real_t _ms161 = _shared[57];
+    const trailer3_real_t _ms164 = _shared[60];
+    const trailer3_real_t _ms165 = _shared[61];
+    const trailer3_real_t _ms167 = _shared[63];
+    const trailer3_real_t _ms168 = _shared[64];
+    const trailer3_real_t _ms169 = _shared[65];
+    const trailer3_real_t _ms170 = _shared[66];
+    const trailer3_real_t _ms179 = _shared[67];
+    const trailer3_real_t _ms180 = _shared[68];
+    const trailer3_real_t _ms181 = _shared[69];
+    const trailer3_real_t _ms182 = _shared[70];
+    const trailer3_real_t _ms183 = _shared[71];
+    const trailer3_real_t _ms184 = _shared[72];
+    const trailer3_real_t _ms185 = _shared[73];
+    const trailer3_real_t _ms186 = _shared[74];
+    const trailer3_real_t _ms187 = _shared[75];
+    const trailer3_real_t _ms188 = _shared[76];
+    const trailer3_real_t _ms189 = _shared[77];
+    const trailer3_real_t _ms190 = _shared[78];
+    const trailer3_real_t _ms191 = _shared[79];
+    const trailer3_real_t _ms193 = _shared[80];
+    const trailer3_real_t _ms194 = _shared[81];
+    const trailer3_real_t _ms195 = _shared[82];
+    const trailer3_real_t _ms196 = _shared[83];
+    const trailer3_real_t _ms293 = _shared[180];
+    const trailer3_real_t _ms294 = _shared[181];
+    const trailer3_real_t _ms300 = _shared[187];
+    const trailer3_real_t _ms303 = _shared[190];
+    const trailer3_real_t _ms304 = _shared[191];
+    const trailer3_real_t _ms305 = _shared[192];
+    const trailer3_real_t _ms306 = _shared[193];
+    const trailer3_real_t _ms307 = _shared[194];
+    const trailer3_real_t _ms308 = _shared[195];
+    const trailer3_real_t _ms309 = _shared[196];
+    const trailer3_real_t _ms341 = _shared[197];
+    const trailer3_real_t _ms342 = _shared[198];
+    const trailer3_real_t _t0 = _ms169*_ms169;
+    const trailer3_real_t _t1 = -theta_tractor;
+    const trailer3_real_t _t2 = _t1 + theta_cart2;
+    const trailer3_real_t _t3 = TRAILER3_SIN(_t2);
+    const trailer3_real_t _t4 = TRAILER3_COS(_t2);
+    const trailer3_real_t _t5 = _ms170*_ms170;
+    const trailer3_real_t _t6 = _t1 + theta_cart3;
+    const trailer3_real_t _t7 = TRAILER3_SIN(_t6);
+    const trailer3_real_t _t8 = TRAILER3_COS(_t6);
+    const trailer3_real_t _t9 = _ms168*_ms168;
+    const trailer3_real_t _t10 = _t1 + theta_cart;
+    const trailer3_real_t _t11 = TRAILER3_SIN(_t10);
+    const trailer3_real_t _t12 = TRAILER3_COS(_t10);
+    const trailer3_real_t _t13 = TRAILER3_LIT(1.0)/radius_right;
+    const trailer3_real_t _t14 = TRAILER3_LIT(1.0)/radius_left;
+    const trailer3_real_t _t15 = J_x_tractor + _ms128*_ms179 + _ms132*_ms180 + _ms136*_ms181;
+    const trailer3_real_t _t16 = J_theta_cart*_ms128 + _ms132*_ms188 + _ms136*_ms189 + _ms179;
+    const trailer3_real_t _t17 = J_theta_cart2*_ms132 + _ms128*_ms188 + _ms136*_ms190 + _ms180;
+    const trailer3_real_t _t18 = J_theta_cart3*_ms136 + _ms128*_ms189 + _ms132*_ms190 + _ms181;
+    const trailer3_real_t _t19 = J_theta_right*_t13;
+    const trailer3_real_t _t20 = J_theta_left*_t14;
+    const trailer3_real_t _t21 = J_theta_cart_right*_ms144;
+    const trailer3_real_t _t22 = J_theta_cart_left*_ms148;
+    const trailer3_real_t _t23 = J_theta_cart2_right*_ms152;
+    const trailer3_real_t _t24 = J_theta_cart2_left*_ms156;
+    const trailer3_real_t _t25 = J_theta_cart3_right*_ms160;
+    const trailer3_real_t _t26 = J_theta_cart3_left*_ms164;
+    const trailer3_real_t _t27 = _ms128*_t16 + _ms132*_t17 + _ms136*_t18 + _ms144*_t21 + _ms148*_t22
+            + _ms152*_t23 + _ms156*_t24 + _ms160*_t25 + _ms164*_t26 + _t13*_t19 + _t14*_t20 + _t15;
+    const trailer3_real_t _t28 = K_theta_tractor_x_tractor_2 + _ms129*_ms179 + _ms133*_ms180
+            + _ms137*_ms181;
+    const trailer3_real_t _t29 = J_theta_cart*_ms129 + _ms133*_ms188 + _ms137*_ms189 + _ms185;
+    const trailer3_real_t _t30 = J_theta_cart2*_ms133 + _ms129*_ms188 + _ms137*_ms190 + _ms186;
+    const trailer3_real_t _t31 = J_theta_cart3*_ms137 + _ms129*_ms189 + _ms133*_ms190 + _ms187;
+    const trailer3_real_t _t32 = TRAILER3_LIT(0.207)*_t13;
+    const trailer3_real_t _t33 = J_theta_right*_t32;
+    const trailer3_real_t _t34 = -TRAILER3_LIT(0.207)*_t14;
+    const trailer3_real_t _t35 = J_theta_left*_t34;
+    const trailer3_real_t _t36 = J_theta_cart_right*_ms145;
+    const trailer3_real_t _t37 = J_theta_cart_left*_ms149;
+    const trailer3_real_t _t38 = J_theta_cart2_right*_ms153;
+    const trailer3_real_t _t39 = J_theta_cart2_left*_ms157;
+    const trailer3_real_t _t40 = J_theta_cart3_right*_ms161;
+    const trailer3_real_t _t41 = J_theta_cart3_left*_ms165;
+    const trailer3_real_t _t42 = _ms128*_t29 + _ms132*_t30 + _ms136*_t31 + _ms144*_t36 + _ms148*_t37
+            + _ms152*_t38 + _ms156*_t39 + _ms160*_t40 + _ms164*_t41 + _t13*_t33 + _t14*_t35 + _t28;
+    const trailer3_real_t _t43 = J_theta_tractor + _ms129*_ms185 + _ms133*_ms186 + _ms137*_ms187;
+    const trailer3_real_t _t44 = _ms129*_t29 + _ms133*_t30 + _ms137*_t31 + _ms145*_t36 + _ms149*_t37
+            + _ms153*_t38 + _ms157*_t39 + _ms161*_t40 + _ms165*_t41 + _t32*_t33 + _t34*_t35 + _t43;
+    const trailer3_real_t _t45 = _t27*_t44 - _t42*_t42;
+    const trailer3_real_t _t46 = TRAILER3_LIT(0.85)*_t8;
+    const trailer3_real_t _t47 = -_t3*_t46 + TRAILER3_LIT(0.85)*_t4*_t7;
+    const trailer3_real_t _t48 = TRAILER3_LIT(0.85)*_t7;
+    const trailer3_real_t _t49 = -_t11*_t46 + TRAILER3_LIT(0.85)*_t12*_t7;
+    const trailer3_real_t _t50 = TRAILER3_LIT(0.85)*_t4;
+    const trailer3_real_t _t51 = -_t11*_t50 + TRAILER3_LIT(0.85)*_t12*_t3;
+    const trailer3_real_t _t52 = -_ms341 + _t13*tau_right + _t14*tau_left;
+    const trailer3_real_t _t53 = -_ms342 + _t32*tau_right + _t34*tau_left;
+    const trailer3_real_t _t54 = TRAILER3_LIT(1.0)/_t45;
+    const trailer3_real_t _t55 = _t54*(-_t42*_t53 + _t44*_t52);
+    const trailer3_real_t _t56 = _t54*(_t27*_t53 - _t42*_t52);
+    const trailer3_real_t _t57 = _ms160*_t55 + _ms161*_t56 + _ms308;
+    const trailer3_real_t _t58 = -J_theta_cart3_right*_t57;
+    const trailer3_real_t _t59 = _ms64*_t58;
+    const trailer3_real_t _t60 = _t59*_t7;
+    const trailer3_real_t _t61 = _ms164*_t55 + _ms165*_t56 + _ms309;
+    const trailer3_real_t _t62 = -J_theta_cart3_left*_t61;
+    const trailer3_real_t _t63 = _ms69*_t62;
+    const trailer3_real_t _t64 = _t63*_t7;
+    const trailer3_real_t _t65 = _ms152*_t55 + _ms153*_t56 + _ms306;
+    const trailer3_real_t _t66 = -J_theta_cart2_right*_t65;
+    const trailer3_real_t _t67 = _ms54*_t66;
+    const trailer3_real_t _t68 = _t3*_t67;
+    const trailer3_real_t _t69 = _ms156*_t55 + _ms157*_t56 + _ms307;
+    const trailer3_real_t _t70 = -J_theta_cart2_left*_t69;
+    const trailer3_real_t _t71 = _ms59*_t70;
+    const trailer3_real_t _t72 = _t3*_t71;
+    const trailer3_real_t _t73 = _ms144*_t55 + _ms145*_t56 + _ms304;
+    const trailer3_real_t _t74 = -J_theta_cart_right*_t73;
+    const trailer3_real_t _t75 = _ms44*_t74;
+    const trailer3_real_t _t76 = _t11*_t75;
+    const trailer3_real_t _t77 = _ms148*_t55 + _ms149*_t56 + _ms305;
+    const trailer3_real_t _t78 = -J_theta_cart_left*_t77;
+    const trailer3_real_t _t79 = _ms49*_t78;
+    const trailer3_real_t _t80 = _t11*_t79;
+    const trailer3_real_t _t81 = _ms128*_t55 + _ms129*_t56 + _ms293;
+    const trailer3_real_t _t82 = _ms132*_t55 + _ms133*_t56 + _ms300;
+    const trailer3_real_t _t83 = _ms136*_t55 + _ms137*_t56 + _ms303;
+    const trailer3_real_t _t84 = -J_x_tractor*_t55 - K_theta_tractor_x_tractor_2*_t56 - _ms179*_t81
+            - _ms180*_t82 - _ms181*_t83 - _ms191;
+    const trailer3_real_t _t85 = -J_theta_cart3*_t83 - _ms181*_t55 - _ms184*_ms294 - _ms187*_t56
+            - _ms189*_t81 - _ms190*_t82 - _ms196;
+    const trailer3_real_t _t86 = TRAILER3_LIT(0.2)*_t59 - TRAILER3_LIT(0.2)*_t63 + _t85;
+    const trailer3_real_t _t87 = -TRAILER3_LIT(1.6666666666666667)*_t86;
+    const trailer3_real_t _t88 = -J_theta_cart2*_t82 - _ms180*_t55 - _ms183*_ms294 - _ms186*_t56
+            - _ms188*_t81 - _ms190*_t83 - _ms195;
+    const trailer3_real_t _t89 = -_t47*_t59 - _t47*_t63 + TRAILER3_LIT(0.2)*_t67
+            - TRAILER3_LIT(0.2)*_t71 - _t87*(-_t3*_t48 - _t4*_t46) + _t88;
+    const trailer3_real_t _t90 = -TRAILER3_LIT(1.6666666666666667)*_t89;
+    const trailer3_real_t _t91 = -J_theta_cart*_t81 - _ms179*_t55 - _ms182*_ms294 - _ms185*_t56
+            - _ms188*_t82 - _ms189*_t83 - _ms194;
+    const trailer3_real_t _t92 = -_t49*_t59 - _t49*_t63 - _t51*_t67 - _t51*_t71
+            + TRAILER3_LIT(0.2)*_t75 - TRAILER3_LIT(0.2)*_t79 - _t87*(-_t11*_t48 - _t12*_t46)
+            - _t90*(-TRAILER3_LIT(0.85)*_t11*_t3 - _t12*_t50) + _t91;
+    const trailer3_real_t _t93 = -TRAILER3_LIT(1.6666666666666667)*_t92;
+    const trailer3_real_t _t94 = _t11*_t93 + _t12*_t75 + _t12*_t79 + _t3*_t90 + _t4*_t67 + _t4*_t71
+            + _t59*_t8 + _t63*_t8 + _t7*_t87 + _t84;
+    const trailer3_real_t _t95 = TRAILER3_LIT(0.5)*_t94;
+    const trailer3_real_t _t96 = -J_theta_tractor*_t56 + K_theta_tractor_x_tractor*_ms294
+            - K_theta_tractor_x_tractor_2*_t55 - _ms185*_t81 - _ms186*_t82 - _ms187*_t83 - _ms193;
+    const trailer3_real_t _t97 = TRAILER3_LIT(0.3)*_t12*_t93 + TRAILER3_LIT(0.3)*_t4*_t90
+            - TRAILER3_LIT(0.3)*_t60 - TRAILER3_LIT(0.3)*_t64 - TRAILER3_LIT(0.3)*_t68
+            - TRAILER3_LIT(0.3)*_t72 - TRAILER3_LIT(0.3)*_t76 + TRAILER3_LIT(0.3)*_t8*_t87
+            - TRAILER3_LIT(0.3)*_t80 + _t96;
+    const trailer3_real_t _t98 = TRAILER3_LIT(2.4154589371980677)*_t97;
+    const trailer3_real_t _t99 = K_theta_cart2_x_tractor*_t0*_t3 + K_theta_cart2_x_tractor_2*_t0*_t4
+            + K_theta_cart3_x_tractor*_t5*_t7 + K_theta_cart3_x_tractor_2*_t5*_t8
+            + K_theta_cart_x_tractor*_t11*_t9 + K_theta_cart_x_tractor_2*_t12*_t9
+            + K_theta_tractor_x_tractor_2*_ms167*_ms167;
+    const trailer3_real_t _t100 = -J_x_tractor*_ms294 + K_theta_tractor_x_tractor*_t56 - _ms182*_t81
+            - _ms183*_t82 - _ms184*_t83 - _t99;
+    const trailer3_real_t _t101 = -_t95 + _t98;
+    const trailer3_real_t _t102 = -_t95 - _t98;
+    const trailer3_real_t _t103 = _t100 - _t12*_t93 - _t4*_t90 + _t60 + _t64 + _t68 + _t72 + _t76
+            - _t8*_t87 + _t80;
     if (!(radius_cart2_left > TRAILER3_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
@@ -4498,19 +3459,18 @@ trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     if (!(J_x_tractor > TRAILER3_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t470 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t27 > TRAILER3_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    if (!(_t470*_t472 - _t471*_t471 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
-                                                               model */
+    if (!(_t45 > TRAILER3_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER3_ERR_BAD_PARAMS;
     }
-    const trailer3_real_t r_0 = _t416;
-    const trailer3_real_t r_1 = _t415;
-    const trailer3_real_t r_2 = -_t414;
-    const trailer3_real_t r_3 = -_t386;
-    const trailer3_real_t r_4 = -_t377;
-    const trailer3_real_t r_5 = -_t368;
+    const trailer3_real_t r_0 = _t102;
+    const trailer3_real_t r_1 = _t101;
+    const trailer3_real_t r_2 = -_t103;
+    const trailer3_real_t r_3 = -_t93;
+    const trailer3_real_t r_4 = -_t90;
+    const trailer3_real_t r_5 = -_t87;
     if (((trailer3_exp_carry(r_0) | trailer3_exp_carry(r_1) | trailer3_exp_carry(r_2)
             | trailer3_exp_carry(r_3) | trailer3_exp_carry(r_4) | trailer3_exp_carry(r_5))
             & TRAILER3_EXP_CARRY_TOP) != 0u) {

@@ -303,7 +303,7 @@ void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_rea
  *         TRAILER3_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER3_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 304 add, 450 mul, 9 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 304 add, 456 mul, 9 div, 6 sin/cos, 0 sqrt
  */
 trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
@@ -340,7 +340,7 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
  * @param[out] A [16x16] row-major (TRAILER3_LINEARIZATION_A_SIZE) -- 16x16 row-major
  * @param[out] B [16x2] row-major (TRAILER3_LINEARIZATION_B_SIZE) -- 16x2 row-major
  *
- * operations after CSE: 1443 add, 1827 mul, 9 div, 8 sin/cos, 0 sqrt
+ * operations after CSE: 1486 add, 1923 mul, 9 div, 14 sin/cos, 0 sqrt
  */
 void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,
@@ -410,7 +410,7 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
  *         TRAILER3_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER3_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 517 add, 722 mul, 9 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 413 add, 602 mul, 9 div, 12 sin/cos, 0 sqrt
  */
 trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,

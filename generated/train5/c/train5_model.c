@@ -6,54 +6,1152 @@
  */
 #include "train5_model.h"
 
+/* train5_staged_quantities: The quantities minimal_bias_forces, minimal_forward_dynamics,
+   linearization, wheel_contact_forces all read.
+   Each caller's documented operations include these:
+   operations after CSE: 614 add, 888 mul, 10 div, 10 sin/cos, 0 sqrt */
+static void train5_staged_quantities(const train5_params_t *p, const train5_real_t *q,
+    const train5_real_t *wheel_rates, train5_real_t *shared_quantities)
+{
+    const train5_real_t theta_tractor = q[2];
+    const train5_real_t _t0 = -theta_tractor;
+    const train5_real_t theta_cart = q[3];
+    const train5_real_t _t1 = _t0 + theta_cart;
+    const train5_real_t _t2 = TRAIN5_SIN(_t1);
+    const train5_real_t _t3 = TRAIN5_COS(_t1);
+    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t theta_cart2 = q[4];
+    const train5_real_t _t5 = _t0 + theta_cart2;
+    const train5_real_t _t6 = TRAIN5_SIN(_t5);
+    const train5_real_t _t7 = TRAIN5_COS(_t5);
+    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
+    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
+    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
+    const train5_real_t theta_cart3 = q[5];
+    const train5_real_t _t11 = _t0 + theta_cart3;
+    const train5_real_t _t12 = TRAIN5_SIN(_t11);
+    const train5_real_t _t13 = TRAIN5_COS(_t11);
+    const train5_real_t _t14 = TRAIN5_LIT(0.3)*_t13;
+    const train5_real_t _t15 = TRAIN5_LIT(0.85)*_t6;
+    const train5_real_t _t16 = TRAIN5_LIT(0.85)*_t7;
+    const train5_real_t theta_cart4 = q[6];
+    const train5_real_t _t17 = _t0 + theta_cart4;
+    const train5_real_t _t18 = TRAIN5_SIN(_t17);
+    const train5_real_t _t19 = TRAIN5_COS(_t17);
+    const train5_real_t _t20 = TRAIN5_LIT(0.3)*_t19;
+    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t12;
+    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t13;
+    const train5_real_t theta_cart5 = q[7];
+    const train5_real_t _t23 = _t0 + theta_cart5;
+    const train5_real_t _t24 = TRAIN5_SIN(_t23);
+    const train5_real_t _t25 = TRAIN5_COS(_t23);
+    const train5_real_t _t26 = TRAIN5_LIT(0.3)*_t25;
+    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t25;
+    const train5_real_t _t28 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t29 = TRAIN5_LIT(0.3)*_t6;
+    const train5_real_t _t30 = TRAIN5_LIT(0.3)*_t12;
+    const train5_real_t _t31 = TRAIN5_LIT(0.3)*_t18;
+    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t24;
+    const train5_real_t _t33 = -_t10*_t7 - _t6*_t9;
+    const train5_real_t _t34 = -TRAIN5_LIT(1.6666666666666667)*_t2;
+    const train5_real_t _t35 = _t33*_t34;
+    const train5_real_t _t36 = _t35 - _t6;
+    const train5_real_t _t37 = -TRAIN5_LIT(1.6666666666666667)*_t4;
+    const train5_real_t _t38 = _t33*_t37;
+    const train5_real_t _t39 = _t38 - _t8;
+    const train5_real_t _t40 = -_t10*_t13 - _t12*_t9;
+    const train5_real_t _t41 = _t34*_t40;
+    const train5_real_t _t42 = -_t12*_t15 - _t13*_t16;
+    const train5_real_t _t43 = TRAIN5_LIT(1.6666666666666667)*_t36;
+    const train5_real_t _t44 = _t42*_t43;
+    const train5_real_t _t45 = -_t12 + _t41 + _t44;
+    const train5_real_t _t46 = _t37*_t40;
+    const train5_real_t _t47 = TRAIN5_LIT(1.6666666666666667)*_t39;
+    const train5_real_t _t48 = _t42*_t47;
+    const train5_real_t _t49 = -_t14 + _t46 + _t48;
+    const train5_real_t _t50 = -_t10*_t19 - _t18*_t9;
+    const train5_real_t _t51 = _t34*_t50;
+    const train5_real_t _t52 = -_t15*_t18 - _t16*_t19;
+    const train5_real_t _t53 = _t43*_t52;
+    const train5_real_t _t54 = -_t18*_t21 - _t19*_t22;
+    const train5_real_t _t55 = TRAIN5_LIT(1.6666666666666667)*_t45;
+    const train5_real_t _t56 = _t54*_t55;
+    const train5_real_t _t57 = -_t18 + _t51 + _t53 + _t56;
+    const train5_real_t _t58 = _t37*_t50;
+    const train5_real_t _t59 = _t47*_t52;
+    const train5_real_t _t60 = TRAIN5_LIT(1.6666666666666667)*_t49;
+    const train5_real_t _t61 = _t54*_t60;
+    const train5_real_t _t62 = -_t20 + _t58 + _t59 + _t61;
+    const train5_real_t _t63 = -_t10*_t25 - _t24*_t9;
+    const train5_real_t _t64 = _t34*_t63;
+    const train5_real_t _t65 = -_t15*_t24 - _t16*_t25;
+    const train5_real_t _t66 = _t43*_t65;
+    const train5_real_t _t67 = -_t21*_t24 - _t22*_t25;
+    const train5_real_t _t68 = _t55*_t67;
+    const train5_real_t _t69 = -TRAIN5_LIT(0.85)*_t18*_t24 - _t19*_t27;
+    const train5_real_t _t70 = TRAIN5_LIT(1.6666666666666667)*_t57;
+    const train5_real_t _t71 = _t69*_t70;
+    const train5_real_t _t72 = -_t24 + _t64 + _t66 + _t68 + _t71;
+    const train5_real_t _t73 = _t37*_t63;
+    const train5_real_t _t74 = _t47*_t65;
+    const train5_real_t _t75 = _t60*_t67;
+    const train5_real_t _t76 = TRAIN5_LIT(1.6666666666666667)*_t62;
+    const train5_real_t _t77 = _t69*_t76;
+    const train5_real_t _t78 = -_t26 + _t73 + _t74 + _t75 + _t77;
+    const train5_real_t _t79 = TRAIN5_LIT(0.2)*_t34;
+    const train5_real_t _t80 = TRAIN5_LIT(0.2)*_t37;
+    const train5_real_t _t81 = TRAIN5_LIT(0.2)*_t43;
+    const train5_real_t _t82 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
+    const train5_real_t _t83 = _t34*_t82;
+    const train5_real_t _t84 = _t7 - _t83;
+    const train5_real_t _t85 = TRAIN5_LIT(0.2)*_t47;
+    const train5_real_t _t86 = _t37*_t82;
+    const train5_real_t _t87 = _t29 + _t86;
+    const train5_real_t _t88 = TRAIN5_LIT(0.2)*_t55;
+    const train5_real_t _t89 = TRAIN5_LIT(0.85)*_t12*_t3 - _t13*_t9;
+    const train5_real_t _t90 = _t34*_t89;
+    const train5_real_t _t91 = TRAIN5_LIT(0.85)*_t12*_t7 - _t13*_t15;
+    const train5_real_t _t92 = _t43*_t91;
+    const train5_real_t _t93 = -_t92;
+    const train5_real_t _t94 = TRAIN5_LIT(0.2)*_t60;
+    const train5_real_t _t95 = _t37*_t89;
+    const train5_real_t _t96 = _t47*_t91;
+    const train5_real_t _t97 = _t30 + _t95 + _t96;
+    const train5_real_t _t98 = -_t13 + _t90 + _t92;
+    const train5_real_t _t99 = TRAIN5_LIT(0.2)*_t70;
+    const train5_real_t _t100 = TRAIN5_LIT(0.85)*_t18*_t3 - _t19*_t9;
+    const train5_real_t _t101 = _t100*_t34;
+    const train5_real_t _t102 = -_t15*_t19 + TRAIN5_LIT(0.85)*_t18*_t7;
+    const train5_real_t _t103 = _t102*_t43;
+    const train5_real_t _t104 = TRAIN5_LIT(0.85)*_t13*_t18 - _t19*_t21;
+    const train5_real_t _t105 = _t104*_t55;
+    const train5_real_t _t106 = _t101 + _t103 + _t105 - _t19;
+    const train5_real_t _t107 = TRAIN5_LIT(0.2)*_t76;
+    const train5_real_t _t108 = _t100*_t37;
+    const train5_real_t _t109 = _t102*_t47;
+    const train5_real_t _t110 = _t104*_t60;
+    const train5_real_t _t111 = _t108 + _t109 + _t110 + _t31;
+    const train5_real_t _t112 = TRAIN5_LIT(1.6666666666666667)*_t72;
+    const train5_real_t _t113 = TRAIN5_LIT(0.2)*_t112;
+    const train5_real_t _t114 = TRAIN5_LIT(0.85)*_t24*_t3 - _t25*_t9;
+    const train5_real_t _t115 = _t114*_t34;
+    const train5_real_t _t116 = -_t15*_t25 + TRAIN5_LIT(0.85)*_t24*_t7;
+    const train5_real_t _t117 = _t116*_t43;
+    const train5_real_t _t118 = TRAIN5_LIT(0.85)*_t13*_t24 - _t21*_t25;
+    const train5_real_t _t119 = _t118*_t55;
+    const train5_real_t _t120 = -_t18*_t27 + TRAIN5_LIT(0.85)*_t19*_t24;
+    const train5_real_t _t121 = _t120*_t70;
+    const train5_real_t _t122 = _t115 + _t117 + _t119 + _t121 - _t25;
+    const train5_real_t _t123 = TRAIN5_LIT(1.6666666666666667)*_t78;
+    const train5_real_t _t124 = TRAIN5_LIT(0.2)*_t123;
+    const train5_real_t _t125 = _t114*_t37;
+    const train5_real_t _t126 = _t116*_t47;
+    const train5_real_t _t127 = _t118*_t60;
+    const train5_real_t _t128 = _t120*_t76;
+    const train5_real_t _t129 = _t125 + _t126 + _t127 + _t128 + _t32;
+    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const train5_real_t _t130 = K_theta_cart2_x_tractor*_t6;
+    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const train5_real_t _t131 = K_theta_cart2_x_tractor_2*_t7;
+    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const train5_real_t _t132 = K_theta_cart3_x_tractor*_t12;
+    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const train5_real_t _t133 = K_theta_cart3_x_tractor_2*_t13;
+    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
+    const train5_real_t _t134 = K_theta_cart4_x_tractor*_t18;
+    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
+    const train5_real_t _t135 = K_theta_cart4_x_tractor_2*_t19;
+    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
+    const train5_real_t _t136 = K_theta_cart5_x_tractor*_t24;
+    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
+    const train5_real_t _t137 = K_theta_cart5_x_tractor_2*_t25;
+    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const train5_real_t _t138 = K_theta_cart_x_tractor*_t3;
+    const train5_real_t _t139 = K_theta_cart2_x_tractor*_t7;
+    const train5_real_t _t140 = K_theta_cart3_x_tractor*_t13;
+    const train5_real_t _t141 = K_theta_cart4_x_tractor*_t19;
+    const train5_real_t _t142 = K_theta_cart5_x_tractor*_t25;
+    const train5_real_t _t143 = K_theta_cart2_x_tractor_2*_t6;
+    const train5_real_t _t144 = K_theta_cart3_x_tractor_2*_t12;
+    const train5_real_t _t145 = K_theta_cart4_x_tractor_2*_t18;
+    const train5_real_t _t146 = K_theta_cart5_x_tractor_2*_t24;
+    const train5_real_t _t147 = TRAIN5_LIT(0.85)*_t18;
+    const train5_real_t _t148 = TRAIN5_LIT(0.85)*_t19;
+    const train5_real_t radius_right = p->radius_right;
+    const train5_real_t _t149 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t radius_left = p->radius_left;
+    const train5_real_t _t150 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t thetadot_right = wheel_rates[0];
+    const train5_real_t thetadot_left = wheel_rates[1];
+    const train5_real_t _t151 = _t149*thetadot_right + _t150*thetadot_left;
+    const train5_real_t _t152 = _t151*_t151;
+    const train5_real_t _t153 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t154 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t155 = _t153*thetadot_right + _t154*thetadot_left;
+    const train5_real_t _t156 = _t151*_t47 + _t155*_t43;
+    const train5_real_t _t157 = _t156*_t156;
+    const train5_real_t _t158 = _t151*_t60 + _t155*_t55;
+    const train5_real_t _t159 = _t158*_t158;
+    const train5_real_t _t160 = _t151*_t76 + _t155*_t70;
+    const train5_real_t _t161 = _t160*_t160;
+    const train5_real_t _t162 = _t141*_t161;
+    const train5_real_t _t163 = _t112*_t155 + _t123*_t151;
+    const train5_real_t _t164 = _t163*_t163;
+    const train5_real_t _t165 = _t142*_t164;
+    const train5_real_t _t166 = _t151*_t37 + _t155*_t34;
+    const train5_real_t _t167 = _t166*_t166;
+    const train5_real_t _t168 = _t143*_t157;
+    const train5_real_t _t169 = _t144*_t159;
+    const train5_real_t _t170 = _t145*_t161;
+    const train5_real_t _t171 = _t146*_t164;
+    const train5_real_t _t172 = K_theta_cart3_x_tractor*_t30;
+    const train5_real_t _t173 = K_theta_cart3_x_tractor_2*_t14;
+    const train5_real_t _t174 = K_theta_cart4_x_tractor*_t31;
+    const train5_real_t _t175 = K_theta_cart4_x_tractor_2*_t20;
+    const train5_real_t _t176 = K_theta_cart5_x_tractor*_t32;
+    const train5_real_t _t177 = K_theta_cart5_x_tractor_2*_t26;
+    const train5_real_t _t178 = _t10*_t157;
+    const train5_real_t _t179 = _t10*_t159;
+    const train5_real_t _t180 = _t10*_t161;
+    const train5_real_t _t181 = _t10*_t164;
+    const train5_real_t _t182 = _t167*_t9;
+    const train5_real_t _t183 = _t159*_t16;
+    const train5_real_t _t184 = _t16*_t161;
+    const train5_real_t _t185 = _t16*_t164;
+    const train5_real_t _t186 = _t10*_t167;
+    const train5_real_t _t187 = _t15*_t157;
+    const train5_real_t _t188 = _t157*_t16;
+    const train5_real_t _t189 = _t161*_t22;
+    const train5_real_t _t190 = _t164*_t22;
+    const train5_real_t _t191 = _t159*_t21;
+    const train5_real_t _t192 = _t159*_t22;
+    const train5_real_t _t193 = _t148*_t164;
+    const train5_real_t _t194 = _t147*_t161;
+    const train5_real_t _t195 = _t148*_t161;
+    const train5_real_t _t196 = TRAIN5_LIT(1.6666666666666667)*_t3;
+    const train5_real_t _t197 = _t196*_t33;
+    const train5_real_t _t198 = -TRAIN5_LIT(1.6666666666666667)*_t28;
+    const train5_real_t _t199 = _t198*_t33;
+    const train5_real_t _t200 = _t196*_t40;
+    const train5_real_t _t201 = _t198*_t40;
+    const train5_real_t _t202 = _t196*_t50;
+    const train5_real_t _t203 = _t198*_t50;
+    const train5_real_t _t204 = _t196*_t63;
+    const train5_real_t _t205 = _t198*_t63;
+    const train5_real_t _t206 = TRAIN5_LIT(0.2)*_t196;
+    const train5_real_t _t207 = TRAIN5_LIT(0.2)*_t198;
+    const train5_real_t _t208 = -_t197 - _t7;
+    const train5_real_t _t209 = -TRAIN5_LIT(1.6666666666666667)*_t208;
+    const train5_real_t _t210 = TRAIN5_LIT(0.2)*_t209;
+    const train5_real_t _t211 = _t196*_t82;
+    const train5_real_t _t212 = _t211 - _t6;
+    const train5_real_t _t213 = -_t199 + _t29;
+    const train5_real_t _t214 = -TRAIN5_LIT(1.6666666666666667)*_t213;
+    const train5_real_t _t215 = TRAIN5_LIT(0.2)*_t214;
+    const train5_real_t _t216 = _t198*_t82;
+    const train5_real_t _t217 = _t216 - _t8;
+    const train5_real_t _t218 = _t197 + _t83;
+    const train5_real_t _t219 = -TRAIN5_LIT(1.6666666666666667)*_t218;
+    const train5_real_t _t220 = TRAIN5_LIT(0.2)*_t219;
+    const train5_real_t _t221 = _t199 + _t86;
+    const train5_real_t _t222 = -TRAIN5_LIT(1.6666666666666667)*_t221;
+    const train5_real_t _t223 = TRAIN5_LIT(0.2)*_t222;
+    const train5_real_t _t224 = -TRAIN5_LIT(1.6666666666666667)*_t84;
+    const train5_real_t _t225 = TRAIN5_LIT(0.2)*_t224;
+    const train5_real_t _t226 = TRAIN5_LIT(1.6666666666666667)*_t87;
+    const train5_real_t _t227 = TRAIN5_LIT(0.2)*_t226;
+    const train5_real_t _t228 = -_t13 - _t200 - _t209*_t42;
+    const train5_real_t _t229 = -TRAIN5_LIT(1.6666666666666667)*_t228;
+    const train5_real_t _t230 = TRAIN5_LIT(0.2)*_t229;
+    const train5_real_t _t231 = _t196*_t89;
+    const train5_real_t _t232 = -_t12 + _t209*_t91 + _t231;
+    const train5_real_t _t233 = -_t201 - _t214*_t42 + _t30;
+    const train5_real_t _t234 = -TRAIN5_LIT(1.6666666666666667)*_t233;
+    const train5_real_t _t235 = TRAIN5_LIT(0.2)*_t234;
+    const train5_real_t _t236 = _t198*_t89;
+    const train5_real_t _t237 = -_t14 + _t214*_t91 + _t236;
+    const train5_real_t _t238 = _t200 - _t219*_t42 + _t90;
+    const train5_real_t _t239 = -TRAIN5_LIT(1.6666666666666667)*_t238;
+    const train5_real_t _t240 = TRAIN5_LIT(0.2)*_t239;
+    const train5_real_t _t241 = _t219*_t91 - _t231 + _t41;
+    const train5_real_t _t242 = _t201 - _t222*_t42 + _t95;
+    const train5_real_t _t243 = -TRAIN5_LIT(1.6666666666666667)*_t242;
+    const train5_real_t _t244 = TRAIN5_LIT(0.2)*_t243;
+    const train5_real_t _t245 = _t222*_t91 - _t236 + _t46;
+    const train5_real_t _t246 = -_t224*_t42 - _t93;
+    const train5_real_t _t247 = -TRAIN5_LIT(1.6666666666666667)*_t246;
+    const train5_real_t _t248 = TRAIN5_LIT(0.2)*_t247;
+    const train5_real_t _t249 = _t224*_t91 + _t44;
+    const train5_real_t _t250 = -_t226*_t42 + _t96;
+    const train5_real_t _t251 = -TRAIN5_LIT(1.6666666666666667)*_t250;
+    const train5_real_t _t252 = TRAIN5_LIT(0.2)*_t251;
+    const train5_real_t _t253 = _t226*_t91 + _t48;
+    const train5_real_t _t254 = TRAIN5_LIT(1.6666666666666667)*_t98;
+    const train5_real_t _t255 = TRAIN5_LIT(0.2)*_t254;
+    const train5_real_t _t256 = TRAIN5_LIT(1.6666666666666667)*_t97;
+    const train5_real_t _t257 = TRAIN5_LIT(0.2)*_t256;
+    const train5_real_t _t258 = -_t19 - _t202 - _t209*_t52 - _t229*_t54;
+    const train5_real_t _t259 = -TRAIN5_LIT(1.6666666666666667)*_t258;
+    const train5_real_t _t260 = TRAIN5_LIT(0.2)*_t259;
+    const train5_real_t _t261 = _t100*_t196;
+    const train5_real_t _t262 = _t102*_t209 + _t104*_t229 - _t18 + _t261;
+    const train5_real_t _t263 = -_t203 - _t214*_t52 - _t234*_t54 + _t31;
+    const train5_real_t _t264 = -TRAIN5_LIT(1.6666666666666667)*_t263;
+    const train5_real_t _t265 = TRAIN5_LIT(0.2)*_t264;
+    const train5_real_t _t266 = _t100*_t198;
+    const train5_real_t _t267 = _t102*_t214 + _t104*_t234 - _t20 + _t266;
+    const train5_real_t _t268 = _t101 + _t202 - _t219*_t52 - _t239*_t54;
+    const train5_real_t _t269 = -TRAIN5_LIT(1.6666666666666667)*_t268;
+    const train5_real_t _t270 = TRAIN5_LIT(0.2)*_t269;
+    const train5_real_t _t271 = _t102*_t219 + _t104*_t239 - _t261 + _t51;
+    const train5_real_t _t272 = _t108 + _t203 - _t222*_t52 - _t243*_t54;
+    const train5_real_t _t273 = -TRAIN5_LIT(1.6666666666666667)*_t272;
+    const train5_real_t _t274 = TRAIN5_LIT(0.2)*_t273;
+    const train5_real_t _t275 = _t102*_t222 + _t104*_t243 - _t266 + _t58;
+    const train5_real_t _t276 = _t103 - _t224*_t52 - _t247*_t54;
+    const train5_real_t _t277 = -TRAIN5_LIT(1.6666666666666667)*_t276;
+    const train5_real_t _t278 = TRAIN5_LIT(0.2)*_t277;
+    const train5_real_t _t279 = _t102*_t224 + _t104*_t247 + _t53;
+    const train5_real_t _t280 = _t109 - _t226*_t52 - _t251*_t54;
+    const train5_real_t _t281 = -TRAIN5_LIT(1.6666666666666667)*_t280;
+    const train5_real_t _t282 = TRAIN5_LIT(0.2)*_t281;
+    const train5_real_t _t283 = _t102*_t226 + _t104*_t251 + _t59;
+    const train5_real_t _t284 = _t105 - _t254*_t54;
+    const train5_real_t _t285 = -TRAIN5_LIT(1.6666666666666667)*_t284;
+    const train5_real_t _t286 = TRAIN5_LIT(0.2)*_t285;
+    const train5_real_t _t287 = _t104*_t254 + _t56;
+    const train5_real_t _t288 = _t110 - _t256*_t54;
+    const train5_real_t _t289 = -TRAIN5_LIT(1.6666666666666667)*_t288;
+    const train5_real_t _t290 = TRAIN5_LIT(0.2)*_t289;
+    const train5_real_t _t291 = _t104*_t256 + _t61;
+    const train5_real_t _t292 = TRAIN5_LIT(1.6666666666666667)*_t106;
+    const train5_real_t _t293 = TRAIN5_LIT(0.2)*_t292;
+    const train5_real_t _t294 = TRAIN5_LIT(1.6666666666666667)*_t111;
+    const train5_real_t _t295 = TRAIN5_LIT(0.2)*_t294;
+    const train5_real_t _t296 = -_t204 - _t209*_t65 - _t229*_t67 - _t25 - _t259*_t69;
+    const train5_real_t _t297 = -TRAIN5_LIT(1.6666666666666667)*_t296;
+    const train5_real_t _t298 = TRAIN5_LIT(0.2)*_t297;
+    const train5_real_t _t299 = _t114*_t196;
+    const train5_real_t _t300 = _t116*_t209 + _t118*_t229 + _t120*_t259 - _t24 + _t299;
+    const train5_real_t _t301 = -_t205 - _t214*_t65 - _t234*_t67 - _t264*_t69 + _t32;
+    const train5_real_t _t302 = -TRAIN5_LIT(1.6666666666666667)*_t301;
+    const train5_real_t _t303 = TRAIN5_LIT(0.2)*_t302;
+    const train5_real_t _t304 = _t114*_t198;
+    const train5_real_t _t305 = _t116*_t214 + _t118*_t234 + _t120*_t264 - _t26 + _t304;
+    const train5_real_t _t306 = _t115 + _t204 - _t219*_t65 - _t239*_t67 - _t269*_t69;
+    const train5_real_t _t307 = -TRAIN5_LIT(1.6666666666666667)*_t306;
+    const train5_real_t _t308 = TRAIN5_LIT(0.2)*_t307;
+    const train5_real_t _t309 = _t116*_t219 + _t118*_t239 + _t120*_t269 - _t299 + _t64;
+    const train5_real_t _t310 = _t125 + _t205 - _t222*_t65 - _t243*_t67 - _t273*_t69;
+    const train5_real_t _t311 = -TRAIN5_LIT(1.6666666666666667)*_t310;
+    const train5_real_t _t312 = TRAIN5_LIT(0.2)*_t311;
+    const train5_real_t _t313 = _t116*_t222 + _t118*_t243 + _t120*_t273 - _t304 + _t73;
+    const train5_real_t _t314 = _t117 - _t224*_t65 - _t247*_t67 - _t277*_t69;
+    const train5_real_t _t315 = -TRAIN5_LIT(1.6666666666666667)*_t314;
+    const train5_real_t _t316 = TRAIN5_LIT(0.2)*_t315;
+    const train5_real_t _t317 = _t116*_t224 + _t118*_t247 + _t120*_t277 + _t66;
+    const train5_real_t _t318 = _t126 - _t226*_t65 - _t251*_t67 - _t281*_t69;
+    const train5_real_t _t319 = -TRAIN5_LIT(1.6666666666666667)*_t318;
+    const train5_real_t _t320 = TRAIN5_LIT(0.2)*_t319;
+    const train5_real_t _t321 = _t116*_t226 + _t118*_t251 + _t120*_t281 + _t74;
+    const train5_real_t _t322 = _t119 - _t254*_t67 - _t285*_t69;
+    const train5_real_t _t323 = -TRAIN5_LIT(1.6666666666666667)*_t322;
+    const train5_real_t _t324 = TRAIN5_LIT(0.2)*_t323;
+    const train5_real_t _t325 = _t118*_t254 + _t120*_t285 + _t68;
+    const train5_real_t _t326 = _t127 - _t256*_t67 - _t289*_t69;
+    const train5_real_t _t327 = -TRAIN5_LIT(1.6666666666666667)*_t326;
+    const train5_real_t _t328 = TRAIN5_LIT(0.2)*_t327;
+    const train5_real_t _t329 = _t118*_t256 + _t120*_t289 + _t75;
+    const train5_real_t _t330 = _t121 - _t292*_t69;
+    const train5_real_t _t331 = -TRAIN5_LIT(1.6666666666666667)*_t330;
+    const train5_real_t _t332 = TRAIN5_LIT(0.2)*_t331;
+    const train5_real_t _t333 = _t120*_t292 + _t71;
+    const train5_real_t _t334 = _t128 - _t294*_t69;
+    const train5_real_t _t335 = -TRAIN5_LIT(1.6666666666666667)*_t334;
+    const train5_real_t _t336 = TRAIN5_LIT(0.2)*_t335;
+    const train5_real_t _t337 = _t120*_t294 + _t77;
+    const train5_real_t _t338 = TRAIN5_LIT(1.6666666666666667)*_t122;
+    const train5_real_t _t339 = TRAIN5_LIT(0.2)*_t338;
+    const train5_real_t _t340 = TRAIN5_LIT(1.6666666666666667)*_t129;
+    const train5_real_t _t341 = TRAIN5_LIT(0.2)*_t340;
+    const train5_real_t _t342 = _t151*_t155;
+    const train5_real_t _t343 = _t155*_t166;
+    const train5_real_t _t344 = _t151*_t166;
+    const train5_real_t radius_cart2_left = p->radius_cart2_left;
+    const train5_real_t _t345 = TRAIN5_LIT(1.0)/radius_cart2_left;
+    const train5_real_t _t346 = -_t210 - _t212;
+    const train5_real_t _t347 = _t345*_t346;
+    const train5_real_t _t348 = -_t215 - _t217;
+    const train5_real_t _t349 = _t345*_t348;
+    const train5_real_t _t350 = _t211 - _t220 - _t35;
+    const train5_real_t _t351 = _t345*_t350;
+    const train5_real_t _t352 = _t216 - _t223 - _t38;
+    const train5_real_t _t353 = _t345*_t352;
+    const train5_real_t _t354 = -_t225 + _t36;
+    const train5_real_t _t355 = _t345*_t354;
+    const train5_real_t _t356 = -_t227 + _t39;
+    const train5_real_t _t357 = _t345*_t356;
+    const train5_real_t _t358 = _t155*_t156;
+    const train5_real_t _t359 = _t151*_t156;
+    const train5_real_t _t360 = _t152*_t349 + _t342*_t347 + _t343*_t351 + _t344*_t353 + _t355*_t358
+            + _t357*_t359;
+    const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const train5_real_t _t361 = J_theta_cart2_left*_t360;
+    const train5_real_t radius_cart2_right = p->radius_cart2_right;
+    const train5_real_t _t362 = TRAIN5_LIT(1.0)/radius_cart2_right;
+    const train5_real_t _t363 = _t210 - _t212;
+    const train5_real_t _t364 = _t362*_t363;
+    const train5_real_t _t365 = _t215 - _t217;
+    const train5_real_t _t366 = _t362*_t365;
+    const train5_real_t _t367 = _t211 + _t220 - _t35;
+    const train5_real_t _t368 = _t362*_t367;
+    const train5_real_t _t369 = _t216 + _t223 - _t38;
+    const train5_real_t _t370 = _t362*_t369;
+    const train5_real_t _t371 = _t225 + _t36;
+    const train5_real_t _t372 = _t362*_t371;
+    const train5_real_t _t373 = _t227 + _t39;
+    const train5_real_t _t374 = _t362*_t373;
+    const train5_real_t _t375 = _t152*_t366 + _t342*_t364 + _t343*_t368 + _t344*_t370 + _t358*_t372
+            + _t359*_t374;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const train5_real_t _t376 = J_theta_cart2_right*_t375;
+    const train5_real_t radius_cart3_left = p->radius_cart3_left;
+    const train5_real_t _t377 = TRAIN5_LIT(1.0)/radius_cart3_left;
+    const train5_real_t _t378 = -_t230 - _t232;
+    const train5_real_t _t379 = _t377*_t378;
+    const train5_real_t _t380 = -_t235 - _t237;
+    const train5_real_t _t381 = _t377*_t380;
+    const train5_real_t _t382 = -_t240 - _t241;
+    const train5_real_t _t383 = _t377*_t382;
+    const train5_real_t _t384 = -_t244 - _t245;
+    const train5_real_t _t385 = _t377*_t384;
+    const train5_real_t _t386 = -_t248 - _t249;
+    const train5_real_t _t387 = _t377*_t386;
+    const train5_real_t _t388 = -_t252 - _t253;
+    const train5_real_t _t389 = _t377*_t388;
+    const train5_real_t _t390 = -_t255 + _t45;
+    const train5_real_t _t391 = _t377*_t390;
+    const train5_real_t _t392 = -_t257 + _t49;
+    const train5_real_t _t393 = _t377*_t392;
+    const train5_real_t _t394 = _t155*_t158;
+    const train5_real_t _t395 = _t151*_t158;
+    const train5_real_t _t396 = _t152*_t381 + _t342*_t379 + _t343*_t383 + _t344*_t385 + _t358*_t387
+            + _t359*_t389 + _t391*_t394 + _t393*_t395;
+    const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const train5_real_t _t397 = J_theta_cart3_left*_t396;
+    const train5_real_t radius_cart3_right = p->radius_cart3_right;
+    const train5_real_t _t398 = TRAIN5_LIT(1.0)/radius_cart3_right;
+    const train5_real_t _t399 = _t230 - _t232;
+    const train5_real_t _t400 = _t398*_t399;
+    const train5_real_t _t401 = _t235 - _t237;
+    const train5_real_t _t402 = _t398*_t401;
+    const train5_real_t _t403 = _t240 - _t241;
+    const train5_real_t _t404 = _t398*_t403;
+    const train5_real_t _t405 = _t244 - _t245;
+    const train5_real_t _t406 = _t398*_t405;
+    const train5_real_t _t407 = _t248 - _t249;
+    const train5_real_t _t408 = _t398*_t407;
+    const train5_real_t _t409 = _t252 - _t253;
+    const train5_real_t _t410 = _t398*_t409;
+    const train5_real_t _t411 = _t255 + _t45;
+    const train5_real_t _t412 = _t398*_t411;
+    const train5_real_t _t413 = _t257 + _t49;
+    const train5_real_t _t414 = _t398*_t413;
+    const train5_real_t _t415 = _t152*_t402 + _t342*_t400 + _t343*_t404 + _t344*_t406 + _t358*_t408
+            + _t359*_t410 + _t394*_t412 + _t395*_t414;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const train5_real_t _t416 = J_theta_cart3_right*_t415;
+    const train5_real_t radius_cart4_left = p->radius_cart4_left;
+    const train5_real_t _t417 = TRAIN5_LIT(1.0)/radius_cart4_left;
+    const train5_real_t _t418 = -_t260 - _t262;
+    const train5_real_t _t419 = _t417*_t418;
+    const train5_real_t _t420 = -_t265 - _t267;
+    const train5_real_t _t421 = _t417*_t420;
+    const train5_real_t _t422 = -_t270 - _t271;
+    const train5_real_t _t423 = _t417*_t422;
+    const train5_real_t _t424 = -_t274 - _t275;
+    const train5_real_t _t425 = _t417*_t424;
+    const train5_real_t _t426 = -_t278 - _t279;
+    const train5_real_t _t427 = _t417*_t426;
+    const train5_real_t _t428 = -_t282 - _t283;
+    const train5_real_t _t429 = _t417*_t428;
+    const train5_real_t _t430 = -_t286 - _t287;
+    const train5_real_t _t431 = _t417*_t430;
+    const train5_real_t _t432 = -_t290 - _t291;
+    const train5_real_t _t433 = _t417*_t432;
+    const train5_real_t _t434 = -_t293 + _t57;
+    const train5_real_t _t435 = _t417*_t434;
+    const train5_real_t _t436 = -_t295 + _t62;
+    const train5_real_t _t437 = _t417*_t436;
+    const train5_real_t _t438 = _t155*_t160;
+    const train5_real_t _t439 = _t151*_t160;
+    const train5_real_t _t440 = _t152*_t421 + _t342*_t419 + _t343*_t423 + _t344*_t425 + _t358*_t427
+            + _t359*_t429 + _t394*_t431 + _t395*_t433 + _t435*_t438 + _t437*_t439;
+    const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
+    const train5_real_t _t441 = J_theta_cart4_left*_t440;
+    const train5_real_t radius_cart4_right = p->radius_cart4_right;
+    const train5_real_t _t442 = TRAIN5_LIT(1.0)/radius_cart4_right;
+    const train5_real_t _t443 = _t260 - _t262;
+    const train5_real_t _t444 = _t442*_t443;
+    const train5_real_t _t445 = _t265 - _t267;
+    const train5_real_t _t446 = _t442*_t445;
+    const train5_real_t _t447 = _t270 - _t271;
+    const train5_real_t _t448 = _t442*_t447;
+    const train5_real_t _t449 = _t274 - _t275;
+    const train5_real_t _t450 = _t442*_t449;
+    const train5_real_t _t451 = _t278 - _t279;
+    const train5_real_t _t452 = _t442*_t451;
+    const train5_real_t _t453 = _t282 - _t283;
+    const train5_real_t _t454 = _t442*_t453;
+    const train5_real_t _t455 = _t286 - _t287;
+    const train5_real_t _t456 = _t442*_t455;
+    const train5_real_t _t457 = _t290 - _t291;
+    const train5_real_t _t458 = _t442*_t457;
+    const train5_real_t _t459 = _t293 + _t57;
+    const train5_real_t _t460 = _t442*_t459;
+    const train5_real_t _t461 = _t295 + _t62;
+    const train5_real_t _t462 = _t442*_t461;
+    const train5_real_t _t463 = _t152*_t446 + _t342*_t444 + _t343*_t448 + _t344*_t450 + _t358*_t452
+            + _t359*_t454 + _t394*_t456 + _t395*_t458 + _t438*_t460 + _t439*_t462;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
+    const train5_real_t _t464 = J_theta_cart4_right*_t463;
+    const train5_real_t radius_cart5_left = p->radius_cart5_left;
+    const train5_real_t _t465 = TRAIN5_LIT(1.0)/radius_cart5_left;
+    const train5_real_t _t466 = -_t298 - _t300;
+    const train5_real_t _t467 = _t465*_t466;
+    const train5_real_t _t468 = -_t303 - _t305;
+    const train5_real_t _t469 = _t465*_t468;
+    const train5_real_t _t470 = -_t308 - _t309;
+    const train5_real_t _t471 = _t465*_t470;
+    const train5_real_t _t472 = -_t312 - _t313;
+    const train5_real_t _t473 = _t465*_t472;
+    const train5_real_t _t474 = -_t316 - _t317;
+    const train5_real_t _t475 = _t465*_t474;
+    const train5_real_t _t476 = -_t320 - _t321;
+    const train5_real_t _t477 = _t465*_t476;
+    const train5_real_t _t478 = -_t324 - _t325;
+    const train5_real_t _t479 = _t465*_t478;
+    const train5_real_t _t480 = -_t328 - _t329;
+    const train5_real_t _t481 = _t465*_t480;
+    const train5_real_t _t482 = -_t332 - _t333;
+    const train5_real_t _t483 = _t465*_t482;
+    const train5_real_t _t484 = -_t336 - _t337;
+    const train5_real_t _t485 = _t465*_t484;
+    const train5_real_t _t486 = -_t339 + _t72;
+    const train5_real_t _t487 = _t465*_t486;
+    const train5_real_t _t488 = -_t341 + _t78;
+    const train5_real_t _t489 = _t465*_t488;
+    const train5_real_t _t490 = _t155*_t163;
+    const train5_real_t _t491 = _t151*_t163;
+    const train5_real_t _t492 = _t152*_t469 + _t342*_t467 + _t343*_t471 + _t344*_t473 + _t358*_t475
+            + _t359*_t477 + _t394*_t479 + _t395*_t481 + _t438*_t483 + _t439*_t485 + _t487*_t490
+            + _t489*_t491;
+    const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
+    const train5_real_t _t493 = J_theta_cart5_left*_t492;
+    const train5_real_t radius_cart5_right = p->radius_cart5_right;
+    const train5_real_t _t494 = TRAIN5_LIT(1.0)/radius_cart5_right;
+    const train5_real_t _t495 = _t298 - _t300;
+    const train5_real_t _t496 = _t494*_t495;
+    const train5_real_t _t497 = _t303 - _t305;
+    const train5_real_t _t498 = _t494*_t497;
+    const train5_real_t _t499 = _t308 - _t309;
+    const train5_real_t _t500 = _t494*_t499;
+    const train5_real_t _t501 = _t312 - _t313;
+    const train5_real_t _t502 = _t494*_t501;
+    const train5_real_t _t503 = _t316 - _t317;
+    const train5_real_t _t504 = _t494*_t503;
+    const train5_real_t _t505 = _t320 - _t321;
+    const train5_real_t _t506 = _t494*_t505;
+    const train5_real_t _t507 = _t324 - _t325;
+    const train5_real_t _t508 = _t494*_t507;
+    const train5_real_t _t509 = _t328 - _t329;
+    const train5_real_t _t510 = _t494*_t509;
+    const train5_real_t _t511 = _t332 - _t333;
+    const train5_real_t _t512 = _t494*_t511;
+    const train5_real_t _t513 = _t336 - _t337;
+    const train5_real_t _t514 = _t494*_t513;
+    const train5_real_t _t515 = _t339 + _t72;
+    const train5_real_t _t516 = _t494*_t515;
+    const train5_real_t _t517 = _t341 + _t78;
+    const train5_real_t _t518 = _t494*_t517;
+    const train5_real_t _t519 = _t152*_t498 + _t342*_t496 + _t343*_t500 + _t344*_t502 + _t358*_t504
+            + _t359*_t506 + _t394*_t508 + _t395*_t510 + _t438*_t512 + _t439*_t514 + _t490*_t516
+            + _t491*_t518;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t _t520 = J_theta_cart5_right*_t519;
+    const train5_real_t radius_cart_left = p->radius_cart_left;
+    const train5_real_t _t521 = TRAIN5_LIT(1.0)/radius_cart_left;
+    const train5_real_t _t522 = _t2 - _t206;
+    const train5_real_t _t523 = _t521*_t522;
+    const train5_real_t _t524 = -_t207 + _t4;
+    const train5_real_t _t525 = _t521*_t524;
+    const train5_real_t _t526 = _t342 - _t343;
+    const train5_real_t _t527 = _t152 - _t344;
+    const train5_real_t _t528 = _t523*_t526 + _t525*_t527;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t _t529 = J_theta_cart_left*_t528;
+    const train5_real_t radius_cart_right = p->radius_cart_right;
+    const train5_real_t _t530 = TRAIN5_LIT(1.0)/radius_cart_right;
+    const train5_real_t _t531 = _t2 + _t206;
+    const train5_real_t _t532 = _t530*_t531;
+    const train5_real_t _t533 = _t207 + _t4;
+    const train5_real_t _t534 = _t530*_t533;
+    const train5_real_t _t535 = _t526*_t532 + _t527*_t534;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t _t536 = J_theta_cart_right*_t535;
+    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const train5_real_t _t537 = K_theta_cart_x_tractor_2*_t2 - _t138;
+    const train5_real_t _t538 = _t10*_t139 - _t10*_t143 + _t130*_t9 + _t131*_t9;
+    const train5_real_t _t539 = _t10*_t140 - _t10*_t144 + _t132*_t9 + _t133*_t9;
+    const train5_real_t _t540 = _t10*_t141 - _t10*_t145 + _t134*_t9 + _t135*_t9;
+    const train5_real_t _t541 = _t10*_t142 - _t10*_t146 + _t136*_t9 + _t137*_t9;
+    const train5_real_t _t542 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t157*_t2*_t7
+            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t159*_t2
+            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t161*_t19*_t2
+            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t164*_t2*_t25
+            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor*_t152*_t2
+            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor_2*_t152*_t3 - _t130*_t178 - _t131*_t178
+            - _t132*_t179 - _t133*_t179 - _t134*_t180 - _t135*_t180 - _t136*_t181 - _t137*_t181
+            - _t168*_t9 - _t169*_t9 - _t170*_t9 - _t171*_t9;
+    const train5_real_t _t543 = _t196*_t526 + _t198*_t527;
+    const train5_real_t _t544 = _t152*_t214 + _t209*_t342 + _t219*_t343 + _t222*_t344 + _t224*_t358
+            + _t226*_t359;
+    const train5_real_t _t545 = _t152*_t234 + _t229*_t342 + _t239*_t343 + _t243*_t344 + _t247*_t358
+            + _t251*_t359 + _t254*_t394 + _t256*_t395;
+    const train5_real_t _t546 = _t152*_t264 + _t259*_t342 + _t269*_t343 + _t273*_t344 + _t277*_t358
+            + _t281*_t359 + _t285*_t394 + _t289*_t395 + _t292*_t438 + _t294*_t439;
+    const train5_real_t _t547 = _t152*_t302 + _t297*_t342 + _t307*_t343 + _t311*_t344 + _t315*_t358
+            + _t319*_t359 + _t323*_t394 + _t327*_t395 + _t331*_t438 + _t335*_t439 + _t338*_t490
+            + _t340*_t491;
+    const train5_real_t J_theta_cart = p->J_theta_cart;
+    const train5_real_t _t548 = J_theta_cart*_t543 + _t342*_t537 + _t538*_t544 + _t539*_t545
+            + _t540*_t546 + _t541*_t547 + _t542;
+    const train5_real_t _t549 = K_theta_cart2_x_tractor_2*_t6 - _t139;
+    const train5_real_t _t550 = _t132*_t15 + _t133*_t15 + _t140*_t16 - _t144*_t16;
+    const train5_real_t _t551 = _t134*_t15 + _t135*_t15 + _t141*_t16 - _t145*_t16;
+    const train5_real_t _t552 = _t136*_t15 + _t137*_t15 + _t142*_t16 - _t146*_t16;
+    const train5_real_t _t553 = TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor*_t152*_t6
+            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t167*_t3*_t6
+            + TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor_2*_t152*_t7
+            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t167*_t2*_t6
+            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t167*_t3*_t7
+            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t159*_t6
+            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t161*_t19*_t6
+            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t164*_t25*_t6 - _t132*_t183 - _t133*_t183
+            - _t134*_t184 - _t135*_t184 - _t136*_t185 - _t137*_t185 - _t139*_t182 - _t15*_t169
+            - _t15*_t170 - _t15*_t171;
+    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
+    const train5_real_t _t554 = J_theta_cart2*_t544 + _t342*_t549 + _t538*_t543 + _t545*_t550
+            + _t546*_t551 + _t547*_t552 + _t553;
+    const train5_real_t _t555 = K_theta_cart3_x_tractor_2*_t12 - _t140;
+    const train5_real_t _t556 = _t134*_t21 + _t135*_t21 + _t141*_t22 - _t145*_t22;
+    const train5_real_t _t557 = _t136*_t21 + _t137*_t21 + _t142*_t22 - _t146*_t22;
+    const train5_real_t _t558 = _t132*_t186 + _t132*_t188 + _t133*_t186 + _t133*_t188 - _t134*_t189
+            - _t135*_t189 - _t136*_t190 - _t137*_t190 - _t140*_t182 - _t140*_t187 + _t144*_t182
+            + _t144*_t187 + _t152*_t172 + _t152*_t173 + _t162*_t21 + _t165*_t21 - _t170*_t21
+            - _t171*_t21;
+    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
+    const train5_real_t _t559 = J_theta_cart3*_t545 + _t342*_t555 + _t539*_t543 + _t544*_t550
+            + _t546*_t556 + _t547*_t557 + _t558;
+    const train5_real_t _t560 = K_theta_cart4_x_tractor_2*_t18 - _t141;
+    const train5_real_t _t561 = _t136*_t147 + _t137*_t147 + _t142*_t148 - _t146*_t148;
+    const train5_real_t _t562 = _t134*_t186 + _t134*_t188 + _t134*_t192 + _t135*_t186 + _t135*_t188
+            + _t135*_t192 - _t136*_t193 - _t137*_t193 - _t141*_t182 - _t141*_t187 - _t141*_t191
+            + _t145*_t182 + _t145*_t187 + _t145*_t191 + _t147*_t165 - _t147*_t171 + _t152*_t174
+            + _t152*_t175;
+    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
+    const train5_real_t _t563 = J_theta_cart4*_t546 + _t342*_t560 + _t540*_t543 + _t544*_t551
+            + _t545*_t556 + _t547*_t561 + _t562;
+    const train5_real_t _t564 = K_theta_cart5_x_tractor_2*_t24 - _t142;
+    const train5_real_t _t565 = _t136*_t186 + _t136*_t188 + _t136*_t192 + _t136*_t195 + _t137*_t186
+            + _t137*_t188 + _t137*_t192 + _t137*_t195 - _t142*_t182 - _t142*_t187 - _t142*_t191
+            - _t142*_t194 + _t146*_t182 + _t146*_t187 + _t146*_t191 + _t146*_t194 + _t152*_t176
+            + _t152*_t177;
+    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
+    const train5_real_t _t566 = J_theta_cart5*_t547 + _t342*_t564 + _t541*_t543 + _t544*_t552
+            + _t545*_t557 + _t546*_t561 + _t565;
+    const train5_real_t _t567 = _t3 + _t79;
+    const train5_real_t _t568 = -_t28 + _t80;
+    const train5_real_t _t569 = _t530*_t567;
+    const train5_real_t _t570 = _t530*_t568;
+    const train5_real_t _t571 = _t3 - _t79;
+    const train5_real_t _t572 = -_t28 - _t80;
+    const train5_real_t _t573 = _t521*_t571;
+    const train5_real_t _t574 = _t521*_t572;
+    const train5_real_t _t575 = _t81 + _t84;
+    const train5_real_t _t576 = _t85 - _t87;
+    const train5_real_t _t577 = _t362*_t575;
+    const train5_real_t _t578 = _t362*_t576;
+    const train5_real_t _t579 = _t7 - _t81 - _t83;
+    const train5_real_t _t580 = -_t85 - _t87;
+    const train5_real_t _t581 = _t345*_t579;
+    const train5_real_t _t582 = _t345*_t580;
+    const train5_real_t _t583 = _t13 + _t88 - _t90 + _t93;
+    const train5_real_t _t584 = _t94 - _t97;
+    const train5_real_t _t585 = _t398*_t583;
+    const train5_real_t _t586 = _t398*_t584;
+    const train5_real_t _t587 = -_t88 - _t98;
+    const train5_real_t _t588 = -_t94 - _t97;
+    const train5_real_t _t589 = _t377*_t587;
+    const train5_real_t _t590 = _t377*_t588;
+    const train5_real_t _t591 = -_t106 + _t99;
+    const train5_real_t _t592 = _t107 - _t111;
+    const train5_real_t _t593 = _t442*_t591;
+    const train5_real_t _t594 = _t442*_t592;
+    const train5_real_t _t595 = -_t106 - _t99;
+    const train5_real_t _t596 = -_t107 - _t111;
+    const train5_real_t _t597 = _t417*_t595;
+    const train5_real_t _t598 = _t417*_t596;
+    const train5_real_t _t599 = _t113 - _t122;
+    const train5_real_t _t600 = _t124 - _t129;
+    const train5_real_t _t601 = _t494*_t599;
+    const train5_real_t _t602 = _t494*_t600;
+    const train5_real_t _t603 = -_t113 - _t122;
+    const train5_real_t _t604 = -_t124 - _t129;
+    const train5_real_t _t605 = _t465*_t603;
+    const train5_real_t _t606 = _t465*_t604;
+    const train5_real_t _t607 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t608 = _t130 + _t131;
+    const train5_real_t _t609 = _t132 + _t133;
+    const train5_real_t _t610 = _t134 + _t135;
+    const train5_real_t _t611 = _t136 + _t137;
+    const train5_real_t _t612 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t28;
+    const train5_real_t _t613 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t29;
+    const train5_real_t _t614 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t30;
+    const train5_real_t _t615 = K_theta_cart4_x_tractor*_t20 - K_theta_cart4_x_tractor_2*_t31;
+    const train5_real_t _t616 = K_theta_cart5_x_tractor*_t26 - K_theta_cart5_x_tractor_2*_t32;
+    const train5_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
+    const train5_real_t _t617 = -K_theta_cart_x_tractor_2*_t167*_t2
+            + K_theta_tractor_x_tractor*_t152 + _t138*_t167 + _t139*_t157 + _t140*_t159 + _t162
+            + _t165 - _t168 - _t169 - _t170 - _t171;
+    const train5_real_t _t618 = -K_theta_cart2_x_tractor*_t157*_t29
+            - K_theta_cart2_x_tractor_2*_t157*_t8 - K_theta_cart_x_tractor*_t167*_t28
+            - K_theta_cart_x_tractor_2*_t167*_t4 - _t159*_t172 - _t159*_t173 - _t161*_t174
+            - _t161*_t175 - _t164*_t176 - _t164*_t177;
+    const train5_real_t _t619 = _t112*_t566 + _t34*_t548 + _t361*_t581 + _t376*_t577 + _t397*_t589
+            + _t416*_t585 + _t43*_t554 + _t441*_t597 + _t464*_t593 + _t493*_t605 + _t520*_t601
+            + _t529*_t573 + _t536*_t569 + _t543*_t607 + _t544*_t608 + _t545*_t609 + _t546*_t610
+            + _t547*_t611 + _t55*_t559 + _t563*_t70 + _t617;
+    const train5_real_t _t620 = -K_theta_tractor_x_tractor*_t342 + _t123*_t566 + _t361*_t582
+            + _t37*_t548 + _t376*_t578 + _t397*_t590 + _t416*_t586 + _t441*_t598 + _t464*_t594
+            + _t47*_t554 + _t493*_t606 + _t520*_t602 + _t529*_t574 + _t536*_t570 + _t543*_t612
+            + _t544*_t613 + _t545*_t614 + _t546*_t615 + _t547*_t616 + _t559*_t60 + _t563*_t76
+            + _t618;
+    shared_quantities[0] = _t149;
+    shared_quantities[1] = _t150;
+    shared_quantities[2] = _t530;
+    shared_quantities[3] = _t521;
+    shared_quantities[4] = _t362;
+    shared_quantities[5] = _t345;
+    shared_quantities[6] = _t398;
+    shared_quantities[7] = _t377;
+    shared_quantities[8] = _t442;
+    shared_quantities[9] = _t417;
+    shared_quantities[10] = _t494;
+    shared_quantities[11] = _t465;
+    shared_quantities[12] = -_t2;
+    shared_quantities[13] = _t3;
+    shared_quantities[14] = -_t4;
+    shared_quantities[15] = -_t6;
+    shared_quantities[16] = _t7;
+    shared_quantities[17] = -_t8;
+    shared_quantities[18] = _t33;
+    shared_quantities[19] = -_t12;
+    shared_quantities[20] = _t13;
+    shared_quantities[21] = -_t14;
+    shared_quantities[22] = _t40;
+    shared_quantities[23] = _t42;
+    shared_quantities[24] = -_t18;
+    shared_quantities[25] = _t19;
+    shared_quantities[26] = -_t20;
+    shared_quantities[27] = _t50;
+    shared_quantities[28] = _t52;
+    shared_quantities[29] = _t54;
+    shared_quantities[30] = -_t24;
+    shared_quantities[31] = _t25;
+    shared_quantities[32] = -_t26;
+    shared_quantities[33] = _t63;
+    shared_quantities[34] = _t65;
+    shared_quantities[35] = _t67;
+    shared_quantities[36] = _t69;
+    shared_quantities[37] = _t28;
+    shared_quantities[38] = _t29;
+    shared_quantities[39] = _t82;
+    shared_quantities[40] = _t30;
+    shared_quantities[41] = _t89;
+    shared_quantities[42] = _t91;
+    shared_quantities[43] = _t31;
+    shared_quantities[44] = _t100;
+    shared_quantities[45] = _t102;
+    shared_quantities[46] = _t104;
+    shared_quantities[47] = _t32;
+    shared_quantities[48] = _t114;
+    shared_quantities[49] = _t116;
+    shared_quantities[50] = _t118;
+    shared_quantities[51] = _t120;
+    shared_quantities[52] = _t153;
+    shared_quantities[53] = _t154;
+    shared_quantities[54] = _t34;
+    shared_quantities[55] = _t37;
+    shared_quantities[56] = -_t36;
+    shared_quantities[57] = -_t39;
+    shared_quantities[58] = _t43;
+    shared_quantities[59] = _t47;
+    shared_quantities[60] = -_t45;
+    shared_quantities[61] = -_t49;
+    shared_quantities[62] = _t55;
+    shared_quantities[63] = _t60;
+    shared_quantities[64] = -_t57;
+    shared_quantities[65] = -_t62;
+    shared_quantities[66] = _t70;
+    shared_quantities[67] = _t76;
+    shared_quantities[68] = -_t72;
+    shared_quantities[69] = -_t78;
+    shared_quantities[70] = _t112;
+    shared_quantities[71] = _t123;
+    shared_quantities[72] = _t567;
+    shared_quantities[73] = _t568;
+    shared_quantities[74] = _t569;
+    shared_quantities[75] = _t570;
+    shared_quantities[76] = _t571;
+    shared_quantities[77] = _t572;
+    shared_quantities[78] = _t573;
+    shared_quantities[79] = _t574;
+    shared_quantities[80] = _t575;
+    shared_quantities[81] = _t576;
+    shared_quantities[82] = _t577;
+    shared_quantities[83] = _t578;
+    shared_quantities[84] = _t579;
+    shared_quantities[85] = _t580;
+    shared_quantities[86] = _t581;
+    shared_quantities[87] = _t582;
+    shared_quantities[88] = _t583;
+    shared_quantities[89] = _t584;
+    shared_quantities[90] = _t585;
+    shared_quantities[91] = _t586;
+    shared_quantities[92] = _t587;
+    shared_quantities[93] = _t588;
+    shared_quantities[94] = _t589;
+    shared_quantities[95] = _t590;
+    shared_quantities[96] = _t591;
+    shared_quantities[97] = _t592;
+    shared_quantities[98] = _t593;
+    shared_quantities[99] = _t594;
+    shared_quantities[100] = _t595;
+    shared_quantities[101] = _t596;
+    shared_quantities[102] = _t597;
+    shared_quantities[103] = _t598;
+    shared_quantities[104] = _t599;
+    shared_quantities[105] = _t600;
+    shared_quantities[106] = _t601;
+    shared_quantities[107] = _t602;
+    shared_quantities[108] = _t603;
+    shared_quantities[109] = _t604;
+    shared_quantities[110] = _t605;
+    shared_quantities[111] = _t606;
+    shared_quantities[112] = _t155;
+    shared_quantities[113] = _t151;
+    shared_quantities[114] = _t166;
+    shared_quantities[115] = _t156;
+    shared_quantities[116] = _t158;
+    shared_quantities[117] = _t160;
+    shared_quantities[118] = _t163;
+    shared_quantities[119] = _t607;
+    shared_quantities[120] = _t608;
+    shared_quantities[121] = _t609;
+    shared_quantities[122] = _t610;
+    shared_quantities[123] = _t611;
+    shared_quantities[124] = _t537;
+    shared_quantities[125] = _t549;
+    shared_quantities[126] = _t555;
+    shared_quantities[127] = _t560;
+    shared_quantities[128] = _t564;
+    shared_quantities[129] = _t612;
+    shared_quantities[130] = _t613;
+    shared_quantities[131] = _t614;
+    shared_quantities[132] = _t615;
+    shared_quantities[133] = _t616;
+    shared_quantities[134] = _t538;
+    shared_quantities[135] = _t539;
+    shared_quantities[136] = _t540;
+    shared_quantities[137] = _t541;
+    shared_quantities[138] = _t550;
+    shared_quantities[139] = _t551;
+    shared_quantities[140] = _t552;
+    shared_quantities[141] = _t556;
+    shared_quantities[142] = _t557;
+    shared_quantities[143] = _t561;
+    shared_quantities[144] = _t617;
+    shared_quantities[145] = _t618;
+    shared_quantities[146] = _t542;
+    shared_quantities[147] = _t553;
+    shared_quantities[148] = _t558;
+    shared_quantities[149] = _t562;
+    shared_quantities[150] = _t565;
+    shared_quantities[151] = _t196;
+    shared_quantities[152] = _t198;
+    shared_quantities[153] = _t208;
+    shared_quantities[154] = _t209;
+    shared_quantities[155] = _t213;
+    shared_quantities[156] = _t214;
+    shared_quantities[157] = _t218;
+    shared_quantities[158] = _t219;
+    shared_quantities[159] = _t221;
+    shared_quantities[160] = _t222;
+    shared_quantities[161] = _t84;
+    shared_quantities[162] = _t224;
+    shared_quantities[163] = -_t87;
+    shared_quantities[164] = _t226;
+    shared_quantities[165] = _t228;
+    shared_quantities[166] = _t229;
+    shared_quantities[167] = _t233;
+    shared_quantities[168] = _t234;
+    shared_quantities[169] = _t238;
+    shared_quantities[170] = _t239;
+    shared_quantities[171] = _t242;
+    shared_quantities[172] = _t243;
+    shared_quantities[173] = _t246;
+    shared_quantities[174] = _t247;
+    shared_quantities[175] = _t250;
+    shared_quantities[176] = _t251;
+    shared_quantities[177] = -_t98;
+    shared_quantities[178] = _t254;
+    shared_quantities[179] = -_t97;
+    shared_quantities[180] = _t256;
+    shared_quantities[181] = _t258;
+    shared_quantities[182] = _t259;
+    shared_quantities[183] = _t263;
+    shared_quantities[184] = _t264;
+    shared_quantities[185] = _t268;
+    shared_quantities[186] = _t269;
+    shared_quantities[187] = _t272;
+    shared_quantities[188] = _t273;
+    shared_quantities[189] = _t276;
+    shared_quantities[190] = _t277;
+    shared_quantities[191] = _t280;
+    shared_quantities[192] = _t281;
+    shared_quantities[193] = _t284;
+    shared_quantities[194] = _t285;
+    shared_quantities[195] = _t288;
+    shared_quantities[196] = _t289;
+    shared_quantities[197] = -_t106;
+    shared_quantities[198] = _t292;
+    shared_quantities[199] = -_t111;
+    shared_quantities[200] = _t294;
+    shared_quantities[201] = _t296;
+    shared_quantities[202] = _t297;
+    shared_quantities[203] = _t301;
+    shared_quantities[204] = _t302;
+    shared_quantities[205] = _t306;
+    shared_quantities[206] = _t307;
+    shared_quantities[207] = _t310;
+    shared_quantities[208] = _t311;
+    shared_quantities[209] = _t314;
+    shared_quantities[210] = _t315;
+    shared_quantities[211] = _t318;
+    shared_quantities[212] = _t319;
+    shared_quantities[213] = _t322;
+    shared_quantities[214] = _t323;
+    shared_quantities[215] = _t326;
+    shared_quantities[216] = _t327;
+    shared_quantities[217] = _t330;
+    shared_quantities[218] = _t331;
+    shared_quantities[219] = _t334;
+    shared_quantities[220] = _t335;
+    shared_quantities[221] = -_t122;
+    shared_quantities[222] = _t338;
+    shared_quantities[223] = -_t129;
+    shared_quantities[224] = _t340;
+    shared_quantities[225] = _t531;
+    shared_quantities[226] = _t532;
+    shared_quantities[227] = _t533;
+    shared_quantities[228] = _t534;
+    shared_quantities[229] = _t522;
+    shared_quantities[230] = _t523;
+    shared_quantities[231] = _t524;
+    shared_quantities[232] = _t525;
+    shared_quantities[233] = _t363;
+    shared_quantities[234] = _t364;
+    shared_quantities[235] = _t365;
+    shared_quantities[236] = _t366;
+    shared_quantities[237] = _t367;
+    shared_quantities[238] = _t368;
+    shared_quantities[239] = _t369;
+    shared_quantities[240] = _t370;
+    shared_quantities[241] = _t371;
+    shared_quantities[242] = _t372;
+    shared_quantities[243] = _t373;
+    shared_quantities[244] = _t374;
+    shared_quantities[245] = _t346;
+    shared_quantities[246] = _t347;
+    shared_quantities[247] = _t348;
+    shared_quantities[248] = _t349;
+    shared_quantities[249] = _t350;
+    shared_quantities[250] = _t351;
+    shared_quantities[251] = _t352;
+    shared_quantities[252] = _t353;
+    shared_quantities[253] = _t354;
+    shared_quantities[254] = _t355;
+    shared_quantities[255] = _t356;
+    shared_quantities[256] = _t357;
+    shared_quantities[257] = _t399;
+    shared_quantities[258] = _t400;
+    shared_quantities[259] = _t401;
+    shared_quantities[260] = _t402;
+    shared_quantities[261] = _t403;
+    shared_quantities[262] = _t404;
+    shared_quantities[263] = _t405;
+    shared_quantities[264] = _t406;
+    shared_quantities[265] = _t407;
+    shared_quantities[266] = _t408;
+    shared_quantities[267] = _t409;
+    shared_quantities[268] = _t410;
+    shared_quantities[269] = _t411;
+    shared_quantities[270] = _t412;
+    shared_quantities[271] = _t413;
+    shared_quantities[272] = _t414;
+    shared_quantities[273] = _t378;
+    shared_quantities[274] = _t379;
+    shared_quantities[275] = _t380;
+    shared_quantities[276] = _t381;
+    shared_quantities[277] = _t382;
+    shared_quantities[278] = _t383;
+    shared_quantities[279] = _t384;
+    shared_quantities[280] = _t385;
+    shared_quantities[281] = _t386;
+    shared_quantities[282] = _t387;
+    shared_quantities[283] = _t388;
+    shared_quantities[284] = _t389;
+    shared_quantities[285] = _t390;
+    shared_quantities[286] = _t391;
+    shared_quantities[287] = _t392;
+    shared_quantities[288] = _t393;
+    shared_quantities[289] = _t443;
+    shared_quantities[290] = _t444;
+    shared_quantities[291] = _t445;
+    shared_quantities[292] = _t446;
+    shared_quantities[293] = _t447;
+    shared_quantities[294] = _t448;
+    shared_quantities[295] = _t449;
+    shared_quantities[296] = _t450;
+    shared_quantities[297] = _t451;
+    shared_quantities[298] = _t452;
+    shared_quantities[299] = _t453;
+    shared_quantities[300] = _t454;
+    shared_quantities[301] = _t455;
+    shared_quantities[302] = _t456;
+    shared_quantities[303] = _t457;
+    shared_quantities[304] = _t458;
+    shared_quantities[305] = _t459;
+    shared_quantities[306] = _t460;
+    shared_quantities[307] = _t461;
+    shared_quantities[308] = _t462;
+    shared_quantities[309] = _t418;
+    shared_quantities[310] = _t419;
+    shared_quantities[311] = _t420;
+    shared_quantities[312] = _t421;
+    shared_quantities[313] = _t422;
+    shared_quantities[314] = _t423;
+    shared_quantities[315] = _t424;
+    shared_quantities[316] = _t425;
+    shared_quantities[317] = _t426;
+    shared_quantities[318] = _t427;
+    shared_quantities[319] = _t428;
+    shared_quantities[320] = _t429;
+    shared_quantities[321] = _t430;
+    shared_quantities[322] = _t431;
+    shared_quantities[323] = _t432;
+    shared_quantities[324] = _t433;
+    shared_quantities[325] = _t434;
+    shared_quantities[326] = _t435;
+    shared_quantities[327] = _t436;
+    shared_quantities[328] = _t437;
+    shared_quantities[329] = _t495;
+    shared_quantities[330] = _t496;
+    shared_quantities[331] = _t497;
+    shared_quantities[332] = _t498;
+    shared_quantities[333] = _t499;
+    shared_quantities[334] = _t500;
+    shared_quantities[335] = _t501;
+    shared_quantities[336] = _t502;
+    shared_quantities[337] = _t503;
+    shared_quantities[338] = _t504;
+    shared_quantities[339] = _t505;
+    shared_quantities[340] = _t506;
+    shared_quantities[341] = _t507;
+    shared_quantities[342] = _t508;
+    shared_quantities[343] = _t509;
+    shared_quantities[344] = _t510;
+    shared_quantities[345] = _t511;
+    shared_quantities[346] = _t512;
+    shared_quantities[347] = _t513;
+    shared_quantities[348] = _t514;
+    shared_quantities[349] = _t515;
+    shared_quantities[350] = _t516;
+    shared_quantities[351] = _t517;
+    shared_quantities[352] = _t518;
+    shared_quantities[353] = _t466;
+    shared_quantities[354] = _t467;
+    shared_quantities[355] = _t468;
+    shared_quantities[356] = _t469;
+    shared_quantities[357] = _t470;
+    shared_quantities[358] = _t471;
+    shared_quantities[359] = _t472;
+    shared_quantities[360] = _t473;
+    shared_quantities[361] = _t474;
+    shared_quantities[362] = _t475;
+    shared_quantities[363] = _t476;
+    shared_quantities[364] = _t477;
+    shared_quantities[365] = _t478;
+    shared_quantities[366] = _t479;
+    shared_quantities[367] = _t480;
+    shared_quantities[368] = _t481;
+    shared_quantities[369] = _t482;
+    shared_quantities[370] = _t483;
+    shared_quantities[371] = _t484;
+    shared_quantities[372] = _t485;
+    shared_quantities[373] = _t486;
+    shared_quantities[374] = _t487;
+    shared_quantities[375] = _t488;
+    shared_quantities[376] = _t489;
+    shared_quantities[377] = _t526;
+    shared_quantities[378] = _t527;
+    shared_quantities[379] = _t543;
+    shared_quantities[380] = _t342;
+    shared_quantities[381] = _t152;
+    shared_quantities[382] = _t343;
+    shared_quantities[383] = _t344;
+    shared_quantities[384] = _t358;
+    shared_quantities[385] = _t359;
+    shared_quantities[386] = _t544;
+    shared_quantities[387] = _t394;
+    shared_quantities[388] = _t395;
+    shared_quantities[389] = _t545;
+    shared_quantities[390] = _t438;
+    shared_quantities[391] = _t439;
+    shared_quantities[392] = _t546;
+    shared_quantities[393] = _t490;
+    shared_quantities[394] = _t491;
+    shared_quantities[395] = _t547;
+    shared_quantities[396] = _t535;
+    shared_quantities[397] = _t528;
+    shared_quantities[398] = _t375;
+    shared_quantities[399] = _t360;
+    shared_quantities[400] = _t415;
+    shared_quantities[401] = _t396;
+    shared_quantities[402] = _t463;
+    shared_quantities[403] = _t440;
+    shared_quantities[404] = _t519;
+    shared_quantities[405] = _t492;
+    shared_quantities[406] = _t619;
+    shared_quantities[407] = _t620;
+}
+
 /* train5_forward_dynamics: documented in train5_model.h.
    operations after CSE: 771 add, 983 mul, 13 div, 12 sin/cos, 0 sqrt */
 train5_status_t train5_forward_dynamics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *tau, train5_real_t *qddot)
 {
-    const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t radius_left = p->radius_left;
-    const train5_real_t radius_right = p->radius_right;
     const train5_real_t theta_tractor = q[2];
     const train5_real_t theta_cart = q[3];
     const train5_real_t theta_cart2 = q[4];
@@ -64,946 +1162,20 @@ train5_status_t train5_forward_dynamics(const train5_params_t *p, const train5_r
     const train5_real_t thetadot_left = qdot[9];
     const train5_real_t tau_right = tau[0];
     const train5_real_t tau_left = tau[1];
-    if (((train5_exp_carry(J_theta_cart) | train5_exp_carry(J_theta_cart2)
-            | train5_exp_carry(J_theta_cart2_left) | train5_exp_carry(J_theta_cart2_right)
-            | train5_exp_carry(J_theta_cart3) | train5_exp_carry(J_theta_cart3_left)
-            | train5_exp_carry(J_theta_cart3_right) | train5_exp_carry(J_theta_cart4)
-            | train5_exp_carry(J_theta_cart4_left) | train5_exp_carry(J_theta_cart4_right)
-            | train5_exp_carry(J_theta_cart5) | train5_exp_carry(J_theta_cart5_left)
-            | train5_exp_carry(J_theta_cart5_right) | train5_exp_carry(J_theta_cart_left)
-            | train5_exp_carry(J_theta_cart_right) | train5_exp_carry(J_theta_left)
-            | train5_exp_carry(J_theta_right) | train5_exp_carry(J_theta_tractor)
-            | train5_exp_carry(J_x_tractor) | train5_exp_carry(K_theta_cart_x_tractor)
-            | train5_exp_carry(K_theta_cart_x_tractor_2) | train5_exp_carry(K_theta_cart2_x_tractor)
-            | train5_exp_carry(K_theta_cart2_x_tractor_2)
-            | train5_exp_carry(K_theta_cart3_x_tractor)
-            | train5_exp_carry(K_theta_cart3_x_tractor_2)
-            | train5_exp_carry(K_theta_cart4_x_tractor)
-            | train5_exp_carry(K_theta_cart4_x_tractor_2)
-            | train5_exp_carry(K_theta_cart5_x_tractor)
-            | train5_exp_carry(K_theta_cart5_x_tractor_2)
-            | train5_exp_carry(K_theta_tractor_x_tractor)
-            | train5_exp_carry(K_theta_tractor_x_tractor_2) | train5_exp_carry(radius_cart2_left)
-            | train5_exp_carry(radius_cart2_right) | train5_exp_carry(radius_cart3_left)
-            | train5_exp_carry(radius_cart3_right) | train5_exp_carry(radius_cart4_left)
-            | train5_exp_carry(radius_cart4_right) | train5_exp_carry(radius_cart5_left)
-            | train5_exp_carry(radius_cart5_right) | train5_exp_carry(radius_cart_left)
-            | train5_exp_carry(radius_cart_right) | train5_exp_carry(radius_left)
-            | train5_exp_carry(radius_right) | train5_exp_carry(theta_tractor)
-            | train5_exp_carry(theta_cart) | train5_exp_carry(theta_cart2)
-            | train5_exp_carry(theta_cart3) | train5_exp_carry(theta_cart4)
-            | train5_exp_carry(theta_cart5) | train5_exp_carry(thetadot_right)
-            | train5_exp_carry(thetadot_left) | train5_exp_carry(tau_right)
-            | train5_exp_carry(tau_left)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
+    if (((train5_exp_carry(theta_tractor) | train5_exp_carry(theta_cart)
+            | train5_exp_carry(theta_cart2) | train5_exp_carry(theta_cart3)
+            | train5_exp_carry(theta_cart4) | train5_exp_carry(theta_cart5)
+            | train5_exp_carry(thetadot_right) | train5_exp_carry(thetadot_left)
+            | train5_exp_carry(tau_right) | train5_exp_carry(tau_left)) & TRAIN5_EXP_CARRY_TOP)
+            != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
-    const train5_real_t _t0 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t1 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t2 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t3 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t4 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t _t5 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t _t6 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t _t7 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t _t8 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t _t9 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t _t10 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t _t11 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t _t12 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t _t13 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t14 = TRAIN5_LIT(0.3)*K_theta_cart_x_tractor;
-    const train5_real_t _t15 = TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor;
-    const train5_real_t _t16 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor;
-    const train5_real_t _t17 = TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor;
-    const train5_real_t _t18 = TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor;
-    const train5_real_t _t19 = TRAIN5_LIT(0.3)*K_theta_cart_x_tractor_2;
-    const train5_real_t _t20 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2;
-    const train5_real_t _t21 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t22 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t23 = J_theta_right*_t21;
-    const train5_real_t _t24 = J_theta_left*_t22;
-    const train5_real_t _t25 = _t21*_t23 + _t22*_t24;
-    const train5_real_t _t26 = TRAIN5_LIT(0.207)*_t21;
-    const train5_real_t _t27 = J_theta_right*_t26;
-    const train5_real_t _t28 = -TRAIN5_LIT(0.207)*_t22;
-    const train5_real_t _t29 = J_theta_left*_t28;
-    const train5_real_t _t30 = _t21*_t27 + _t22*_t29;
-    const train5_real_t _t31 = _t26*_t27 + _t28*_t29;
-    if (!(radius_cart2_left > TRAIN5_LIT(0.0))) { /* radius_cart2_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
+    train5_model_prepared_t prepared;
+    const train5_status_t prepare_status = train5_model_prepare(p, &prepared);
+    if (prepare_status != TRAIN5_OK) {
+        return prepare_status;
     }
-    if (!(radius_cart2_right > TRAIN5_LIT(0.0))) { /* radius_cart2_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart3_left > TRAIN5_LIT(0.0))) { /* radius_cart3_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart3_right > TRAIN5_LIT(0.0))) { /* radius_cart3_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart4_left > TRAIN5_LIT(0.0))) { /* radius_cart4_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart4_right > TRAIN5_LIT(0.0))) { /* radius_cart4_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart5_left > TRAIN5_LIT(0.0))) { /* radius_cart5_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart5_right > TRAIN5_LIT(0.0))) { /* radius_cart5_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart_left > TRAIN5_LIT(0.0))) { /* radius_cart_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_cart_right > TRAIN5_LIT(0.0))) { /* radius_cart_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_left > TRAIN5_LIT(0.0))) { /* radius_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(radius_right > TRAIN5_LIT(0.0))) { /* radius_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart > TRAIN5_LIT(0.0))) { /* J_theta_cart > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2 > TRAIN5_LIT(0.0))) { /* J_theta_cart2 > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2_left > TRAIN5_LIT(0.0))) { /* J_theta_cart2_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart2_right > TRAIN5_LIT(0.0))) { /* J_theta_cart2_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart3 > TRAIN5_LIT(0.0))) { /* J_theta_cart3 > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart3_left > TRAIN5_LIT(0.0))) { /* J_theta_cart3_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart3_right > TRAIN5_LIT(0.0))) { /* J_theta_cart3_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart4 > TRAIN5_LIT(0.0))) { /* J_theta_cart4 > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart4_left > TRAIN5_LIT(0.0))) { /* J_theta_cart4_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart4_right > TRAIN5_LIT(0.0))) { /* J_theta_cart4_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart5 > TRAIN5_LIT(0.0))) { /* J_theta_cart5 > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart5_left > TRAIN5_LIT(0.0))) { /* J_theta_cart5_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart5_right > TRAIN5_LIT(0.0))) { /* J_theta_cart5_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_left > TRAIN5_LIT(0.0))) { /* J_theta_cart_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_cart_right > TRAIN5_LIT(0.0))) { /* J_theta_cart_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_left > TRAIN5_LIT(0.0))) { /* J_theta_left > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_right > TRAIN5_LIT(0.0))) { /* J_theta_right > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_theta_tractor > TRAIN5_LIT(0.0))) { /* J_theta_tractor > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(J_x_tractor > TRAIN5_LIT(0.0))) { /* J_x_tractor > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    const train5_real_t _t32 = -theta_tractor;
-    const train5_real_t _t33 = _t32 + theta_cart;
-    const train5_real_t _t34 = TRAIN5_SIN(_t33);
-    const train5_real_t _t35 = TRAIN5_COS(_t33);
-    const train5_real_t _t36 = TRAIN5_LIT(0.3)*_t35;
-    const train5_real_t _t37 = _t32 + theta_cart2;
-    const train5_real_t _t38 = TRAIN5_SIN(_t37);
-    const train5_real_t _t39 = TRAIN5_COS(_t37);
-    const train5_real_t _t40 = TRAIN5_LIT(0.3)*_t39;
-    const train5_real_t _t41 = TRAIN5_LIT(0.85)*_t34;
-    const train5_real_t _t42 = TRAIN5_LIT(0.85)*_t35;
-    const train5_real_t _t43 = _t32 + theta_cart3;
-    const train5_real_t _t44 = TRAIN5_SIN(_t43);
-    const train5_real_t _t45 = TRAIN5_COS(_t43);
-    const train5_real_t _t46 = TRAIN5_LIT(0.3)*_t45;
-    const train5_real_t _t47 = TRAIN5_LIT(0.85)*_t38;
-    const train5_real_t _t48 = TRAIN5_LIT(0.85)*_t39;
-    const train5_real_t _t49 = _t32 + theta_cart4;
-    const train5_real_t _t50 = TRAIN5_SIN(_t49);
-    const train5_real_t _t51 = TRAIN5_COS(_t49);
-    const train5_real_t _t52 = TRAIN5_LIT(0.3)*_t51;
-    const train5_real_t _t53 = TRAIN5_LIT(0.85)*_t44;
-    const train5_real_t _t54 = TRAIN5_LIT(0.85)*_t45;
-    const train5_real_t _t55 = _t32 + theta_cart5;
-    const train5_real_t _t56 = TRAIN5_SIN(_t55);
-    const train5_real_t _t57 = TRAIN5_COS(_t55);
-    const train5_real_t _t58 = TRAIN5_LIT(0.3)*_t57;
-    const train5_real_t _t59 = TRAIN5_LIT(0.85)*_t57;
-    const train5_real_t _t60 = TRAIN5_LIT(0.3)*_t34;
-    const train5_real_t _t61 = TRAIN5_LIT(0.3)*_t38;
-    const train5_real_t _t62 = TRAIN5_LIT(0.3)*_t44;
-    const train5_real_t _t63 = TRAIN5_LIT(0.3)*_t50;
-    const train5_real_t _t64 = TRAIN5_LIT(0.3)*_t56;
-    const train5_real_t _t65 = -_t38*_t41 - _t39*_t42;
-    const train5_real_t _t66 = -TRAIN5_LIT(1.6666666666666667)*_t34;
-    const train5_real_t _t67 = _t65*_t66;
-    const train5_real_t _t68 = -_t38 + _t67;
-    const train5_real_t _t69 = -TRAIN5_LIT(1.6666666666666667)*_t36;
-    const train5_real_t _t70 = _t65*_t69;
-    const train5_real_t _t71 = -_t40 + _t70;
-    const train5_real_t _t72 = -_t41*_t44 - _t42*_t45;
-    const train5_real_t _t73 = _t66*_t72;
-    const train5_real_t _t74 = -_t44*_t47 - _t45*_t48;
-    const train5_real_t _t75 = TRAIN5_LIT(1.6666666666666667)*_t68;
-    const train5_real_t _t76 = _t74*_t75;
-    const train5_real_t _t77 = -_t44 + _t73 + _t76;
-    const train5_real_t _t78 = _t69*_t72;
-    const train5_real_t _t79 = TRAIN5_LIT(1.6666666666666667)*_t71;
-    const train5_real_t _t80 = _t74*_t79;
-    const train5_real_t _t81 = -_t46 + _t78 + _t80;
-    const train5_real_t _t82 = -_t41*_t50 - _t42*_t51;
-    const train5_real_t _t83 = _t66*_t82;
-    const train5_real_t _t84 = -_t47*_t50 - _t48*_t51;
-    const train5_real_t _t85 = _t75*_t84;
-    const train5_real_t _t86 = -_t50*_t53 - _t51*_t54;
-    const train5_real_t _t87 = TRAIN5_LIT(1.6666666666666667)*_t77;
-    const train5_real_t _t88 = _t86*_t87;
-    const train5_real_t _t89 = -_t50 + _t83 + _t85 + _t88;
-    const train5_real_t _t90 = _t69*_t82;
-    const train5_real_t _t91 = _t79*_t84;
-    const train5_real_t _t92 = TRAIN5_LIT(1.6666666666666667)*_t81;
-    const train5_real_t _t93 = _t86*_t92;
-    const train5_real_t _t94 = -_t52 + _t90 + _t91 + _t93;
-    const train5_real_t _t95 = -_t41*_t56 - _t42*_t57;
-    const train5_real_t _t96 = _t66*_t95;
-    const train5_real_t _t97 = -_t47*_t56 - _t48*_t57;
-    const train5_real_t _t98 = _t75*_t97;
-    const train5_real_t _t99 = -_t53*_t56 - _t54*_t57;
-    const train5_real_t _t100 = _t87*_t99;
-    const train5_real_t _t101 = -TRAIN5_LIT(0.85)*_t50*_t56 - _t51*_t59;
-    const train5_real_t _t102 = TRAIN5_LIT(1.6666666666666667)*_t89;
-    const train5_real_t _t103 = _t101*_t102;
-    const train5_real_t _t104 = _t100 + _t103 - _t56 + _t96 + _t98;
-    const train5_real_t _t105 = _t69*_t95;
-    const train5_real_t _t106 = _t79*_t97;
-    const train5_real_t _t107 = _t92*_t99;
-    const train5_real_t _t108 = TRAIN5_LIT(1.6666666666666667)*_t94;
-    const train5_real_t _t109 = _t101*_t108;
-    const train5_real_t _t110 = _t105 + _t106 + _t107 + _t109 - _t58;
-    const train5_real_t _t111 = TRAIN5_LIT(0.2)*_t66;
-    const train5_real_t _t112 = TRAIN5_LIT(0.2)*_t69;
-    const train5_real_t _t113 = TRAIN5_LIT(0.2)*_t75;
-    const train5_real_t _t114 = TRAIN5_LIT(0.85)*_t35*_t38 - _t39*_t41;
-    const train5_real_t _t115 = _t114*_t66;
-    const train5_real_t _t116 = -_t115 + _t39;
-    const train5_real_t _t117 = TRAIN5_LIT(0.2)*_t79;
-    const train5_real_t _t118 = _t114*_t69;
-    const train5_real_t _t119 = _t118 + _t61;
-    const train5_real_t _t120 = TRAIN5_LIT(0.2)*_t87;
-    const train5_real_t _t121 = TRAIN5_LIT(0.85)*_t35*_t44 - _t41*_t45;
-    const train5_real_t _t122 = _t121*_t66;
-    const train5_real_t _t123 = TRAIN5_LIT(0.85)*_t39*_t44 - _t45*_t47;
-    const train5_real_t _t124 = _t123*_t75;
-    const train5_real_t _t125 = -_t124;
-    const train5_real_t _t126 = TRAIN5_LIT(0.2)*_t92;
-    const train5_real_t _t127 = _t121*_t69;
-    const train5_real_t _t128 = _t123*_t79;
-    const train5_real_t _t129 = _t127 + _t128 + _t62;
-    const train5_real_t _t130 = _t122 + _t124 - _t45;
-    const train5_real_t _t131 = TRAIN5_LIT(0.2)*_t102;
-    const train5_real_t _t132 = TRAIN5_LIT(0.85)*_t35*_t50 - _t41*_t51;
-    const train5_real_t _t133 = _t132*_t66;
-    const train5_real_t _t134 = TRAIN5_LIT(0.85)*_t39*_t50 - _t47*_t51;
-    const train5_real_t _t135 = _t134*_t75;
-    const train5_real_t _t136 = TRAIN5_LIT(0.85)*_t45*_t50 - _t51*_t53;
-    const train5_real_t _t137 = _t136*_t87;
-    const train5_real_t _t138 = _t133 + _t135 + _t137 - _t51;
-    const train5_real_t _t139 = TRAIN5_LIT(0.2)*_t108;
-    const train5_real_t _t140 = _t132*_t69;
-    const train5_real_t _t141 = _t134*_t79;
-    const train5_real_t _t142 = _t136*_t92;
-    const train5_real_t _t143 = _t140 + _t141 + _t142 + _t63;
-    const train5_real_t _t144 = TRAIN5_LIT(1.6666666666666667)*_t104;
-    const train5_real_t _t145 = TRAIN5_LIT(0.2)*_t144;
-    const train5_real_t _t146 = TRAIN5_LIT(0.85)*_t35*_t56 - _t41*_t57;
-    const train5_real_t _t147 = _t146*_t66;
-    const train5_real_t _t148 = TRAIN5_LIT(0.85)*_t39*_t56 - _t47*_t57;
-    const train5_real_t _t149 = _t148*_t75;
-    const train5_real_t _t150 = TRAIN5_LIT(0.85)*_t45*_t56 - _t53*_t57;
-    const train5_real_t _t151 = _t150*_t87;
-    const train5_real_t _t152 = -_t50*_t59 + TRAIN5_LIT(0.85)*_t51*_t56;
-    const train5_real_t _t153 = _t102*_t152;
-    const train5_real_t _t154 = _t147 + _t149 + _t151 + _t153 - _t57;
-    const train5_real_t _t155 = TRAIN5_LIT(1.6666666666666667)*_t110;
-    const train5_real_t _t156 = TRAIN5_LIT(0.2)*_t155;
-    const train5_real_t _t157 = _t146*_t69;
-    const train5_real_t _t158 = _t148*_t79;
-    const train5_real_t _t159 = _t150*_t92;
-    const train5_real_t _t160 = _t108*_t152;
-    const train5_real_t _t161 = _t157 + _t158 + _t159 + _t160 + _t64;
-    const train5_real_t _t162 = K_theta_cart2_x_tractor*_t38;
-    const train5_real_t _t163 = K_theta_cart2_x_tractor_2*_t39;
-    const train5_real_t _t164 = K_theta_cart3_x_tractor*_t44;
-    const train5_real_t _t165 = K_theta_cart3_x_tractor_2*_t45;
-    const train5_real_t _t166 = K_theta_cart4_x_tractor*_t50;
-    const train5_real_t _t167 = K_theta_cart4_x_tractor_2*_t51;
-    const train5_real_t _t168 = K_theta_cart5_x_tractor*_t56;
-    const train5_real_t _t169 = K_theta_cart5_x_tractor_2*_t57;
-    const train5_real_t _t170 = K_theta_cart_x_tractor*_t35;
-    const train5_real_t _t171 = K_theta_cart2_x_tractor*_t39;
-    const train5_real_t _t172 = K_theta_cart3_x_tractor*_t45;
-    const train5_real_t _t173 = K_theta_cart4_x_tractor*_t51;
-    const train5_real_t _t174 = K_theta_cart5_x_tractor*_t57;
-    const train5_real_t _t175 = K_theta_cart2_x_tractor_2*_t38;
-    const train5_real_t _t176 = K_theta_cart3_x_tractor_2*_t44;
-    const train5_real_t _t177 = K_theta_cart4_x_tractor_2*_t50;
-    const train5_real_t _t178 = K_theta_cart5_x_tractor_2*_t56;
-    const train5_real_t _t179 = TRAIN5_LIT(0.85)*_t50;
-    const train5_real_t _t180 = TRAIN5_LIT(0.85)*_t51;
-    const train5_real_t _t181 = _t0*thetadot_right + _t1*thetadot_left;
-    const train5_real_t _t182 = _t181*_t181;
-    const train5_real_t _t183 = _t2*thetadot_right + _t3*thetadot_left;
-    const train5_real_t _t184 = _t181*_t79 + _t183*_t75;
-    const train5_real_t _t185 = _t184*_t184;
-    const train5_real_t _t186 = _t181*_t92 + _t183*_t87;
-    const train5_real_t _t187 = _t186*_t186;
-    const train5_real_t _t188 = _t102*_t183 + _t108*_t181;
-    const train5_real_t _t189 = _t188*_t188;
-    const train5_real_t _t190 = _t173*_t189;
-    const train5_real_t _t191 = _t144*_t183 + _t155*_t181;
-    const train5_real_t _t192 = _t191*_t191;
-    const train5_real_t _t193 = _t174*_t192;
-    const train5_real_t _t194 = _t181*_t69 + _t183*_t66;
-    const train5_real_t _t195 = _t194*_t194;
-    const train5_real_t _t196 = _t175*_t185;
-    const train5_real_t _t197 = _t176*_t187;
-    const train5_real_t _t198 = _t177*_t189;
-    const train5_real_t _t199 = _t178*_t192;
-    const train5_real_t _t200 = K_theta_cart3_x_tractor*_t62;
-    const train5_real_t _t201 = K_theta_cart3_x_tractor_2*_t46;
-    const train5_real_t _t202 = K_theta_cart4_x_tractor*_t63;
-    const train5_real_t _t203 = K_theta_cart4_x_tractor_2*_t52;
-    const train5_real_t _t204 = K_theta_cart5_x_tractor*_t64;
-    const train5_real_t _t205 = K_theta_cart5_x_tractor_2*_t58;
-    const train5_real_t _t206 = _t185*_t42;
-    const train5_real_t _t207 = _t187*_t42;
-    const train5_real_t _t208 = _t189*_t42;
-    const train5_real_t _t209 = _t192*_t42;
-    const train5_real_t _t210 = _t195*_t41;
-    const train5_real_t _t211 = _t187*_t48;
-    const train5_real_t _t212 = _t189*_t48;
-    const train5_real_t _t213 = _t192*_t48;
-    const train5_real_t _t214 = _t195*_t42;
-    const train5_real_t _t215 = _t185*_t47;
-    const train5_real_t _t216 = _t185*_t48;
-    const train5_real_t _t217 = _t189*_t54;
-    const train5_real_t _t218 = _t192*_t54;
-    const train5_real_t _t219 = _t187*_t53;
-    const train5_real_t _t220 = _t187*_t54;
-    const train5_real_t _t221 = _t180*_t192;
-    const train5_real_t _t222 = _t179*_t189;
-    const train5_real_t _t223 = _t180*_t189;
-    const train5_real_t _t224 = TRAIN5_LIT(1.6666666666666667)*_t35;
-    const train5_real_t _t225 = _t224*_t65;
-    const train5_real_t _t226 = -TRAIN5_LIT(1.6666666666666667)*_t60;
-    const train5_real_t _t227 = _t226*_t65;
-    const train5_real_t _t228 = _t224*_t72;
-    const train5_real_t _t229 = _t226*_t72;
-    const train5_real_t _t230 = _t224*_t82;
-    const train5_real_t _t231 = _t226*_t82;
-    const train5_real_t _t232 = _t224*_t95;
-    const train5_real_t _t233 = _t226*_t95;
-    const train5_real_t _t234 = TRAIN5_LIT(0.2)*_t224;
-    const train5_real_t _t235 = TRAIN5_LIT(0.2)*_t226;
-    const train5_real_t _t236 = -_t225 - _t39;
-    const train5_real_t _t237 = -TRAIN5_LIT(1.6666666666666667)*_t236;
-    const train5_real_t _t238 = TRAIN5_LIT(0.2)*_t237;
-    const train5_real_t _t239 = _t114*_t224;
-    const train5_real_t _t240 = _t239 - _t38;
-    const train5_real_t _t241 = -_t227 + _t61;
-    const train5_real_t _t242 = -TRAIN5_LIT(1.6666666666666667)*_t241;
-    const train5_real_t _t243 = TRAIN5_LIT(0.2)*_t242;
-    const train5_real_t _t244 = _t114*_t226;
-    const train5_real_t _t245 = _t244 - _t40;
-    const train5_real_t _t246 = _t115 + _t225;
-    const train5_real_t _t247 = -TRAIN5_LIT(1.6666666666666667)*_t246;
-    const train5_real_t _t248 = TRAIN5_LIT(0.2)*_t247;
-    const train5_real_t _t249 = _t118 + _t227;
-    const train5_real_t _t250 = -TRAIN5_LIT(1.6666666666666667)*_t249;
-    const train5_real_t _t251 = TRAIN5_LIT(0.2)*_t250;
-    const train5_real_t _t252 = -TRAIN5_LIT(1.6666666666666667)*_t116;
-    const train5_real_t _t253 = TRAIN5_LIT(0.2)*_t252;
-    const train5_real_t _t254 = TRAIN5_LIT(1.6666666666666667)*_t119;
-    const train5_real_t _t255 = TRAIN5_LIT(0.2)*_t254;
-    const train5_real_t _t256 = -_t228 - _t237*_t74 - _t45;
-    const train5_real_t _t257 = -TRAIN5_LIT(1.6666666666666667)*_t256;
-    const train5_real_t _t258 = TRAIN5_LIT(0.2)*_t257;
-    const train5_real_t _t259 = _t121*_t224;
-    const train5_real_t _t260 = _t123*_t237 + _t259 - _t44;
-    const train5_real_t _t261 = -_t229 - _t242*_t74 + _t62;
-    const train5_real_t _t262 = -TRAIN5_LIT(1.6666666666666667)*_t261;
-    const train5_real_t _t263 = TRAIN5_LIT(0.2)*_t262;
-    const train5_real_t _t264 = _t121*_t226;
-    const train5_real_t _t265 = _t123*_t242 + _t264 - _t46;
-    const train5_real_t _t266 = _t122 + _t228 - _t247*_t74;
-    const train5_real_t _t267 = -TRAIN5_LIT(1.6666666666666667)*_t266;
-    const train5_real_t _t268 = TRAIN5_LIT(0.2)*_t267;
-    const train5_real_t _t269 = _t123*_t247 - _t259 + _t73;
-    const train5_real_t _t270 = _t127 + _t229 - _t250*_t74;
-    const train5_real_t _t271 = -TRAIN5_LIT(1.6666666666666667)*_t270;
-    const train5_real_t _t272 = TRAIN5_LIT(0.2)*_t271;
-    const train5_real_t _t273 = _t123*_t250 - _t264 + _t78;
-    const train5_real_t _t274 = -_t125 - _t252*_t74;
-    const train5_real_t _t275 = -TRAIN5_LIT(1.6666666666666667)*_t274;
-    const train5_real_t _t276 = TRAIN5_LIT(0.2)*_t275;
-    const train5_real_t _t277 = _t123*_t252 + _t76;
-    const train5_real_t _t278 = _t128 - _t254*_t74;
-    const train5_real_t _t279 = -TRAIN5_LIT(1.6666666666666667)*_t278;
-    const train5_real_t _t280 = TRAIN5_LIT(0.2)*_t279;
-    const train5_real_t _t281 = _t123*_t254 + _t80;
-    const train5_real_t _t282 = TRAIN5_LIT(1.6666666666666667)*_t130;
-    const train5_real_t _t283 = TRAIN5_LIT(0.2)*_t282;
-    const train5_real_t _t284 = TRAIN5_LIT(1.6666666666666667)*_t129;
-    const train5_real_t _t285 = TRAIN5_LIT(0.2)*_t284;
-    const train5_real_t _t286 = -_t230 - _t237*_t84 - _t257*_t86 - _t51;
-    const train5_real_t _t287 = -TRAIN5_LIT(1.6666666666666667)*_t286;
-    const train5_real_t _t288 = TRAIN5_LIT(0.2)*_t287;
-    const train5_real_t _t289 = _t132*_t224;
-    const train5_real_t _t290 = _t134*_t237 + _t136*_t257 + _t289 - _t50;
-    const train5_real_t _t291 = -_t231 - _t242*_t84 - _t262*_t86 + _t63;
-    const train5_real_t _t292 = -TRAIN5_LIT(1.6666666666666667)*_t291;
-    const train5_real_t _t293 = TRAIN5_LIT(0.2)*_t292;
-    const train5_real_t _t294 = _t132*_t226;
-    const train5_real_t _t295 = _t134*_t242 + _t136*_t262 + _t294 - _t52;
-    const train5_real_t _t296 = _t133 + _t230 - _t247*_t84 - _t267*_t86;
-    const train5_real_t _t297 = -TRAIN5_LIT(1.6666666666666667)*_t296;
-    const train5_real_t _t298 = TRAIN5_LIT(0.2)*_t297;
-    const train5_real_t _t299 = _t134*_t247 + _t136*_t267 - _t289 + _t83;
-    const train5_real_t _t300 = _t140 + _t231 - _t250*_t84 - _t271*_t86;
-    const train5_real_t _t301 = -TRAIN5_LIT(1.6666666666666667)*_t300;
-    const train5_real_t _t302 = TRAIN5_LIT(0.2)*_t301;
-    const train5_real_t _t303 = _t134*_t250 + _t136*_t271 - _t294 + _t90;
-    const train5_real_t _t304 = _t135 - _t252*_t84 - _t275*_t86;
-    const train5_real_t _t305 = -TRAIN5_LIT(1.6666666666666667)*_t304;
-    const train5_real_t _t306 = TRAIN5_LIT(0.2)*_t305;
-    const train5_real_t _t307 = _t134*_t252 + _t136*_t275 + _t85;
-    const train5_real_t _t308 = _t141 - _t254*_t84 - _t279*_t86;
-    const train5_real_t _t309 = -TRAIN5_LIT(1.6666666666666667)*_t308;
-    const train5_real_t _t310 = TRAIN5_LIT(0.2)*_t309;
-    const train5_real_t _t311 = _t134*_t254 + _t136*_t279 + _t91;
-    const train5_real_t _t312 = _t137 - _t282*_t86;
-    const train5_real_t _t313 = -TRAIN5_LIT(1.6666666666666667)*_t312;
-    const train5_real_t _t314 = TRAIN5_LIT(0.2)*_t313;
-    const train5_real_t _t315 = _t136*_t282 + _t88;
-    const train5_real_t _t316 = _t142 - _t284*_t86;
-    const train5_real_t _t317 = -TRAIN5_LIT(1.6666666666666667)*_t316;
-    const train5_real_t _t318 = TRAIN5_LIT(0.2)*_t317;
-    const train5_real_t _t319 = _t136*_t284 + _t93;
-    const train5_real_t _t320 = TRAIN5_LIT(1.6666666666666667)*_t138;
-    const train5_real_t _t321 = TRAIN5_LIT(0.2)*_t320;
-    const train5_real_t _t322 = TRAIN5_LIT(1.6666666666666667)*_t143;
-    const train5_real_t _t323 = TRAIN5_LIT(0.2)*_t322;
-    const train5_real_t _t324 = -_t101*_t287 - _t232 - _t237*_t97 - _t257*_t99 - _t57;
-    const train5_real_t _t325 = -TRAIN5_LIT(1.6666666666666667)*_t324;
-    const train5_real_t _t326 = TRAIN5_LIT(0.2)*_t325;
-    const train5_real_t _t327 = _t146*_t224;
-    const train5_real_t _t328 = _t148*_t237 + _t150*_t257 + _t152*_t287 + _t327 - _t56;
-    const train5_real_t _t329 = -_t101*_t292 - _t233 - _t242*_t97 - _t262*_t99 + _t64;
-    const train5_real_t _t330 = -TRAIN5_LIT(1.6666666666666667)*_t329;
-    const train5_real_t _t331 = TRAIN5_LIT(0.2)*_t330;
-    const train5_real_t _t332 = _t146*_t226;
-    const train5_real_t _t333 = _t148*_t242 + _t150*_t262 + _t152*_t292 + _t332 - _t58;
-    const train5_real_t _t334 = -_t101*_t297 + _t147 + _t232 - _t247*_t97 - _t267*_t99;
-    const train5_real_t _t335 = -TRAIN5_LIT(1.6666666666666667)*_t334;
-    const train5_real_t _t336 = TRAIN5_LIT(0.2)*_t335;
-    const train5_real_t _t337 = _t148*_t247 + _t150*_t267 + _t152*_t297 - _t327 + _t96;
-    const train5_real_t _t338 = -_t101*_t301 + _t157 + _t233 - _t250*_t97 - _t271*_t99;
-    const train5_real_t _t339 = -TRAIN5_LIT(1.6666666666666667)*_t338;
-    const train5_real_t _t340 = TRAIN5_LIT(0.2)*_t339;
-    const train5_real_t _t341 = _t105 + _t148*_t250 + _t150*_t271 + _t152*_t301 - _t332;
-    const train5_real_t _t342 = -_t101*_t305 + _t149 - _t252*_t97 - _t275*_t99;
-    const train5_real_t _t343 = -TRAIN5_LIT(1.6666666666666667)*_t342;
-    const train5_real_t _t344 = TRAIN5_LIT(0.2)*_t343;
-    const train5_real_t _t345 = _t148*_t252 + _t150*_t275 + _t152*_t305 + _t98;
-    const train5_real_t _t346 = -_t101*_t309 + _t158 - _t254*_t97 - _t279*_t99;
-    const train5_real_t _t347 = -TRAIN5_LIT(1.6666666666666667)*_t346;
-    const train5_real_t _t348 = TRAIN5_LIT(0.2)*_t347;
-    const train5_real_t _t349 = _t106 + _t148*_t254 + _t150*_t279 + _t152*_t309;
-    const train5_real_t _t350 = -_t101*_t313 + _t151 - _t282*_t99;
-    const train5_real_t _t351 = -TRAIN5_LIT(1.6666666666666667)*_t350;
-    const train5_real_t _t352 = TRAIN5_LIT(0.2)*_t351;
-    const train5_real_t _t353 = _t100 + _t150*_t282 + _t152*_t313;
-    const train5_real_t _t354 = -_t101*_t317 + _t159 - _t284*_t99;
-    const train5_real_t _t355 = -TRAIN5_LIT(1.6666666666666667)*_t354;
-    const train5_real_t _t356 = TRAIN5_LIT(0.2)*_t355;
-    const train5_real_t _t357 = _t107 + _t150*_t284 + _t152*_t317;
-    const train5_real_t _t358 = -_t101*_t320 + _t153;
-    const train5_real_t _t359 = -TRAIN5_LIT(1.6666666666666667)*_t358;
-    const train5_real_t _t360 = TRAIN5_LIT(0.2)*_t359;
-    const train5_real_t _t361 = _t103 + _t152*_t320;
-    const train5_real_t _t362 = -_t101*_t322 + _t160;
-    const train5_real_t _t363 = -TRAIN5_LIT(1.6666666666666667)*_t362;
-    const train5_real_t _t364 = TRAIN5_LIT(0.2)*_t363;
-    const train5_real_t _t365 = _t109 + _t152*_t322;
-    const train5_real_t _t366 = TRAIN5_LIT(1.6666666666666667)*_t154;
-    const train5_real_t _t367 = TRAIN5_LIT(0.2)*_t366;
-    const train5_real_t _t368 = TRAIN5_LIT(1.6666666666666667)*_t161;
-    const train5_real_t _t369 = TRAIN5_LIT(0.2)*_t368;
-    const train5_real_t _t370 = _t181*_t183;
-    const train5_real_t _t371 = _t183*_t194;
-    const train5_real_t _t372 = _t181*_t194;
-    const train5_real_t _t373 = _t111 + _t35;
-    const train5_real_t _t374 = _t373*_t4;
-    const train5_real_t _t375 = J_theta_cart_right*_t374;
-    const train5_real_t _t376 = _t112 - _t60;
-    const train5_real_t _t377 = _t376*_t4;
-    const train5_real_t _t378 = J_theta_cart_right*_t377;
-    const train5_real_t _t379 = -_t111 + _t35;
-    const train5_real_t _t380 = _t379*_t5;
-    const train5_real_t _t381 = J_theta_cart_left*_t380;
-    const train5_real_t _t382 = -_t112 - _t60;
-    const train5_real_t _t383 = _t382*_t5;
-    const train5_real_t _t384 = J_theta_cart_left*_t383;
-    const train5_real_t _t385 = _t113 + _t116;
-    const train5_real_t _t386 = _t385*_t6;
-    const train5_real_t _t387 = J_theta_cart2_right*_t386;
-    const train5_real_t _t388 = _t117 - _t119;
-    const train5_real_t _t389 = _t388*_t6;
-    const train5_real_t _t390 = J_theta_cart2_right*_t389;
-    const train5_real_t _t391 = -_t113 - _t115 + _t39;
-    const train5_real_t _t392 = _t391*_t7;
-    const train5_real_t _t393 = J_theta_cart2_left*_t392;
-    const train5_real_t _t394 = -_t117 - _t119;
-    const train5_real_t _t395 = _t394*_t7;
-    const train5_real_t _t396 = J_theta_cart2_left*_t395;
-    const train5_real_t _t397 = _t120 - _t122 + _t125 + _t45;
-    const train5_real_t _t398 = _t397*_t8;
-    const train5_real_t _t399 = J_theta_cart3_right*_t398;
-    const train5_real_t _t400 = _t126 - _t129;
-    const train5_real_t _t401 = _t400*_t8;
-    const train5_real_t _t402 = J_theta_cart3_right*_t401;
-    const train5_real_t _t403 = -_t120 - _t130;
-    const train5_real_t _t404 = _t403*_t9;
-    const train5_real_t _t405 = J_theta_cart3_left*_t404;
-    const train5_real_t _t406 = -_t126 - _t129;
-    const train5_real_t _t407 = _t406*_t9;
-    const train5_real_t _t408 = J_theta_cart3_left*_t407;
-    const train5_real_t _t409 = _t131 - _t138;
-    const train5_real_t _t410 = _t10*_t409;
-    const train5_real_t _t411 = J_theta_cart4_right*_t410;
-    const train5_real_t _t412 = _t139 - _t143;
-    const train5_real_t _t413 = _t10*_t412;
-    const train5_real_t _t414 = J_theta_cart4_right*_t413;
-    const train5_real_t _t415 = -_t131 - _t138;
-    const train5_real_t _t416 = _t11*_t415;
-    const train5_real_t _t417 = J_theta_cart4_left*_t416;
-    const train5_real_t _t418 = -_t139 - _t143;
-    const train5_real_t _t419 = _t11*_t418;
-    const train5_real_t _t420 = J_theta_cart4_left*_t419;
-    const train5_real_t _t421 = _t145 - _t154;
-    const train5_real_t _t422 = _t12*_t421;
-    const train5_real_t _t423 = J_theta_cart5_right*_t422;
-    const train5_real_t _t424 = _t156 - _t161;
-    const train5_real_t _t425 = _t12*_t424;
-    const train5_real_t _t426 = J_theta_cart5_right*_t425;
-    const train5_real_t _t427 = -_t145 - _t154;
-    const train5_real_t _t428 = _t13*_t427;
-    const train5_real_t _t429 = J_theta_cart5_left*_t428;
-    const train5_real_t _t430 = -_t156 - _t161;
-    const train5_real_t _t431 = _t13*_t430;
-    const train5_real_t _t432 = J_theta_cart5_left*_t431;
-    const train5_real_t _t433 = K_theta_cart_x_tractor_2*_t34 - _t170;
-    const train5_real_t _t434 = _t41*(_t162 + _t163) + _t42*(_t171 - _t175);
-    const train5_real_t _t435 = _t41*(_t164 + _t165) + _t42*(_t172 - _t176);
-    const train5_real_t _t436 = _t41*(_t166 + _t167) + _t42*(_t173 - _t177);
-    const train5_real_t _t437 = _t41*(_t168 + _t169) + _t42*(_t174 - _t178);
-    const train5_real_t _t438 = _t182*_t19*_t35 + _t206*(-_t162 - _t163) + _t207*(-_t164 - _t165)
-            + _t208*(-_t166 - _t167) + _t209*(-_t168 - _t169) + _t34*(_t14*_t182 + _t15*_t187*_t45
-            + _t16*_t185*_t39 + _t17*_t189*_t51 + _t18*_t192*_t57)
-            + _t41*(-_t196 - _t197 - _t198 - _t199);
-    const train5_real_t _t439 = _t370 - _t371;
-    const train5_real_t _t440 = _t182 - _t372;
-    const train5_real_t _t441 = _t224*_t439 + _t226*_t440;
-    const train5_real_t _t442 = _t183*_t184;
-    const train5_real_t _t443 = _t181*_t184;
-    const train5_real_t _t444 = _t182*_t242 + _t237*_t370 + _t247*_t371 + _t250*_t372 + _t252*_t442
-            + _t254*_t443;
-    const train5_real_t _t445 = _t183*_t186;
-    const train5_real_t _t446 = _t181*_t186;
-    const train5_real_t _t447 = _t182*_t262 + _t257*_t370 + _t267*_t371 + _t271*_t372 + _t275*_t442
-            + _t279*_t443 + _t282*_t445 + _t284*_t446;
-    const train5_real_t _t448 = _t183*_t188;
-    const train5_real_t _t449 = _t181*_t188;
-    const train5_real_t _t450 = _t182*_t292 + _t287*_t370 + _t297*_t371 + _t301*_t372 + _t305*_t442
-            + _t309*_t443 + _t313*_t445 + _t317*_t446 + _t320*_t448 + _t322*_t449;
-    const train5_real_t _t451 = _t183*_t191;
-    const train5_real_t _t452 = _t181*_t191;
-    const train5_real_t _t453 = _t182*_t330 + _t325*_t370 + _t335*_t371 + _t339*_t372 + _t343*_t442
-            + _t347*_t443 + _t351*_t445 + _t355*_t446 + _t359*_t448 + _t363*_t449 + _t366*_t451
-            + _t368*_t452;
-    const train5_real_t _t454 = J_theta_cart*_t441 + _t370*_t433 + _t434*_t444 + _t435*_t447
-            + _t436*_t450 + _t437*_t453 + _t438;
-    const train5_real_t _t455 = K_theta_cart2_x_tractor_2*_t38 - _t171;
-    const train5_real_t _t456 = _t47*(_t164 + _t165) + _t48*(_t172 - _t176);
-    const train5_real_t _t457 = _t47*(_t166 + _t167) + _t48*(_t173 - _t177);
-    const train5_real_t _t458 = _t47*(_t168 + _t169) + _t48*(_t174 - _t178);
-    const train5_real_t _t459 = K_theta_cart2_x_tractor_2*_t39*(TRAIN5_LIT(0.3)*_t182
-            + TRAIN5_LIT(0.85)*_t195*_t35) - _t171*_t210 + _t211*(-_t164 - _t165)
-            + _t212*(-_t166 - _t167) + _t213*(-_t168 - _t169)
-            + _t38*(K_theta_cart2_x_tractor*(TRAIN5_LIT(0.3)*_t182 + TRAIN5_LIT(0.85)*_t195*_t35)
-            + _t15*_t187*_t45 + _t17*_t189*_t51 + _t18*_t192*_t57 + _t195*_t20*_t34)
-            + _t47*(-_t197 - _t198 - _t199);
-    const train5_real_t _t460 = J_theta_cart2*_t444 + _t370*_t455 + _t434*_t441 + _t447*_t456
-            + _t450*_t457 + _t453*_t458 + _t459;
-    const train5_real_t _t461 = K_theta_cart3_x_tractor_2*_t44 - _t172;
-    const train5_real_t _t462 = _t53*(_t166 + _t167) + _t54*(_t173 - _t177);
-    const train5_real_t _t463 = _t53*(_t168 + _t169) + _t54*(_t174 - _t178);
-    const train5_real_t _t464 = _t164*(_t214 + _t216) + _t165*(_t214 + _t216)
-            + _t172*(-_t210 - _t215) + _t176*(_t210 + _t215) + _t182*(_t200 + _t201)
-            + _t217*(-_t166 - _t167) + _t218*(-_t168 - _t169) + _t53*(_t190 + _t193 - _t198
-            - _t199);
-    const train5_real_t _t465 = J_theta_cart3*_t447 + _t370*_t461 + _t435*_t441 + _t444*_t456
-            + _t450*_t462 + _t453*_t463 + _t464;
-    const train5_real_t _t466 = K_theta_cart4_x_tractor_2*_t50 - _t173;
-    const train5_real_t _t467 = _t179*(_t168 + _t169) + _t180*(_t174 - _t178);
-    const train5_real_t _t468 = _t166*(_t214 + _t216 + _t220) + _t167*(_t214 + _t216 + _t220)
-            + _t173*(-_t210 - _t215 - _t219) + _t177*(_t210 + _t215 + _t219) + _t179*(_t193 - _t199)
-            + _t182*(_t202 + _t203) + _t221*(-_t168 - _t169);
-    const train5_real_t _t469 = J_theta_cart4*_t450 + _t370*_t466 + _t436*_t441 + _t444*_t457
-            + _t447*_t462 + _t453*_t467 + _t468;
-    const train5_real_t _t470 = K_theta_cart5_x_tractor_2*_t56 - _t174;
-    const train5_real_t _t471 = _t168*(_t214 + _t216 + _t220 + _t223)
-            + _t169*(_t214 + _t216 + _t220 + _t223) + _t174*(-_t210 - _t215 - _t219 - _t222)
-            + _t178*(_t210 + _t215 + _t219 + _t222) + _t182*(_t204 + _t205);
-    const train5_real_t _t472 = J_theta_cart5*_t453 + _t370*_t470 + _t437*_t441 + _t444*_t458
-            + _t447*_t463 + _t450*_t467 + _t471;
-    const train5_real_t _t473 = K_theta_cart_x_tractor*_t34 + K_theta_cart_x_tractor_2*_t35;
-    const train5_real_t _t474 = _t162 + _t163;
-    const train5_real_t _t475 = _t164 + _t165;
-    const train5_real_t _t476 = _t166 + _t167;
-    const train5_real_t _t477 = _t168 + _t169;
-    const train5_real_t _t478 = J_x_tractor + _t102*_t476 + _t144*_t477 + _t473*_t66 + _t474*_t75
-            + _t475*_t87;
-    const train5_real_t _t479 = J_theta_cart*_t66 + _t102*_t436 + _t144*_t437 + _t434*_t75
-            + _t435*_t87 + _t473;
-    const train5_real_t _t480 = J_theta_cart2*_t75 + _t102*_t457 + _t144*_t458 + _t434*_t66
-            + _t456*_t87 + _t474;
-    const train5_real_t _t481 = J_theta_cart3*_t87 + _t102*_t462 + _t144*_t463 + _t435*_t66
-            + _t456*_t75 + _t475;
-    const train5_real_t _t482 = J_theta_cart4*_t102 + _t144*_t467 + _t436*_t66 + _t457*_t75
-            + _t462*_t87 + _t476;
-    const train5_real_t _t483 = J_theta_cart5*_t144 + _t102*_t467 + _t437*_t66 + _t458*_t75
-            + _t463*_t87 + _t477;
-    const train5_real_t _t484 = _t102*_t482 + _t144*_t483 + _t25 + _t374*_t375 + _t380*_t381
-            + _t386*_t387 + _t392*_t393 + _t398*_t399 + _t404*_t405 + _t410*_t411 + _t416*_t417
-            + _t422*_t423 + _t428*_t429 + _t478 + _t479*_t66 + _t480*_t75 + _t481*_t87;
-    const train5_real_t _t485 = K_theta_tractor_x_tractor_2 + _t108*_t476 + _t155*_t477 + _t473*_t69
-            + _t474*_t79 + _t475*_t92;
-    const train5_real_t _t486 = K_theta_cart_x_tractor*_t36 - K_theta_cart_x_tractor_2*_t60;
-    const train5_real_t _t487 = J_theta_cart*_t69 + _t108*_t436 + _t155*_t437 + _t434*_t79
-            + _t435*_t92 + _t486;
-    const train5_real_t _t488 = K_theta_cart2_x_tractor*_t40 - K_theta_cart2_x_tractor_2*_t61;
-    const train5_real_t _t489 = J_theta_cart2*_t79 + _t108*_t457 + _t155*_t458 + _t434*_t69
-            + _t456*_t92 + _t488;
-    const train5_real_t _t490 = K_theta_cart3_x_tractor*_t46 - K_theta_cart3_x_tractor_2*_t62;
-    const train5_real_t _t491 = J_theta_cart3*_t92 + _t108*_t462 + _t155*_t463 + _t435*_t69
-            + _t456*_t79 + _t490;
-    const train5_real_t _t492 = K_theta_cart4_x_tractor*_t52 - K_theta_cart4_x_tractor_2*_t63;
-    const train5_real_t _t493 = J_theta_cart4*_t108 + _t155*_t467 + _t436*_t69 + _t457*_t79
-            + _t462*_t92 + _t492;
-    const train5_real_t _t494 = K_theta_cart5_x_tractor*_t58 - K_theta_cart5_x_tractor_2*_t64;
-    const train5_real_t _t495 = J_theta_cart5*_t155 + _t108*_t467 + _t437*_t69 + _t458*_t79
-            + _t463*_t92 + _t494;
-    const train5_real_t _t496 = _t102*_t493 + _t144*_t495 + _t30 + _t374*_t378 + _t380*_t384
-            + _t386*_t390 + _t392*_t396 + _t398*_t402 + _t404*_t408 + _t410*_t414 + _t416*_t420
-            + _t422*_t426 + _t428*_t432 + _t485 + _t487*_t66 + _t489*_t75 + _t491*_t87;
-    const train5_real_t _t497 = J_theta_tractor + _t108*_t492 + _t155*_t494 + _t486*_t69
-            + _t488*_t79 + _t490*_t92;
-    const train5_real_t _t498 = _t108*_t493 + _t155*_t495 + _t31 + _t377*_t378 + _t383*_t384
-            + _t389*_t390 + _t395*_t396 + _t401*_t402 + _t407*_t408 + _t413*_t414 + _t419*_t420
-            + _t425*_t426 + _t431*_t432 + _t487*_t69 + _t489*_t79 + _t491*_t92 + _t497;
-    const train5_real_t _t499 = _t484*_t498 - _t496*_t496;
-    const train5_real_t _t500 = TRAIN5_SIN(theta_tractor);
-    const train5_real_t _t501 = TRAIN5_COS(theta_tractor);
-    const train5_real_t _t502 = K_theta_tractor_x_tractor*_t182 + _t171*_t185 + _t172*_t187 + _t190
-            + _t193 + _t195*(-K_theta_cart_x_tractor_2*_t34 + _t170) - _t196 - _t197 - _t198
-            - _t199;
-    const train5_real_t _t503 = _t185*(-K_theta_cart2_x_tractor*_t61
-            - K_theta_cart2_x_tractor_2*_t40) + _t187*(-_t200 - _t201) + _t189*(-_t202 - _t203)
-            + _t192*(-_t204 - _t205) + _t195*(-K_theta_cart_x_tractor*_t60
-            - K_theta_cart_x_tractor_2*_t36);
-    const train5_real_t _t504 = _t234 + _t34;
-    const train5_real_t _t505 = _t4*_t504;
-    const train5_real_t _t506 = _t235 + _t36;
-    const train5_real_t _t507 = _t4*_t506;
-    const train5_real_t _t508 = -_t234 + _t34;
-    const train5_real_t _t509 = _t5*_t508;
-    const train5_real_t _t510 = -_t235 + _t36;
-    const train5_real_t _t511 = _t5*_t510;
-    const train5_real_t _t512 = _t238 - _t240;
-    const train5_real_t _t513 = _t512*_t6;
-    const train5_real_t _t514 = _t243 - _t245;
-    const train5_real_t _t515 = _t514*_t6;
-    const train5_real_t _t516 = _t239 + _t248 - _t67;
-    const train5_real_t _t517 = _t516*_t6;
-    const train5_real_t _t518 = _t244 + _t251 - _t70;
-    const train5_real_t _t519 = _t518*_t6;
-    const train5_real_t _t520 = _t253 + _t68;
-    const train5_real_t _t521 = _t520*_t6;
-    const train5_real_t _t522 = _t255 + _t71;
-    const train5_real_t _t523 = _t522*_t6;
-    const train5_real_t _t524 = -_t238 - _t240;
-    const train5_real_t _t525 = _t524*_t7;
-    const train5_real_t _t526 = -_t243 - _t245;
-    const train5_real_t _t527 = _t526*_t7;
-    const train5_real_t _t528 = _t239 - _t248 - _t67;
-    const train5_real_t _t529 = _t528*_t7;
-    const train5_real_t _t530 = _t244 - _t251 - _t70;
-    const train5_real_t _t531 = _t530*_t7;
-    const train5_real_t _t532 = -_t253 + _t68;
-    const train5_real_t _t533 = _t532*_t7;
-    const train5_real_t _t534 = -_t255 + _t71;
-    const train5_real_t _t535 = _t534*_t7;
-    const train5_real_t _t536 = _t258 - _t260;
-    const train5_real_t _t537 = _t536*_t8;
-    const train5_real_t _t538 = _t263 - _t265;
-    const train5_real_t _t539 = _t538*_t8;
-    const train5_real_t _t540 = _t268 - _t269;
-    const train5_real_t _t541 = _t540*_t8;
-    const train5_real_t _t542 = _t272 - _t273;
-    const train5_real_t _t543 = _t542*_t8;
-    const train5_real_t _t544 = _t276 - _t277;
-    const train5_real_t _t545 = _t544*_t8;
-    const train5_real_t _t546 = _t280 - _t281;
-    const train5_real_t _t547 = _t546*_t8;
-    const train5_real_t _t548 = _t283 + _t77;
-    const train5_real_t _t549 = _t548*_t8;
-    const train5_real_t _t550 = _t285 + _t81;
-    const train5_real_t _t551 = _t550*_t8;
-    const train5_real_t _t552 = -_t258 - _t260;
-    const train5_real_t _t553 = _t552*_t9;
-    const train5_real_t _t554 = -_t263 - _t265;
-    const train5_real_t _t555 = _t554*_t9;
-    const train5_real_t _t556 = -_t268 - _t269;
-    const train5_real_t _t557 = _t556*_t9;
-    const train5_real_t _t558 = -_t272 - _t273;
-    const train5_real_t _t559 = _t558*_t9;
-    const train5_real_t _t560 = -_t276 - _t277;
-    const train5_real_t _t561 = _t560*_t9;
-    const train5_real_t _t562 = -_t280 - _t281;
-    const train5_real_t _t563 = _t562*_t9;
-    const train5_real_t _t564 = -_t283 + _t77;
-    const train5_real_t _t565 = _t564*_t9;
-    const train5_real_t _t566 = -_t285 + _t81;
-    const train5_real_t _t567 = _t566*_t9;
-    const train5_real_t _t568 = _t288 - _t290;
-    const train5_real_t _t569 = _t10*_t568;
-    const train5_real_t _t570 = _t293 - _t295;
-    const train5_real_t _t571 = _t10*_t570;
-    const train5_real_t _t572 = _t298 - _t299;
-    const train5_real_t _t573 = _t10*_t572;
-    const train5_real_t _t574 = _t302 - _t303;
-    const train5_real_t _t575 = _t10*_t574;
-    const train5_real_t _t576 = _t306 - _t307;
-    const train5_real_t _t577 = _t10*_t576;
-    const train5_real_t _t578 = _t310 - _t311;
-    const train5_real_t _t579 = _t10*_t578;
-    const train5_real_t _t580 = _t314 - _t315;
-    const train5_real_t _t581 = _t10*_t580;
-    const train5_real_t _t582 = _t318 - _t319;
-    const train5_real_t _t583 = _t10*_t582;
-    const train5_real_t _t584 = _t321 + _t89;
-    const train5_real_t _t585 = _t10*_t584;
-    const train5_real_t _t586 = _t323 + _t94;
-    const train5_real_t _t587 = _t10*_t586;
-    const train5_real_t _t588 = -_t288 - _t290;
-    const train5_real_t _t589 = _t11*_t588;
-    const train5_real_t _t590 = -_t293 - _t295;
-    const train5_real_t _t591 = _t11*_t590;
-    const train5_real_t _t592 = -_t298 - _t299;
-    const train5_real_t _t593 = _t11*_t592;
-    const train5_real_t _t594 = -_t302 - _t303;
-    const train5_real_t _t595 = _t11*_t594;
-    const train5_real_t _t596 = -_t306 - _t307;
-    const train5_real_t _t597 = _t11*_t596;
-    const train5_real_t _t598 = -_t310 - _t311;
-    const train5_real_t _t599 = _t11*_t598;
-    const train5_real_t _t600 = -_t314 - _t315;
-    const train5_real_t _t601 = _t11*_t600;
-    const train5_real_t _t602 = -_t318 - _t319;
-    const train5_real_t _t603 = _t11*_t602;
-    const train5_real_t _t604 = -_t321 + _t89;
-    const train5_real_t _t605 = _t11*_t604;
-    const train5_real_t _t606 = -_t323 + _t94;
-    const train5_real_t _t607 = _t11*_t606;
-    const train5_real_t _t608 = _t326 - _t328;
-    const train5_real_t _t609 = _t12*_t608;
-    const train5_real_t _t610 = _t331 - _t333;
-    const train5_real_t _t611 = _t12*_t610;
-    const train5_real_t _t612 = _t336 - _t337;
-    const train5_real_t _t613 = _t12*_t612;
-    const train5_real_t _t614 = _t340 - _t341;
-    const train5_real_t _t615 = _t12*_t614;
-    const train5_real_t _t616 = _t344 - _t345;
-    const train5_real_t _t617 = _t12*_t616;
-    const train5_real_t _t618 = _t348 - _t349;
-    const train5_real_t _t619 = _t12*_t618;
-    const train5_real_t _t620 = _t352 - _t353;
-    const train5_real_t _t621 = _t12*_t620;
-    const train5_real_t _t622 = _t356 - _t357;
-    const train5_real_t _t623 = _t12*_t622;
-    const train5_real_t _t624 = _t360 - _t361;
-    const train5_real_t _t625 = _t12*_t624;
-    const train5_real_t _t626 = _t364 - _t365;
-    const train5_real_t _t627 = _t12*_t626;
-    const train5_real_t _t628 = _t104 + _t367;
-    const train5_real_t _t629 = _t12*_t628;
-    const train5_real_t _t630 = _t110 + _t369;
-    const train5_real_t _t631 = _t12*_t630;
-    const train5_real_t _t632 = -_t326 - _t328;
-    const train5_real_t _t633 = _t13*_t632;
-    const train5_real_t _t634 = -_t331 - _t333;
-    const train5_real_t _t635 = _t13*_t634;
-    const train5_real_t _t636 = -_t336 - _t337;
-    const train5_real_t _t637 = _t13*_t636;
-    const train5_real_t _t638 = -_t340 - _t341;
-    const train5_real_t _t639 = _t13*_t638;
-    const train5_real_t _t640 = -_t344 - _t345;
-    const train5_real_t _t641 = _t13*_t640;
-    const train5_real_t _t642 = -_t348 - _t349;
-    const train5_real_t _t643 = _t13*_t642;
-    const train5_real_t _t644 = -_t352 - _t353;
-    const train5_real_t _t645 = _t13*_t644;
-    const train5_real_t _t646 = -_t356 - _t357;
-    const train5_real_t _t647 = _t13*_t646;
-    const train5_real_t _t648 = -_t360 - _t361;
-    const train5_real_t _t649 = _t13*_t648;
-    const train5_real_t _t650 = -_t364 - _t365;
-    const train5_real_t _t651 = _t13*_t650;
-    const train5_real_t _t652 = _t104 - _t367;
-    const train5_real_t _t653 = _t13*_t652;
-    const train5_real_t _t654 = _t110 - _t369;
-    const train5_real_t _t655 = _t13*_t654;
-    const train5_real_t _t656 = _t439*_t505 + _t440*_t507;
-    const train5_real_t _t657 = _t439*_t509 + _t440*_t511;
-    const train5_real_t _t658 = _t182*_t515 + _t370*_t513 + _t371*_t517 + _t372*_t519 + _t442*_t521
-            + _t443*_t523;
-    const train5_real_t _t659 = _t182*_t527 + _t370*_t525 + _t371*_t529 + _t372*_t531 + _t442*_t533
-            + _t443*_t535;
-    const train5_real_t _t660 = _t182*_t539 + _t370*_t537 + _t371*_t541 + _t372*_t543 + _t442*_t545
-            + _t443*_t547 + _t445*_t549 + _t446*_t551;
-    const train5_real_t _t661 = _t182*_t555 + _t370*_t553 + _t371*_t557 + _t372*_t559 + _t442*_t561
-            + _t443*_t563 + _t445*_t565 + _t446*_t567;
-    const train5_real_t _t662 = _t182*_t571 + _t370*_t569 + _t371*_t573 + _t372*_t575 + _t442*_t577
-            + _t443*_t579 + _t445*_t581 + _t446*_t583 + _t448*_t585 + _t449*_t587;
-    const train5_real_t _t663 = _t182*_t591 + _t370*_t589 + _t371*_t593 + _t372*_t595 + _t442*_t597
-            + _t443*_t599 + _t445*_t601 + _t446*_t603 + _t448*_t605 + _t449*_t607;
-    const train5_real_t _t664 = _t182*_t611 + _t370*_t609 + _t371*_t613 + _t372*_t615 + _t442*_t617
-            + _t443*_t619 + _t445*_t621 + _t446*_t623 + _t448*_t625 + _t449*_t627 + _t451*_t629
-            + _t452*_t631;
-    const train5_real_t _t665 = _t182*_t635 + _t370*_t633 + _t371*_t637 + _t372*_t639 + _t442*_t641
-            + _t443*_t643 + _t445*_t645 + _t446*_t647 + _t448*_t649 + _t449*_t651 + _t451*_t653
-            + _t452*_t655;
-    const train5_real_t _t666 = _t102*_t469 + _t144*_t472 + _t375*_t656 + _t381*_t657 + _t387*_t658
-            + _t393*_t659 + _t399*_t660 + _t405*_t661 + _t411*_t662 + _t417*_t663 + _t423*_t664
-            + _t429*_t665 + _t441*_t473 + _t444*_t474 + _t447*_t475 + _t450*_t476 + _t453*_t477
-            + _t454*_t66 + _t460*_t75 + _t465*_t87 + _t502;
-    const train5_real_t _t667 = -K_theta_tractor_x_tractor*_t370 + _t108*_t469 + _t155*_t472
-            + _t378*_t656 + _t384*_t657 + _t390*_t658 + _t396*_t659 + _t402*_t660 + _t408*_t661
-            + _t414*_t662 + _t420*_t663 + _t426*_t664 + _t432*_t665 + _t441*_t486 + _t444*_t488
-            + _t447*_t490 + _t450*_t492 + _t453*_t494 + _t454*_t69 + _t460*_t79 + _t465*_t92
-            + _t503;
-    const train5_real_t _t668 = _t21*tau_right + _t22*tau_left - _t666;
-    const train5_real_t _t669 = _t26*tau_right + _t28*tau_left - _t667;
-    const train5_real_t _t670 = TRAIN5_LIT(1.0)/_t499;
-    const train5_real_t _t671 = _t670*(-_t496*_t669 + _t498*_t668);
-    const train5_real_t _t672 = _t670*(_t484*_t669 - _t496*_t668);
-    const train5_real_t _t673 = _t441 + _t66*_t671 + _t672*_t69;
-    const train5_real_t _t674 = _t444 + _t671*_t75 + _t672*_t79;
-    const train5_real_t _t675 = _t447 + _t671*_t87 + _t672*_t92;
-    const train5_real_t _t676 = _t102*_t671 + _t108*_t672 + _t450;
-    const train5_real_t _t677 = _t144*_t671 + _t155*_t672 + _t453;
-    const train5_real_t _t678 = _t21*_t671 + _t26*_t672;
-    const train5_real_t _t679 = _t22*_t671 + _t28*_t672;
-    const train5_real_t _t680 = _t374*_t671 + _t377*_t672 + _t656;
-    const train5_real_t _t681 = _t380*_t671 + _t383*_t672 + _t657;
-    const train5_real_t _t682 = _t386*_t671 + _t389*_t672 + _t658;
-    const train5_real_t _t683 = _t392*_t671 + _t395*_t672 + _t659;
-    const train5_real_t _t684 = _t398*_t671 + _t401*_t672 + _t660;
-    const train5_real_t _t685 = _t404*_t671 + _t407*_t672 + _t661;
-    const train5_real_t _t686 = _t410*_t671 + _t413*_t672 + _t662;
-    const train5_real_t _t687 = _t416*_t671 + _t419*_t672 + _t663;
-    const train5_real_t _t688 = _t422*_t671 + _t425*_t672 + _t664;
-    const train5_real_t _t689 = _t428*_t671 + _t431*_t672 + _t665;
-    const train5_real_t _t690 = -_t370*_t500 + _t501*_t671;
-    const train5_real_t _t691 = _t370*_t501 + _t500*_t671;
-    if (!(_t484 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    if (!(_t499 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
-        return TRAIN5_ERR_BAD_PARAMS;
-    }
-    const train5_real_t r_0 = _t690;
-    const train5_real_t r_1 = _t691;
-    const train5_real_t r_2 = _t672;
-    const train5_real_t r_3 = _t673;
-    const train5_real_t r_4 = _t674;
-    const train5_real_t r_5 = _t675;
-    const train5_real_t r_6 = _t676;
-    const train5_real_t r_7 = _t677;
-    const train5_real_t r_8 = _t678;
-    const train5_real_t r_9 = _t679;
-    const train5_real_t r_10 = _t680;
-    const train5_real_t r_11 = _t681;
-    const train5_real_t r_12 = _t682;
-    const train5_real_t r_13 = _t683;
-    const train5_real_t r_14 = _t684;
-    const train5_real_t r_15 = _t685;
-    const train5_real_t r_16 = _t686;
-    const train5_real_t r_17 = _t687;
-    const train5_real_t r_18 = _t688;
-    const train5_real_t r_19 = _t689;
-    if (((train5_exp_carry(r_0) | train5_exp_carry(r_1) | train5_exp_carry(r_2)
-            | train5_exp_carry(r_3) | train5_exp_carry(r_4) | train5_exp_carry(r_5)
-            | train5_exp_carry(r_6) | train5_exp_carry(r_7) | train5_exp_carry(r_8)
-            | train5_exp_carry(r_9) | train5_exp_carry(r_10) | train5_exp_carry(r_11)
-            | train5_exp_carry(r_12) | train5_exp_carry(r_13) | train5_exp_carry(r_14)
-            | train5_exp_carry(r_15) | train5_exp_carry(r_16) | train5_exp_carry(r_17)
-            | train5_exp_carry(r_18) | train5_exp_carry(r_19)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
-        return TRAIN5_ERR_NONFINITE_OUTPUT;
-    }
-    qddot[0] = r_0;
-    qddot[1] = r_1;
-    qddot[2] = r_2;
-    qddot[3] = r_3;
-    qddot[4] = r_4;
-    qddot[5] = r_5;
-    qddot[6] = r_6;
-    qddot[7] = r_7;
-    qddot[8] = r_8;
-    qddot[9] = r_9;
-    qddot[10] = r_10;
-    qddot[11] = r_11;
-    qddot[12] = r_12;
-    qddot[13] = r_13;
-    qddot[14] = r_14;
-    qddot[15] = r_15;
-    qddot[16] = r_16;
-    qddot[17] = r_17;
-    qddot[18] = r_18;
-    qddot[19] = r_19;
-    return TRAIN5_OK;
+    return train5_forward_dynamics_prepared(&prepared, q, qdot, tau, qddot);
 }
 
 /* train5_model_prepare: documented in train5_model.h.
@@ -2672,738 +2844,22 @@ void train5_minimal_mass_matrix(const train5_params_t *p, const train5_real_t *q
 void train5_minimal_bias_forces(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, train5_real_t *H)
 {
-    const train5_real_t theta_tractor = q[2];
-    const train5_real_t _t0 = -theta_tractor;
-    const train5_real_t theta_cart = q[3];
-    const train5_real_t _t1 = _t0 + theta_cart;
-    const train5_real_t _t2 = TRAIN5_SIN(_t1);
-    const train5_real_t _t3 = TRAIN5_COS(_t1);
-    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t theta_cart2 = q[4];
-    const train5_real_t _t5 = _t0 + theta_cart2;
-    const train5_real_t _t6 = TRAIN5_SIN(_t5);
-    const train5_real_t _t7 = TRAIN5_COS(_t5);
-    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
-    const train5_real_t theta_cart3 = q[5];
-    const train5_real_t _t11 = _t0 + theta_cart3;
-    const train5_real_t _t12 = TRAIN5_SIN(_t11);
-    const train5_real_t _t13 = TRAIN5_COS(_t11);
-    const train5_real_t _t14 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t15 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t16 = TRAIN5_LIT(0.85)*_t7;
-    const train5_real_t theta_cart4 = q[6];
-    const train5_real_t _t17 = _t0 + theta_cart4;
-    const train5_real_t _t18 = TRAIN5_SIN(_t17);
-    const train5_real_t _t19 = TRAIN5_COS(_t17);
-    const train5_real_t _t20 = TRAIN5_LIT(0.3)*_t19;
-    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t12;
-    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t13;
-    const train5_real_t theta_cart5 = q[7];
-    const train5_real_t _t23 = _t0 + theta_cart5;
-    const train5_real_t _t24 = TRAIN5_SIN(_t23);
-    const train5_real_t _t25 = TRAIN5_COS(_t23);
-    const train5_real_t _t26 = TRAIN5_LIT(0.3)*_t25;
-    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t25;
-    const train5_real_t _t28 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t29 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t30 = TRAIN5_LIT(0.3)*_t12;
-    const train5_real_t _t31 = TRAIN5_LIT(0.3)*_t18;
-    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t24;
-    const train5_real_t _t33 = -_t10*_t7 - _t6*_t9;
-    const train5_real_t _t34 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t35 = _t33*_t34;
-    const train5_real_t _t36 = _t35 - _t6;
-    const train5_real_t _t37 = -TRAIN5_LIT(1.6666666666666667)*_t4;
-    const train5_real_t _t38 = _t33*_t37;
-    const train5_real_t _t39 = _t38 - _t8;
-    const train5_real_t _t40 = -_t10*_t13 - _t12*_t9;
-    const train5_real_t _t41 = _t34*_t40;
-    const train5_real_t _t42 = -_t12*_t15 - _t13*_t16;
-    const train5_real_t _t43 = TRAIN5_LIT(1.6666666666666667)*_t36;
-    const train5_real_t _t44 = _t42*_t43;
-    const train5_real_t _t45 = -_t12 + _t41 + _t44;
-    const train5_real_t _t46 = _t37*_t40;
-    const train5_real_t _t47 = TRAIN5_LIT(1.6666666666666667)*_t39;
-    const train5_real_t _t48 = _t42*_t47;
-    const train5_real_t _t49 = -_t14 + _t46 + _t48;
-    const train5_real_t _t50 = -_t10*_t19 - _t18*_t9;
-    const train5_real_t _t51 = _t34*_t50;
-    const train5_real_t _t52 = -_t15*_t18 - _t16*_t19;
-    const train5_real_t _t53 = _t43*_t52;
-    const train5_real_t _t54 = -_t18*_t21 - _t19*_t22;
-    const train5_real_t _t55 = TRAIN5_LIT(1.6666666666666667)*_t45;
-    const train5_real_t _t56 = _t54*_t55;
-    const train5_real_t _t57 = -_t18 + _t51 + _t53 + _t56;
-    const train5_real_t _t58 = _t37*_t50;
-    const train5_real_t _t59 = _t47*_t52;
-    const train5_real_t _t60 = TRAIN5_LIT(1.6666666666666667)*_t49;
-    const train5_real_t _t61 = _t54*_t60;
-    const train5_real_t _t62 = -_t20 + _t58 + _t59 + _t61;
-    const train5_real_t _t63 = -_t10*_t25 - _t24*_t9;
-    const train5_real_t _t64 = _t34*_t63;
-    const train5_real_t _t65 = -_t15*_t24 - _t16*_t25;
-    const train5_real_t _t66 = _t43*_t65;
-    const train5_real_t _t67 = -_t21*_t24 - _t22*_t25;
-    const train5_real_t _t68 = _t55*_t67;
-    const train5_real_t _t69 = -TRAIN5_LIT(0.85)*_t18*_t24 - _t19*_t27;
-    const train5_real_t _t70 = TRAIN5_LIT(1.6666666666666667)*_t57;
-    const train5_real_t _t71 = _t69*_t70;
-    const train5_real_t _t72 = -_t24 + _t64 + _t66 + _t68 + _t71;
-    const train5_real_t _t73 = _t37*_t63;
-    const train5_real_t _t74 = _t47*_t65;
-    const train5_real_t _t75 = _t60*_t67;
-    const train5_real_t _t76 = TRAIN5_LIT(1.6666666666666667)*_t62;
-    const train5_real_t _t77 = _t69*_t76;
-    const train5_real_t _t78 = -_t26 + _t73 + _t74 + _t75 + _t77;
-    const train5_real_t _t79 = TRAIN5_LIT(0.2)*_t34;
-    const train5_real_t _t80 = TRAIN5_LIT(0.2)*_t37;
-    const train5_real_t _t81 = TRAIN5_LIT(0.2)*_t43;
-    const train5_real_t _t82 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const train5_real_t _t83 = _t34*_t82;
-    const train5_real_t _t84 = _t7 - _t83;
-    const train5_real_t _t85 = TRAIN5_LIT(0.2)*_t47;
-    const train5_real_t _t86 = _t37*_t82;
-    const train5_real_t _t87 = _t29 + _t86;
-    const train5_real_t _t88 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t89 = TRAIN5_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const train5_real_t _t90 = _t34*_t89;
-    const train5_real_t _t91 = TRAIN5_LIT(0.85)*_t12*_t7 - _t13*_t15;
-    const train5_real_t _t92 = _t43*_t91;
-    const train5_real_t _t93 = -_t92;
-    const train5_real_t _t94 = TRAIN5_LIT(0.2)*_t60;
-    const train5_real_t _t95 = _t37*_t89;
-    const train5_real_t _t96 = _t47*_t91;
-    const train5_real_t _t97 = _t30 + _t95 + _t96;
-    const train5_real_t _t98 = -_t13 + _t90 + _t92;
-    const train5_real_t _t99 = TRAIN5_LIT(0.2)*_t70;
-    const train5_real_t _t100 = TRAIN5_LIT(0.85)*_t18*_t3 - _t19*_t9;
-    const train5_real_t _t101 = _t100*_t34;
-    const train5_real_t _t102 = -_t15*_t19 + TRAIN5_LIT(0.85)*_t18*_t7;
-    const train5_real_t _t103 = _t102*_t43;
-    const train5_real_t _t104 = TRAIN5_LIT(0.85)*_t13*_t18 - _t19*_t21;
-    const train5_real_t _t105 = _t104*_t55;
-    const train5_real_t _t106 = _t101 + _t103 + _t105 - _t19;
-    const train5_real_t _t107 = TRAIN5_LIT(0.2)*_t76;
-    const train5_real_t _t108 = _t100*_t37;
-    const train5_real_t _t109 = _t102*_t47;
-    const train5_real_t _t110 = _t104*_t60;
-    const train5_real_t _t111 = _t108 + _t109 + _t110 + _t31;
-    const train5_real_t _t112 = TRAIN5_LIT(1.6666666666666667)*_t72;
-    const train5_real_t _t113 = TRAIN5_LIT(0.2)*_t112;
-    const train5_real_t _t114 = TRAIN5_LIT(0.85)*_t24*_t3 - _t25*_t9;
-    const train5_real_t _t115 = _t114*_t34;
-    const train5_real_t _t116 = -_t15*_t25 + TRAIN5_LIT(0.85)*_t24*_t7;
-    const train5_real_t _t117 = _t116*_t43;
-    const train5_real_t _t118 = TRAIN5_LIT(0.85)*_t13*_t24 - _t21*_t25;
-    const train5_real_t _t119 = _t118*_t55;
-    const train5_real_t _t120 = -_t18*_t27 + TRAIN5_LIT(0.85)*_t19*_t24;
-    const train5_real_t _t121 = _t120*_t70;
-    const train5_real_t _t122 = _t115 + _t117 + _t119 + _t121 - _t25;
-    const train5_real_t _t123 = TRAIN5_LIT(1.6666666666666667)*_t78;
-    const train5_real_t _t124 = TRAIN5_LIT(0.2)*_t123;
-    const train5_real_t _t125 = _t114*_t37;
-    const train5_real_t _t126 = _t116*_t47;
-    const train5_real_t _t127 = _t118*_t60;
-    const train5_real_t _t128 = _t120*_t76;
-    const train5_real_t _t129 = _t125 + _t126 + _t127 + _t128 + _t32;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t _t130 = K_theta_cart2_x_tractor*_t6;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t131 = K_theta_cart2_x_tractor_2*_t7;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t _t132 = K_theta_cart3_x_tractor*_t12;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t133 = K_theta_cart3_x_tractor_2*_t13;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t _t134 = K_theta_cart4_x_tractor*_t18;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t135 = K_theta_cart4_x_tractor_2*_t19;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t _t136 = K_theta_cart5_x_tractor*_t24;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t137 = K_theta_cart5_x_tractor_2*_t25;
-    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const train5_real_t _t138 = K_theta_cart_x_tractor*_t3;
-    const train5_real_t _t139 = K_theta_cart2_x_tractor*_t7;
-    const train5_real_t _t140 = K_theta_cart3_x_tractor*_t13;
-    const train5_real_t _t141 = K_theta_cart4_x_tractor*_t19;
-    const train5_real_t _t142 = K_theta_cart5_x_tractor*_t25;
-    const train5_real_t _t143 = K_theta_cart2_x_tractor_2*_t6;
-    const train5_real_t _t144 = K_theta_cart3_x_tractor_2*_t12;
-    const train5_real_t _t145 = K_theta_cart4_x_tractor_2*_t18;
-    const train5_real_t _t146 = K_theta_cart5_x_tractor_2*_t24;
-    const train5_real_t _t147 = TRAIN5_LIT(0.85)*_t18;
-    const train5_real_t _t148 = TRAIN5_LIT(0.85)*_t19;
-    const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t149 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t150 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t thetadot_right = wheel_rates[0];
-    const train5_real_t thetadot_left = wheel_rates[1];
-    const train5_real_t _t151 = _t149*thetadot_right + _t150*thetadot_left;
-    const train5_real_t _t152 = _t151*_t151;
-    const train5_real_t _t153 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t154 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t155 = _t153*thetadot_right + _t154*thetadot_left;
-    const train5_real_t _t156 = _t151*_t47 + _t155*_t43;
-    const train5_real_t _t157 = _t156*_t156;
-    const train5_real_t _t158 = _t151*_t60 + _t155*_t55;
-    const train5_real_t _t159 = _t158*_t158;
-    const train5_real_t _t160 = _t151*_t76 + _t155*_t70;
-    const train5_real_t _t161 = _t160*_t160;
-    const train5_real_t _t162 = _t141*_t161;
-    const train5_real_t _t163 = _t112*_t155 + _t123*_t151;
-    const train5_real_t _t164 = _t163*_t163;
-    const train5_real_t _t165 = _t142*_t164;
-    const train5_real_t _t166 = _t151*_t37 + _t155*_t34;
-    const train5_real_t _t167 = _t166*_t166;
-    const train5_real_t _t168 = _t143*_t157;
-    const train5_real_t _t169 = _t144*_t159;
-    const train5_real_t _t170 = _t145*_t161;
-    const train5_real_t _t171 = _t146*_t164;
-    const train5_real_t _t172 = K_theta_cart3_x_tractor*_t30;
-    const train5_real_t _t173 = K_theta_cart3_x_tractor_2*_t14;
-    const train5_real_t _t174 = K_theta_cart4_x_tractor*_t31;
-    const train5_real_t _t175 = K_theta_cart4_x_tractor_2*_t20;
-    const train5_real_t _t176 = K_theta_cart5_x_tractor*_t32;
-    const train5_real_t _t177 = K_theta_cart5_x_tractor_2*_t26;
-    const train5_real_t _t178 = _t10*_t157;
-    const train5_real_t _t179 = _t10*_t159;
-    const train5_real_t _t180 = _t10*_t161;
-    const train5_real_t _t181 = _t10*_t164;
-    const train5_real_t _t182 = _t167*_t9;
-    const train5_real_t _t183 = _t159*_t16;
-    const train5_real_t _t184 = _t16*_t161;
-    const train5_real_t _t185 = _t16*_t164;
-    const train5_real_t _t186 = _t10*_t167;
-    const train5_real_t _t187 = _t15*_t157;
-    const train5_real_t _t188 = _t157*_t16;
-    const train5_real_t _t189 = _t161*_t22;
-    const train5_real_t _t190 = _t164*_t22;
-    const train5_real_t _t191 = _t159*_t21;
-    const train5_real_t _t192 = _t159*_t22;
-    const train5_real_t _t193 = _t148*_t164;
-    const train5_real_t _t194 = _t147*_t161;
-    const train5_real_t _t195 = _t148*_t161;
-    const train5_real_t _t196 = TRAIN5_LIT(1.6666666666666667)*_t3;
-    const train5_real_t _t197 = _t196*_t33;
-    const train5_real_t _t198 = -TRAIN5_LIT(1.6666666666666667)*_t28;
-    const train5_real_t _t199 = _t198*_t33;
-    const train5_real_t _t200 = _t196*_t40;
-    const train5_real_t _t201 = _t198*_t40;
-    const train5_real_t _t202 = _t196*_t50;
-    const train5_real_t _t203 = _t198*_t50;
-    const train5_real_t _t204 = _t196*_t63;
-    const train5_real_t _t205 = _t198*_t63;
-    const train5_real_t _t206 = TRAIN5_LIT(0.2)*_t196;
-    const train5_real_t _t207 = TRAIN5_LIT(0.2)*_t198;
-    const train5_real_t _t208 = -_t197 - _t7;
-    const train5_real_t _t209 = -TRAIN5_LIT(1.6666666666666667)*_t208;
-    const train5_real_t _t210 = TRAIN5_LIT(0.2)*_t209;
-    const train5_real_t _t211 = _t196*_t82;
-    const train5_real_t _t212 = _t211 - _t6;
-    const train5_real_t _t213 = -_t199 + _t29;
-    const train5_real_t _t214 = -TRAIN5_LIT(1.6666666666666667)*_t213;
-    const train5_real_t _t215 = TRAIN5_LIT(0.2)*_t214;
-    const train5_real_t _t216 = _t198*_t82;
-    const train5_real_t _t217 = _t216 - _t8;
-    const train5_real_t _t218 = _t197 + _t83;
-    const train5_real_t _t219 = -TRAIN5_LIT(1.6666666666666667)*_t218;
-    const train5_real_t _t220 = TRAIN5_LIT(0.2)*_t219;
-    const train5_real_t _t221 = _t199 + _t86;
-    const train5_real_t _t222 = -TRAIN5_LIT(1.6666666666666667)*_t221;
-    const train5_real_t _t223 = TRAIN5_LIT(0.2)*_t222;
-    const train5_real_t _t224 = -TRAIN5_LIT(1.6666666666666667)*_t84;
-    const train5_real_t _t225 = TRAIN5_LIT(0.2)*_t224;
-    const train5_real_t _t226 = TRAIN5_LIT(1.6666666666666667)*_t87;
-    const train5_real_t _t227 = TRAIN5_LIT(0.2)*_t226;
-    const train5_real_t _t228 = -_t13 - _t200 - _t209*_t42;
-    const train5_real_t _t229 = -TRAIN5_LIT(1.6666666666666667)*_t228;
-    const train5_real_t _t230 = TRAIN5_LIT(0.2)*_t229;
-    const train5_real_t _t231 = _t196*_t89;
-    const train5_real_t _t232 = -_t12 + _t209*_t91 + _t231;
-    const train5_real_t _t233 = -_t201 - _t214*_t42 + _t30;
-    const train5_real_t _t234 = -TRAIN5_LIT(1.6666666666666667)*_t233;
-    const train5_real_t _t235 = TRAIN5_LIT(0.2)*_t234;
-    const train5_real_t _t236 = _t198*_t89;
-    const train5_real_t _t237 = -_t14 + _t214*_t91 + _t236;
-    const train5_real_t _t238 = _t200 - _t219*_t42 + _t90;
-    const train5_real_t _t239 = -TRAIN5_LIT(1.6666666666666667)*_t238;
-    const train5_real_t _t240 = TRAIN5_LIT(0.2)*_t239;
-    const train5_real_t _t241 = _t219*_t91 - _t231 + _t41;
-    const train5_real_t _t242 = _t201 - _t222*_t42 + _t95;
-    const train5_real_t _t243 = -TRAIN5_LIT(1.6666666666666667)*_t242;
-    const train5_real_t _t244 = TRAIN5_LIT(0.2)*_t243;
-    const train5_real_t _t245 = _t222*_t91 - _t236 + _t46;
-    const train5_real_t _t246 = -_t224*_t42 - _t93;
-    const train5_real_t _t247 = -TRAIN5_LIT(1.6666666666666667)*_t246;
-    const train5_real_t _t248 = TRAIN5_LIT(0.2)*_t247;
-    const train5_real_t _t249 = _t224*_t91 + _t44;
-    const train5_real_t _t250 = -_t226*_t42 + _t96;
-    const train5_real_t _t251 = -TRAIN5_LIT(1.6666666666666667)*_t250;
-    const train5_real_t _t252 = TRAIN5_LIT(0.2)*_t251;
-    const train5_real_t _t253 = _t226*_t91 + _t48;
-    const train5_real_t _t254 = TRAIN5_LIT(1.6666666666666667)*_t98;
-    const train5_real_t _t255 = TRAIN5_LIT(0.2)*_t254;
-    const train5_real_t _t256 = TRAIN5_LIT(1.6666666666666667)*_t97;
-    const train5_real_t _t257 = TRAIN5_LIT(0.2)*_t256;
-    const train5_real_t _t258 = -_t19 - _t202 - _t209*_t52 - _t229*_t54;
-    const train5_real_t _t259 = -TRAIN5_LIT(1.6666666666666667)*_t258;
-    const train5_real_t _t260 = TRAIN5_LIT(0.2)*_t259;
-    const train5_real_t _t261 = _t100*_t196;
-    const train5_real_t _t262 = _t102*_t209 + _t104*_t229 - _t18 + _t261;
-    const train5_real_t _t263 = -_t203 - _t214*_t52 - _t234*_t54 + _t31;
-    const train5_real_t _t264 = -TRAIN5_LIT(1.6666666666666667)*_t263;
-    const train5_real_t _t265 = TRAIN5_LIT(0.2)*_t264;
-    const train5_real_t _t266 = _t100*_t198;
-    const train5_real_t _t267 = _t102*_t214 + _t104*_t234 - _t20 + _t266;
-    const train5_real_t _t268 = _t101 + _t202 - _t219*_t52 - _t239*_t54;
-    const train5_real_t _t269 = -TRAIN5_LIT(1.6666666666666667)*_t268;
-    const train5_real_t _t270 = TRAIN5_LIT(0.2)*_t269;
-    const train5_real_t _t271 = _t102*_t219 + _t104*_t239 - _t261 + _t51;
-    const train5_real_t _t272 = _t108 + _t203 - _t222*_t52 - _t243*_t54;
-    const train5_real_t _t273 = -TRAIN5_LIT(1.6666666666666667)*_t272;
-    const train5_real_t _t274 = TRAIN5_LIT(0.2)*_t273;
-    const train5_real_t _t275 = _t102*_t222 + _t104*_t243 - _t266 + _t58;
-    const train5_real_t _t276 = _t103 - _t224*_t52 - _t247*_t54;
-    const train5_real_t _t277 = -TRAIN5_LIT(1.6666666666666667)*_t276;
-    const train5_real_t _t278 = TRAIN5_LIT(0.2)*_t277;
-    const train5_real_t _t279 = _t102*_t224 + _t104*_t247 + _t53;
-    const train5_real_t _t280 = _t109 - _t226*_t52 - _t251*_t54;
-    const train5_real_t _t281 = -TRAIN5_LIT(1.6666666666666667)*_t280;
-    const train5_real_t _t282 = TRAIN5_LIT(0.2)*_t281;
-    const train5_real_t _t283 = _t102*_t226 + _t104*_t251 + _t59;
-    const train5_real_t _t284 = _t105 - _t254*_t54;
-    const train5_real_t _t285 = -TRAIN5_LIT(1.6666666666666667)*_t284;
-    const train5_real_t _t286 = TRAIN5_LIT(0.2)*_t285;
-    const train5_real_t _t287 = _t104*_t254 + _t56;
-    const train5_real_t _t288 = _t110 - _t256*_t54;
-    const train5_real_t _t289 = -TRAIN5_LIT(1.6666666666666667)*_t288;
-    const train5_real_t _t290 = TRAIN5_LIT(0.2)*_t289;
-    const train5_real_t _t291 = _t104*_t256 + _t61;
-    const train5_real_t _t292 = TRAIN5_LIT(1.6666666666666667)*_t106;
-    const train5_real_t _t293 = TRAIN5_LIT(0.2)*_t292;
-    const train5_real_t _t294 = TRAIN5_LIT(1.6666666666666667)*_t111;
-    const train5_real_t _t295 = TRAIN5_LIT(0.2)*_t294;
-    const train5_real_t _t296 = -_t204 - _t209*_t65 - _t229*_t67 - _t25 - _t259*_t69;
-    const train5_real_t _t297 = -TRAIN5_LIT(1.6666666666666667)*_t296;
-    const train5_real_t _t298 = TRAIN5_LIT(0.2)*_t297;
-    const train5_real_t _t299 = _t114*_t196;
-    const train5_real_t _t300 = _t116*_t209 + _t118*_t229 + _t120*_t259 - _t24 + _t299;
-    const train5_real_t _t301 = -_t205 - _t214*_t65 - _t234*_t67 - _t264*_t69 + _t32;
-    const train5_real_t _t302 = -TRAIN5_LIT(1.6666666666666667)*_t301;
-    const train5_real_t _t303 = TRAIN5_LIT(0.2)*_t302;
-    const train5_real_t _t304 = _t114*_t198;
-    const train5_real_t _t305 = _t116*_t214 + _t118*_t234 + _t120*_t264 - _t26 + _t304;
-    const train5_real_t _t306 = _t115 + _t204 - _t219*_t65 - _t239*_t67 - _t269*_t69;
-    const train5_real_t _t307 = -TRAIN5_LIT(1.6666666666666667)*_t306;
-    const train5_real_t _t308 = TRAIN5_LIT(0.2)*_t307;
-    const train5_real_t _t309 = _t116*_t219 + _t118*_t239 + _t120*_t269 - _t299 + _t64;
-    const train5_real_t _t310 = _t125 + _t205 - _t222*_t65 - _t243*_t67 - _t273*_t69;
-    const train5_real_t _t311 = -TRAIN5_LIT(1.6666666666666667)*_t310;
-    const train5_real_t _t312 = TRAIN5_LIT(0.2)*_t311;
-    const train5_real_t _t313 = _t116*_t222 + _t118*_t243 + _t120*_t273 - _t304 + _t73;
-    const train5_real_t _t314 = _t117 - _t224*_t65 - _t247*_t67 - _t277*_t69;
-    const train5_real_t _t315 = -TRAIN5_LIT(1.6666666666666667)*_t314;
-    const train5_real_t _t316 = TRAIN5_LIT(0.2)*_t315;
-    const train5_real_t _t317 = _t116*_t224 + _t118*_t247 + _t120*_t277 + _t66;
-    const train5_real_t _t318 = _t126 - _t226*_t65 - _t251*_t67 - _t281*_t69;
-    const train5_real_t _t319 = -TRAIN5_LIT(1.6666666666666667)*_t318;
-    const train5_real_t _t320 = TRAIN5_LIT(0.2)*_t319;
-    const train5_real_t _t321 = _t116*_t226 + _t118*_t251 + _t120*_t281 + _t74;
-    const train5_real_t _t322 = _t119 - _t254*_t67 - _t285*_t69;
-    const train5_real_t _t323 = -TRAIN5_LIT(1.6666666666666667)*_t322;
-    const train5_real_t _t324 = TRAIN5_LIT(0.2)*_t323;
-    const train5_real_t _t325 = _t118*_t254 + _t120*_t285 + _t68;
-    const train5_real_t _t326 = _t127 - _t256*_t67 - _t289*_t69;
-    const train5_real_t _t327 = -TRAIN5_LIT(1.6666666666666667)*_t326;
-    const train5_real_t _t328 = TRAIN5_LIT(0.2)*_t327;
-    const train5_real_t _t329 = _t118*_t256 + _t120*_t289 + _t75;
-    const train5_real_t _t330 = _t121 - _t292*_t69;
-    const train5_real_t _t331 = -TRAIN5_LIT(1.6666666666666667)*_t330;
-    const train5_real_t _t332 = TRAIN5_LIT(0.2)*_t331;
-    const train5_real_t _t333 = _t120*_t292 + _t71;
-    const train5_real_t _t334 = _t128 - _t294*_t69;
-    const train5_real_t _t335 = -TRAIN5_LIT(1.6666666666666667)*_t334;
-    const train5_real_t _t336 = TRAIN5_LIT(0.2)*_t335;
-    const train5_real_t _t337 = _t120*_t294 + _t77;
-    const train5_real_t _t338 = TRAIN5_LIT(1.6666666666666667)*_t122;
-    const train5_real_t _t339 = TRAIN5_LIT(0.2)*_t338;
-    const train5_real_t _t340 = TRAIN5_LIT(1.6666666666666667)*_t129;
-    const train5_real_t _t341 = TRAIN5_LIT(0.2)*_t340;
-    const train5_real_t _t342 = _t151*_t155;
-    const train5_real_t _t343 = _t155*_t166;
-    const train5_real_t _t344 = _t151*_t166;
-    const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t345 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t _t346 = -_t210 - _t212;
-    const train5_real_t _t347 = _t345*_t346;
-    const train5_real_t _t348 = -_t215 - _t217;
-    const train5_real_t _t349 = _t345*_t348;
-    const train5_real_t _t350 = _t211 - _t220 - _t35;
-    const train5_real_t _t351 = _t345*_t350;
-    const train5_real_t _t352 = _t216 - _t223 - _t38;
-    const train5_real_t _t353 = _t345*_t352;
-    const train5_real_t _t354 = -_t225 + _t36;
-    const train5_real_t _t355 = _t345*_t354;
-    const train5_real_t _t356 = -_t227 + _t39;
-    const train5_real_t _t357 = _t345*_t356;
-    const train5_real_t _t358 = _t155*_t156;
-    const train5_real_t _t359 = _t151*_t156;
-    const train5_real_t _t360 = _t152*_t349 + _t342*_t347 + _t343*_t351 + _t344*_t353 + _t355*_t358
-            + _t357*_t359;
-    const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t361 = J_theta_cart2_left*_t360;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t362 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t _t363 = _t210 - _t212;
-    const train5_real_t _t364 = _t362*_t363;
-    const train5_real_t _t365 = _t215 - _t217;
-    const train5_real_t _t366 = _t362*_t365;
-    const train5_real_t _t367 = _t211 + _t220 - _t35;
-    const train5_real_t _t368 = _t362*_t367;
-    const train5_real_t _t369 = _t216 + _t223 - _t38;
-    const train5_real_t _t370 = _t362*_t369;
-    const train5_real_t _t371 = _t225 + _t36;
-    const train5_real_t _t372 = _t362*_t371;
-    const train5_real_t _t373 = _t227 + _t39;
-    const train5_real_t _t374 = _t362*_t373;
-    const train5_real_t _t375 = _t152*_t366 + _t342*_t364 + _t343*_t368 + _t344*_t370 + _t358*_t372
-            + _t359*_t374;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t376 = J_theta_cart2_right*_t375;
-    const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t377 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t _t378 = -_t230 - _t232;
-    const train5_real_t _t379 = _t377*_t378;
-    const train5_real_t _t380 = -_t235 - _t237;
-    const train5_real_t _t381 = _t377*_t380;
-    const train5_real_t _t382 = -_t240 - _t241;
-    const train5_real_t _t383 = _t377*_t382;
-    const train5_real_t _t384 = -_t244 - _t245;
-    const train5_real_t _t385 = _t377*_t384;
-    const train5_real_t _t386 = -_t248 - _t249;
-    const train5_real_t _t387 = _t377*_t386;
-    const train5_real_t _t388 = -_t252 - _t253;
-    const train5_real_t _t389 = _t377*_t388;
-    const train5_real_t _t390 = -_t255 + _t45;
-    const train5_real_t _t391 = _t377*_t390;
-    const train5_real_t _t392 = -_t257 + _t49;
-    const train5_real_t _t393 = _t377*_t392;
-    const train5_real_t _t394 = _t155*_t158;
-    const train5_real_t _t395 = _t151*_t158;
-    const train5_real_t _t396 = _t152*_t381 + _t342*_t379 + _t343*_t383 + _t344*_t385 + _t358*_t387
-            + _t359*_t389 + _t391*_t394 + _t393*_t395;
-    const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t397 = J_theta_cart3_left*_t396;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t398 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t _t399 = _t230 - _t232;
-    const train5_real_t _t400 = _t398*_t399;
-    const train5_real_t _t401 = _t235 - _t237;
-    const train5_real_t _t402 = _t398*_t401;
-    const train5_real_t _t403 = _t240 - _t241;
-    const train5_real_t _t404 = _t398*_t403;
-    const train5_real_t _t405 = _t244 - _t245;
-    const train5_real_t _t406 = _t398*_t405;
-    const train5_real_t _t407 = _t248 - _t249;
-    const train5_real_t _t408 = _t398*_t407;
-    const train5_real_t _t409 = _t252 - _t253;
-    const train5_real_t _t410 = _t398*_t409;
-    const train5_real_t _t411 = _t255 + _t45;
-    const train5_real_t _t412 = _t398*_t411;
-    const train5_real_t _t413 = _t257 + _t49;
-    const train5_real_t _t414 = _t398*_t413;
-    const train5_real_t _t415 = _t152*_t402 + _t342*_t400 + _t343*_t404 + _t344*_t406 + _t358*_t408
-            + _t359*_t410 + _t394*_t412 + _t395*_t414;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t416 = J_theta_cart3_right*_t415;
-    const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t417 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t _t418 = -_t260 - _t262;
-    const train5_real_t _t419 = _t417*_t418;
-    const train5_real_t _t420 = -_t265 - _t267;
-    const train5_real_t _t421 = _t417*_t420;
-    const train5_real_t _t422 = -_t270 - _t271;
-    const train5_real_t _t423 = _t417*_t422;
-    const train5_real_t _t424 = -_t274 - _t275;
-    const train5_real_t _t425 = _t417*_t424;
-    const train5_real_t _t426 = -_t278 - _t279;
-    const train5_real_t _t427 = _t417*_t426;
-    const train5_real_t _t428 = -_t282 - _t283;
-    const train5_real_t _t429 = _t417*_t428;
-    const train5_real_t _t430 = -_t286 - _t287;
-    const train5_real_t _t431 = _t417*_t430;
-    const train5_real_t _t432 = -_t290 - _t291;
-    const train5_real_t _t433 = _t417*_t432;
-    const train5_real_t _t434 = -_t293 + _t57;
-    const train5_real_t _t435 = _t417*_t434;
-    const train5_real_t _t436 = -_t295 + _t62;
-    const train5_real_t _t437 = _t417*_t436;
-    const train5_real_t _t438 = _t155*_t160;
-    const train5_real_t _t439 = _t151*_t160;
-    const train5_real_t _t440 = _t152*_t421 + _t342*_t419 + _t343*_t423 + _t344*_t425 + _t358*_t427
-            + _t359*_t429 + _t394*_t431 + _t395*_t433 + _t435*_t438 + _t437*_t439;
-    const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t441 = J_theta_cart4_left*_t440;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t442 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t _t443 = _t260 - _t262;
-    const train5_real_t _t444 = _t442*_t443;
-    const train5_real_t _t445 = _t265 - _t267;
-    const train5_real_t _t446 = _t442*_t445;
-    const train5_real_t _t447 = _t270 - _t271;
-    const train5_real_t _t448 = _t442*_t447;
-    const train5_real_t _t449 = _t274 - _t275;
-    const train5_real_t _t450 = _t442*_t449;
-    const train5_real_t _t451 = _t278 - _t279;
-    const train5_real_t _t452 = _t442*_t451;
-    const train5_real_t _t453 = _t282 - _t283;
-    const train5_real_t _t454 = _t442*_t453;
-    const train5_real_t _t455 = _t286 - _t287;
-    const train5_real_t _t456 = _t442*_t455;
-    const train5_real_t _t457 = _t290 - _t291;
-    const train5_real_t _t458 = _t442*_t457;
-    const train5_real_t _t459 = _t293 + _t57;
-    const train5_real_t _t460 = _t442*_t459;
-    const train5_real_t _t461 = _t295 + _t62;
-    const train5_real_t _t462 = _t442*_t461;
-    const train5_real_t _t463 = _t152*_t446 + _t342*_t444 + _t343*_t448 + _t344*_t450 + _t358*_t452
-            + _t359*_t454 + _t394*_t456 + _t395*_t458 + _t438*_t460 + _t439*_t462;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t464 = J_theta_cart4_right*_t463;
-    const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t465 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t466 = -_t298 - _t300;
-    const train5_real_t _t467 = _t465*_t466;
-    const train5_real_t _t468 = -_t303 - _t305;
-    const train5_real_t _t469 = _t465*_t468;
-    const train5_real_t _t470 = -_t308 - _t309;
-    const train5_real_t _t471 = _t465*_t470;
-    const train5_real_t _t472 = -_t312 - _t313;
-    const train5_real_t _t473 = _t465*_t472;
-    const train5_real_t _t474 = -_t316 - _t317;
-    const train5_real_t _t475 = _t465*_t474;
-    const train5_real_t _t476 = -_t320 - _t321;
-    const train5_real_t _t477 = _t465*_t476;
-    const train5_real_t _t478 = -_t324 - _t325;
-    const train5_real_t _t479 = _t465*_t478;
-    const train5_real_t _t480 = -_t328 - _t329;
-    const train5_real_t _t481 = _t465*_t480;
-    const train5_real_t _t482 = -_t332 - _t333;
-    const train5_real_t _t483 = _t465*_t482;
-    const train5_real_t _t484 = -_t336 - _t337;
-    const train5_real_t _t485 = _t465*_t484;
-    const train5_real_t _t486 = -_t339 + _t72;
-    const train5_real_t _t487 = _t465*_t486;
-    const train5_real_t _t488 = -_t341 + _t78;
-    const train5_real_t _t489 = _t465*_t488;
-    const train5_real_t _t490 = _t155*_t163;
-    const train5_real_t _t491 = _t151*_t163;
-    const train5_real_t _t492 = _t152*_t469 + _t342*_t467 + _t343*_t471 + _t344*_t473 + _t358*_t475
-            + _t359*_t477 + _t394*_t479 + _t395*_t481 + _t438*_t483 + _t439*_t485 + _t487*_t490
-            + _t489*_t491;
-    const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t493 = J_theta_cart5_left*_t492;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t494 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t _t495 = _t298 - _t300;
-    const train5_real_t _t496 = _t494*_t495;
-    const train5_real_t _t497 = _t303 - _t305;
-    const train5_real_t _t498 = _t494*_t497;
-    const train5_real_t _t499 = _t308 - _t309;
-    const train5_real_t _t500 = _t494*_t499;
-    const train5_real_t _t501 = _t312 - _t313;
-    const train5_real_t _t502 = _t494*_t501;
-    const train5_real_t _t503 = _t316 - _t317;
-    const train5_real_t _t504 = _t494*_t503;
-    const train5_real_t _t505 = _t320 - _t321;
-    const train5_real_t _t506 = _t494*_t505;
-    const train5_real_t _t507 = _t324 - _t325;
-    const train5_real_t _t508 = _t494*_t507;
-    const train5_real_t _t509 = _t328 - _t329;
-    const train5_real_t _t510 = _t494*_t509;
-    const train5_real_t _t511 = _t332 - _t333;
-    const train5_real_t _t512 = _t494*_t511;
-    const train5_real_t _t513 = _t336 - _t337;
-    const train5_real_t _t514 = _t494*_t513;
-    const train5_real_t _t515 = _t339 + _t72;
-    const train5_real_t _t516 = _t494*_t515;
-    const train5_real_t _t517 = _t341 + _t78;
-    const train5_real_t _t518 = _t494*_t517;
-    const train5_real_t _t519 = _t152*_t498 + _t342*_t496 + _t343*_t500 + _t344*_t502 + _t358*_t504
-            + _t359*_t506 + _t394*_t508 + _t395*_t510 + _t438*_t512 + _t439*_t514 + _t490*_t516
-            + _t491*_t518;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t520 = J_theta_cart5_right*_t519;
-    const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t521 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t _t522 = _t2 - _t206;
-    const train5_real_t _t523 = _t521*_t522;
-    const train5_real_t _t524 = -_t207 + _t4;
-    const train5_real_t _t525 = _t521*_t524;
-    const train5_real_t _t526 = _t342 - _t343;
-    const train5_real_t _t527 = _t152 - _t344;
-    const train5_real_t _t528 = _t523*_t526 + _t525*_t527;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t529 = J_theta_cart_left*_t528;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t530 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t _t531 = _t2 + _t206;
-    const train5_real_t _t532 = _t530*_t531;
-    const train5_real_t _t533 = _t207 + _t4;
-    const train5_real_t _t534 = _t530*_t533;
-    const train5_real_t _t535 = _t526*_t532 + _t527*_t534;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t536 = J_theta_cart_right*_t535;
-    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t537 = K_theta_cart_x_tractor_2*_t2 - _t138;
-    const train5_real_t _t538 = _t10*_t139 - _t10*_t143 + _t130*_t9 + _t131*_t9;
-    const train5_real_t _t539 = _t10*_t140 - _t10*_t144 + _t132*_t9 + _t133*_t9;
-    const train5_real_t _t540 = _t10*_t141 - _t10*_t145 + _t134*_t9 + _t135*_t9;
-    const train5_real_t _t541 = _t10*_t142 - _t10*_t146 + _t136*_t9 + _t137*_t9;
-    const train5_real_t _t542 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t157*_t2*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t159*_t2
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t161*_t19*_t2
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t164*_t2*_t25
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor*_t152*_t2
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor_2*_t152*_t3 - _t130*_t178 - _t131*_t178
-            - _t132*_t179 - _t133*_t179 - _t134*_t180 - _t135*_t180 - _t136*_t181 - _t137*_t181
-            - _t168*_t9 - _t169*_t9 - _t170*_t9 - _t171*_t9;
-    const train5_real_t _t543 = _t196*_t526 + _t198*_t527;
-    const train5_real_t _t544 = _t152*_t214 + _t209*_t342 + _t219*_t343 + _t222*_t344 + _t224*_t358
-            + _t226*_t359;
-    const train5_real_t _t545 = _t152*_t234 + _t229*_t342 + _t239*_t343 + _t243*_t344 + _t247*_t358
-            + _t251*_t359 + _t254*_t394 + _t256*_t395;
-    const train5_real_t _t546 = _t152*_t264 + _t259*_t342 + _t269*_t343 + _t273*_t344 + _t277*_t358
-            + _t281*_t359 + _t285*_t394 + _t289*_t395 + _t292*_t438 + _t294*_t439;
-    const train5_real_t _t547 = _t152*_t302 + _t297*_t342 + _t307*_t343 + _t311*_t344 + _t315*_t358
-            + _t319*_t359 + _t323*_t394 + _t327*_t395 + _t331*_t438 + _t335*_t439 + _t338*_t490
-            + _t340*_t491;
-    const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t548 = J_theta_cart*_t543 + _t342*_t537 + _t538*_t544 + _t539*_t545
-            + _t540*_t546 + _t541*_t547 + _t542;
-    const train5_real_t _t549 = K_theta_cart2_x_tractor_2*_t6 - _t139;
-    const train5_real_t _t550 = _t132*_t15 + _t133*_t15 + _t140*_t16 - _t144*_t16;
-    const train5_real_t _t551 = _t134*_t15 + _t135*_t15 + _t141*_t16 - _t145*_t16;
-    const train5_real_t _t552 = _t136*_t15 + _t137*_t15 + _t142*_t16 - _t146*_t16;
-    const train5_real_t _t553 = TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor*_t152*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t167*_t3*_t6
-            + TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor_2*_t152*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t167*_t2*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t167*_t3*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t159*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t161*_t19*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t164*_t25*_t6 - _t132*_t183 - _t133*_t183
-            - _t134*_t184 - _t135*_t184 - _t136*_t185 - _t137*_t185 - _t139*_t182 - _t15*_t169
-            - _t15*_t170 - _t15*_t171;
-    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t554 = J_theta_cart2*_t544 + _t342*_t549 + _t538*_t543 + _t545*_t550
-            + _t546*_t551 + _t547*_t552 + _t553;
-    const train5_real_t _t555 = K_theta_cart3_x_tractor_2*_t12 - _t140;
-    const train5_real_t _t556 = _t134*_t21 + _t135*_t21 + _t141*_t22 - _t145*_t22;
-    const train5_real_t _t557 = _t136*_t21 + _t137*_t21 + _t142*_t22 - _t146*_t22;
-    const train5_real_t _t558 = _t132*_t186 + _t132*_t188 + _t133*_t186 + _t133*_t188 - _t134*_t189
-            - _t135*_t189 - _t136*_t190 - _t137*_t190 - _t140*_t182 - _t140*_t187 + _t144*_t182
-            + _t144*_t187 + _t152*_t172 + _t152*_t173 + _t162*_t21 + _t165*_t21 - _t170*_t21
-            - _t171*_t21;
-    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t559 = J_theta_cart3*_t545 + _t342*_t555 + _t539*_t543 + _t544*_t550
-            + _t546*_t556 + _t547*_t557 + _t558;
-    const train5_real_t _t560 = K_theta_cart4_x_tractor_2*_t18 - _t141;
-    const train5_real_t _t561 = _t136*_t147 + _t137*_t147 + _t142*_t148 - _t146*_t148;
-    const train5_real_t _t562 = _t134*_t186 + _t134*_t188 + _t134*_t192 + _t135*_t186 + _t135*_t188
-            + _t135*_t192 - _t136*_t193 - _t137*_t193 - _t141*_t182 - _t141*_t187 - _t141*_t191
-            + _t145*_t182 + _t145*_t187 + _t145*_t191 + _t147*_t165 - _t147*_t171 + _t152*_t174
-            + _t152*_t175;
-    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t563 = J_theta_cart4*_t546 + _t342*_t560 + _t540*_t543 + _t544*_t551
-            + _t545*_t556 + _t547*_t561 + _t562;
-    const train5_real_t _t564 = K_theta_cart5_x_tractor_2*_t24 - _t142;
-    const train5_real_t _t565 = _t136*_t186 + _t136*_t188 + _t136*_t192 + _t136*_t195 + _t137*_t186
-            + _t137*_t188 + _t137*_t192 + _t137*_t195 - _t142*_t182 - _t142*_t187 - _t142*_t191
-            - _t142*_t194 + _t146*_t182 + _t146*_t187 + _t146*_t191 + _t146*_t194 + _t152*_t176
-            + _t152*_t177;
-    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t566 = J_theta_cart5*_t547 + _t342*_t564 + _t541*_t543 + _t544*_t552
-            + _t545*_t557 + _t546*_t561 + _t565;
-    const train5_real_t _t567 = _t3 + _t79;
-    const train5_real_t _t568 = -_t28 + _t80;
-    const train5_real_t _t569 = _t530*_t567;
-    const train5_real_t _t570 = _t530*_t568;
-    const train5_real_t _t571 = _t3 - _t79;
-    const train5_real_t _t572 = -_t28 - _t80;
-    const train5_real_t _t573 = _t521*_t571;
-    const train5_real_t _t574 = _t521*_t572;
-    const train5_real_t _t575 = _t81 + _t84;
-    const train5_real_t _t576 = _t85 - _t87;
-    const train5_real_t _t577 = _t362*_t575;
-    const train5_real_t _t578 = _t362*_t576;
-    const train5_real_t _t579 = _t7 - _t81 - _t83;
-    const train5_real_t _t580 = -_t85 - _t87;
-    const train5_real_t _t581 = _t345*_t579;
-    const train5_real_t _t582 = _t345*_t580;
-    const train5_real_t _t583 = _t13 + _t88 - _t90 + _t93;
-    const train5_real_t _t584 = _t94 - _t97;
-    const train5_real_t _t585 = _t398*_t583;
-    const train5_real_t _t586 = _t398*_t584;
-    const train5_real_t _t587 = -_t88 - _t98;
-    const train5_real_t _t588 = -_t94 - _t97;
-    const train5_real_t _t589 = _t377*_t587;
-    const train5_real_t _t590 = _t377*_t588;
-    const train5_real_t _t591 = -_t106 + _t99;
-    const train5_real_t _t592 = _t107 - _t111;
-    const train5_real_t _t593 = _t442*_t591;
-    const train5_real_t _t594 = _t442*_t592;
-    const train5_real_t _t595 = -_t106 - _t99;
-    const train5_real_t _t596 = -_t107 - _t111;
-    const train5_real_t _t597 = _t417*_t595;
-    const train5_real_t _t598 = _t417*_t596;
-    const train5_real_t _t599 = _t113 - _t122;
-    const train5_real_t _t600 = _t124 - _t129;
-    const train5_real_t _t601 = _t494*_t599;
-    const train5_real_t _t602 = _t494*_t600;
-    const train5_real_t _t603 = -_t113 - _t122;
-    const train5_real_t _t604 = -_t124 - _t129;
-    const train5_real_t _t605 = _t465*_t603;
-    const train5_real_t _t606 = _t465*_t604;
-    const train5_real_t _t607 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t608 = _t130 + _t131;
-    const train5_real_t _t609 = _t132 + _t133;
-    const train5_real_t _t610 = _t134 + _t135;
-    const train5_real_t _t611 = _t136 + _t137;
-    const train5_real_t _t612 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t28;
-    const train5_real_t _t613 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t29;
-    const train5_real_t _t614 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t30;
-    const train5_real_t _t615 = K_theta_cart4_x_tractor*_t20 - K_theta_cart4_x_tractor_2*_t31;
-    const train5_real_t _t616 = K_theta_cart5_x_tractor*_t26 - K_theta_cart5_x_tractor_2*_t32;
-    const train5_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const train5_real_t _t617 = -K_theta_cart_x_tractor_2*_t167*_t2
-            + K_theta_tractor_x_tractor*_t152 + _t138*_t167 + _t139*_t157 + _t140*_t159 + _t162
-            + _t165 - _t168 - _t169 - _t170 - _t171;
-    const train5_real_t _t618 = -K_theta_cart2_x_tractor*_t157*_t29
-            - K_theta_cart2_x_tractor_2*_t157*_t8 - K_theta_cart_x_tractor*_t167*_t28
-            - K_theta_cart_x_tractor_2*_t167*_t4 - _t159*_t172 - _t159*_t173 - _t161*_t174
-            - _t161*_t175 - _t164*_t176 - _t164*_t177;
-    const train5_real_t _t619 = _t112*_t566 + _t34*_t548 + _t361*_t581 + _t376*_t577 + _t397*_t589
-            + _t416*_t585 + _t43*_t554 + _t441*_t597 + _t464*_t593 + _t493*_t605 + _t520*_t601
-            + _t529*_t573 + _t536*_t569 + _t543*_t607 + _t544*_t608 + _t545*_t609 + _t546*_t610
-            + _t547*_t611 + _t55*_t559 + _t563*_t70 + _t617;
-    const train5_real_t _t620 = -K_theta_tractor_x_tractor*_t342 + _t123*_t566 + _t361*_t582
-            + _t37*_t548 + _t376*_t578 + _t397*_t590 + _t416*_t586 + _t441*_t598 + _t464*_t594
-            + _t47*_t554 + _t493*_t606 + _t520*_t602 + _t529*_t574 + _t536*_t570 + _t543*_t612
-            + _t544*_t613 + _t545*_t614 + _t546*_t615 + _t547*_t616 + _t559*_t60 + _t563*_t76
-            + _t618;
-    const train5_real_t _t621 = _t149*_t620 + _t153*_t619;
-    const train5_real_t _t622 = _t150*_t620 + _t154*_t619;
-    H[0] = _t621;
-    H[1] = _t622;
+    train5_real_t _shared[408];
+    train5_staged_quantities(p, q, wheel_rates, _shared);
+    const train5_real_t _ms48 = _shared[0];
+    const train5_real_t _ms49 = _shared[1];
+    const train5_real_t _ms162 = _shared[52];
+    const train5_real_t _ms163 = _shared[53];
+    const train5_real_t _ms636 = _shared[406];
+    const train5_real_t _ms637 = _shared[407];
+    const train5_real_t _t0 = _ms162*_ms636 + _ms48*_ms637;
+    const train5_real_t _t1 = _ms163*_ms636 + _ms49*_ms637;
+    H[0] = _t0;
+    H[1] = _t1;
 }
 
 /* train5_minimal_forward_dynamics: documented in train5_model.h.
-   operations after CSE: 739 add, 1036 mul, 13 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 739 add, 1046 mul, 13 div, 10 sin/cos, 0 sqrt */
 train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *wheel_accels)
 {
@@ -3493,748 +2949,150 @@ train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const 
             | train5_exp_carry(tau_left)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
-    const train5_real_t _t0 = -theta_tractor;
-    const train5_real_t _t1 = _t0 + theta_cart;
-    const train5_real_t _t2 = TRAIN5_SIN(_t1);
-    const train5_real_t _t3 = TRAIN5_COS(_t1);
-    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t _t5 = _t0 + theta_cart2;
-    const train5_real_t _t6 = TRAIN5_SIN(_t5);
-    const train5_real_t _t7 = TRAIN5_COS(_t5);
-    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
-    const train5_real_t _t11 = _t0 + theta_cart3;
-    const train5_real_t _t12 = TRAIN5_SIN(_t11);
-    const train5_real_t _t13 = TRAIN5_COS(_t11);
-    const train5_real_t _t14 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t15 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t16 = TRAIN5_LIT(0.85)*_t7;
-    const train5_real_t _t17 = _t0 + theta_cart4;
-    const train5_real_t _t18 = TRAIN5_SIN(_t17);
-    const train5_real_t _t19 = TRAIN5_COS(_t17);
-    const train5_real_t _t20 = TRAIN5_LIT(0.3)*_t19;
-    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t12;
-    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t13;
-    const train5_real_t _t23 = _t0 + theta_cart5;
-    const train5_real_t _t24 = TRAIN5_SIN(_t23);
-    const train5_real_t _t25 = TRAIN5_COS(_t23);
-    const train5_real_t _t26 = TRAIN5_LIT(0.3)*_t25;
-    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t25;
-    const train5_real_t _t28 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t29 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t30 = TRAIN5_LIT(0.3)*_t12;
-    const train5_real_t _t31 = TRAIN5_LIT(0.3)*_t18;
-    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t24;
-    const train5_real_t _t33 = -_t10*_t7 - _t6*_t9;
-    const train5_real_t _t34 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t35 = _t33*_t34;
-    const train5_real_t _t36 = _t35 - _t6;
-    const train5_real_t _t37 = -TRAIN5_LIT(1.6666666666666667)*_t4;
-    const train5_real_t _t38 = _t33*_t37;
-    const train5_real_t _t39 = _t38 - _t8;
-    const train5_real_t _t40 = -_t10*_t13 - _t12*_t9;
-    const train5_real_t _t41 = _t34*_t40;
-    const train5_real_t _t42 = -_t12*_t15 - _t13*_t16;
-    const train5_real_t _t43 = TRAIN5_LIT(1.6666666666666667)*_t36;
-    const train5_real_t _t44 = _t42*_t43;
-    const train5_real_t _t45 = -_t12 + _t41 + _t44;
-    const train5_real_t _t46 = _t37*_t40;
-    const train5_real_t _t47 = TRAIN5_LIT(1.6666666666666667)*_t39;
-    const train5_real_t _t48 = _t42*_t47;
-    const train5_real_t _t49 = -_t14 + _t46 + _t48;
-    const train5_real_t _t50 = -_t10*_t19 - _t18*_t9;
-    const train5_real_t _t51 = _t34*_t50;
-    const train5_real_t _t52 = -_t15*_t18 - _t16*_t19;
-    const train5_real_t _t53 = _t43*_t52;
-    const train5_real_t _t54 = -_t18*_t21 - _t19*_t22;
-    const train5_real_t _t55 = TRAIN5_LIT(1.6666666666666667)*_t45;
-    const train5_real_t _t56 = _t54*_t55;
-    const train5_real_t _t57 = -_t18 + _t51 + _t53 + _t56;
-    const train5_real_t _t58 = _t37*_t50;
-    const train5_real_t _t59 = _t47*_t52;
-    const train5_real_t _t60 = TRAIN5_LIT(1.6666666666666667)*_t49;
-    const train5_real_t _t61 = _t54*_t60;
-    const train5_real_t _t62 = -_t20 + _t58 + _t59 + _t61;
-    const train5_real_t _t63 = -_t10*_t25 - _t24*_t9;
-    const train5_real_t _t64 = _t34*_t63;
-    const train5_real_t _t65 = -_t15*_t24 - _t16*_t25;
-    const train5_real_t _t66 = _t43*_t65;
-    const train5_real_t _t67 = -_t21*_t24 - _t22*_t25;
-    const train5_real_t _t68 = _t55*_t67;
-    const train5_real_t _t69 = -TRAIN5_LIT(0.85)*_t18*_t24 - _t19*_t27;
-    const train5_real_t _t70 = TRAIN5_LIT(1.6666666666666667)*_t57;
-    const train5_real_t _t71 = _t69*_t70;
-    const train5_real_t _t72 = -_t24 + _t64 + _t66 + _t68 + _t71;
-    const train5_real_t _t73 = _t37*_t63;
-    const train5_real_t _t74 = _t47*_t65;
-    const train5_real_t _t75 = _t60*_t67;
-    const train5_real_t _t76 = TRAIN5_LIT(1.6666666666666667)*_t62;
-    const train5_real_t _t77 = _t69*_t76;
-    const train5_real_t _t78 = -_t26 + _t73 + _t74 + _t75 + _t77;
-    const train5_real_t _t79 = TRAIN5_LIT(0.2)*_t34;
-    const train5_real_t _t80 = TRAIN5_LIT(0.2)*_t37;
-    const train5_real_t _t81 = TRAIN5_LIT(0.2)*_t43;
-    const train5_real_t _t82 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const train5_real_t _t83 = _t34*_t82;
-    const train5_real_t _t84 = _t7 - _t83;
-    const train5_real_t _t85 = TRAIN5_LIT(0.2)*_t47;
-    const train5_real_t _t86 = _t37*_t82;
-    const train5_real_t _t87 = _t29 + _t86;
-    const train5_real_t _t88 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t89 = TRAIN5_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const train5_real_t _t90 = _t34*_t89;
-    const train5_real_t _t91 = TRAIN5_LIT(0.85)*_t12*_t7 - _t13*_t15;
-    const train5_real_t _t92 = _t43*_t91;
-    const train5_real_t _t93 = -_t92;
-    const train5_real_t _t94 = TRAIN5_LIT(0.2)*_t60;
-    const train5_real_t _t95 = _t37*_t89;
-    const train5_real_t _t96 = _t47*_t91;
-    const train5_real_t _t97 = _t30 + _t95 + _t96;
-    const train5_real_t _t98 = -_t13 + _t90 + _t92;
-    const train5_real_t _t99 = TRAIN5_LIT(0.2)*_t70;
-    const train5_real_t _t100 = TRAIN5_LIT(0.85)*_t18*_t3 - _t19*_t9;
-    const train5_real_t _t101 = _t100*_t34;
-    const train5_real_t _t102 = -_t15*_t19 + TRAIN5_LIT(0.85)*_t18*_t7;
-    const train5_real_t _t103 = _t102*_t43;
-    const train5_real_t _t104 = TRAIN5_LIT(0.85)*_t13*_t18 - _t19*_t21;
-    const train5_real_t _t105 = _t104*_t55;
-    const train5_real_t _t106 = _t101 + _t103 + _t105 - _t19;
-    const train5_real_t _t107 = TRAIN5_LIT(0.2)*_t76;
-    const train5_real_t _t108 = _t100*_t37;
-    const train5_real_t _t109 = _t102*_t47;
-    const train5_real_t _t110 = _t104*_t60;
-    const train5_real_t _t111 = _t108 + _t109 + _t110 + _t31;
-    const train5_real_t _t112 = TRAIN5_LIT(1.6666666666666667)*_t72;
-    const train5_real_t _t113 = TRAIN5_LIT(0.2)*_t112;
-    const train5_real_t _t114 = TRAIN5_LIT(0.85)*_t24*_t3 - _t25*_t9;
-    const train5_real_t _t115 = _t114*_t34;
-    const train5_real_t _t116 = -_t15*_t25 + TRAIN5_LIT(0.85)*_t24*_t7;
-    const train5_real_t _t117 = _t116*_t43;
-    const train5_real_t _t118 = TRAIN5_LIT(0.85)*_t13*_t24 - _t21*_t25;
-    const train5_real_t _t119 = _t118*_t55;
-    const train5_real_t _t120 = -_t18*_t27 + TRAIN5_LIT(0.85)*_t19*_t24;
-    const train5_real_t _t121 = _t120*_t70;
-    const train5_real_t _t122 = _t115 + _t117 + _t119 + _t121 - _t25;
-    const train5_real_t _t123 = TRAIN5_LIT(1.6666666666666667)*_t78;
-    const train5_real_t _t124 = TRAIN5_LIT(0.2)*_t123;
-    const train5_real_t _t125 = _t114*_t37;
-    const train5_real_t _t126 = _t116*_t47;
-    const train5_real_t _t127 = _t118*_t60;
-    const train5_real_t _t128 = _t120*_t76;
-    const train5_real_t _t129 = _t125 + _t126 + _t127 + _t128 + _t32;
-    const train5_real_t _t130 = K_theta_cart2_x_tractor*_t6;
-    const train5_real_t _t131 = K_theta_cart2_x_tractor_2*_t7;
-    const train5_real_t _t132 = K_theta_cart3_x_tractor*_t12;
-    const train5_real_t _t133 = K_theta_cart3_x_tractor_2*_t13;
-    const train5_real_t _t134 = K_theta_cart4_x_tractor*_t18;
-    const train5_real_t _t135 = K_theta_cart4_x_tractor_2*_t19;
-    const train5_real_t _t136 = K_theta_cart5_x_tractor*_t24;
-    const train5_real_t _t137 = K_theta_cart5_x_tractor_2*_t25;
-    const train5_real_t _t138 = K_theta_cart_x_tractor*_t3;
-    const train5_real_t _t139 = K_theta_cart2_x_tractor*_t7;
-    const train5_real_t _t140 = K_theta_cart3_x_tractor*_t13;
-    const train5_real_t _t141 = K_theta_cart4_x_tractor*_t19;
-    const train5_real_t _t142 = K_theta_cart5_x_tractor*_t25;
-    const train5_real_t _t143 = K_theta_cart2_x_tractor_2*_t6;
-    const train5_real_t _t144 = K_theta_cart3_x_tractor_2*_t12;
-    const train5_real_t _t145 = K_theta_cart4_x_tractor_2*_t18;
-    const train5_real_t _t146 = K_theta_cart5_x_tractor_2*_t24;
-    const train5_real_t _t147 = TRAIN5_LIT(0.85)*_t18;
-    const train5_real_t _t148 = TRAIN5_LIT(0.85)*_t19;
-    const train5_real_t _t149 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t150 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t151 = _t149*thetadot_right + _t150*thetadot_left;
-    const train5_real_t _t152 = _t151*_t151;
-    const train5_real_t _t153 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t154 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t155 = _t153*thetadot_right + _t154*thetadot_left;
-    const train5_real_t _t156 = _t151*_t47 + _t155*_t43;
-    const train5_real_t _t157 = _t156*_t156;
-    const train5_real_t _t158 = _t151*_t60 + _t155*_t55;
-    const train5_real_t _t159 = _t158*_t158;
-    const train5_real_t _t160 = _t151*_t76 + _t155*_t70;
-    const train5_real_t _t161 = _t160*_t160;
-    const train5_real_t _t162 = _t141*_t161;
-    const train5_real_t _t163 = _t112*_t155 + _t123*_t151;
-    const train5_real_t _t164 = _t163*_t163;
-    const train5_real_t _t165 = _t142*_t164;
-    const train5_real_t _t166 = _t151*_t37 + _t155*_t34;
-    const train5_real_t _t167 = _t166*_t166;
-    const train5_real_t _t168 = _t143*_t157;
-    const train5_real_t _t169 = _t144*_t159;
-    const train5_real_t _t170 = _t145*_t161;
-    const train5_real_t _t171 = _t146*_t164;
-    const train5_real_t _t172 = K_theta_cart3_x_tractor*_t30;
-    const train5_real_t _t173 = K_theta_cart3_x_tractor_2*_t14;
-    const train5_real_t _t174 = K_theta_cart4_x_tractor*_t31;
-    const train5_real_t _t175 = K_theta_cart4_x_tractor_2*_t20;
-    const train5_real_t _t176 = K_theta_cart5_x_tractor*_t32;
-    const train5_real_t _t177 = K_theta_cart5_x_tractor_2*_t26;
-    const train5_real_t _t178 = _t10*_t157;
-    const train5_real_t _t179 = _t10*_t159;
-    const train5_real_t _t180 = _t10*_t161;
-    const train5_real_t _t181 = _t10*_t164;
-    const train5_real_t _t182 = _t167*_t9;
-    const train5_real_t _t183 = _t159*_t16;
-    const train5_real_t _t184 = _t16*_t161;
-    const train5_real_t _t185 = _t16*_t164;
-    const train5_real_t _t186 = _t10*_t167;
-    const train5_real_t _t187 = _t15*_t157;
-    const train5_real_t _t188 = _t157*_t16;
-    const train5_real_t _t189 = _t161*_t22;
-    const train5_real_t _t190 = _t164*_t22;
-    const train5_real_t _t191 = _t159*_t21;
-    const train5_real_t _t192 = _t159*_t22;
-    const train5_real_t _t193 = _t148*_t164;
-    const train5_real_t _t194 = _t147*_t161;
-    const train5_real_t _t195 = _t148*_t161;
-    const train5_real_t _t196 = TRAIN5_LIT(1.6666666666666667)*_t3;
-    const train5_real_t _t197 = _t196*_t33;
-    const train5_real_t _t198 = -TRAIN5_LIT(1.6666666666666667)*_t28;
-    const train5_real_t _t199 = _t198*_t33;
-    const train5_real_t _t200 = _t196*_t40;
-    const train5_real_t _t201 = _t198*_t40;
-    const train5_real_t _t202 = _t196*_t50;
-    const train5_real_t _t203 = _t198*_t50;
-    const train5_real_t _t204 = _t196*_t63;
-    const train5_real_t _t205 = _t198*_t63;
-    const train5_real_t _t206 = TRAIN5_LIT(0.2)*_t196;
-    const train5_real_t _t207 = TRAIN5_LIT(0.2)*_t198;
-    const train5_real_t _t208 = -_t197 - _t7;
-    const train5_real_t _t209 = -TRAIN5_LIT(1.6666666666666667)*_t208;
-    const train5_real_t _t210 = TRAIN5_LIT(0.2)*_t209;
-    const train5_real_t _t211 = _t196*_t82;
-    const train5_real_t _t212 = _t211 - _t6;
-    const train5_real_t _t213 = -_t199 + _t29;
-    const train5_real_t _t214 = -TRAIN5_LIT(1.6666666666666667)*_t213;
-    const train5_real_t _t215 = TRAIN5_LIT(0.2)*_t214;
-    const train5_real_t _t216 = _t198*_t82;
-    const train5_real_t _t217 = _t216 - _t8;
-    const train5_real_t _t218 = _t197 + _t83;
-    const train5_real_t _t219 = -TRAIN5_LIT(1.6666666666666667)*_t218;
-    const train5_real_t _t220 = TRAIN5_LIT(0.2)*_t219;
-    const train5_real_t _t221 = _t199 + _t86;
-    const train5_real_t _t222 = -TRAIN5_LIT(1.6666666666666667)*_t221;
-    const train5_real_t _t223 = TRAIN5_LIT(0.2)*_t222;
-    const train5_real_t _t224 = -TRAIN5_LIT(1.6666666666666667)*_t84;
-    const train5_real_t _t225 = TRAIN5_LIT(0.2)*_t224;
-    const train5_real_t _t226 = TRAIN5_LIT(1.6666666666666667)*_t87;
-    const train5_real_t _t227 = TRAIN5_LIT(0.2)*_t226;
-    const train5_real_t _t228 = -_t13 - _t200 - _t209*_t42;
-    const train5_real_t _t229 = -TRAIN5_LIT(1.6666666666666667)*_t228;
-    const train5_real_t _t230 = TRAIN5_LIT(0.2)*_t229;
-    const train5_real_t _t231 = _t196*_t89;
-    const train5_real_t _t232 = -_t12 + _t209*_t91 + _t231;
-    const train5_real_t _t233 = -_t201 - _t214*_t42 + _t30;
-    const train5_real_t _t234 = -TRAIN5_LIT(1.6666666666666667)*_t233;
-    const train5_real_t _t235 = TRAIN5_LIT(0.2)*_t234;
-    const train5_real_t _t236 = _t198*_t89;
-    const train5_real_t _t237 = -_t14 + _t214*_t91 + _t236;
-    const train5_real_t _t238 = _t200 - _t219*_t42 + _t90;
-    const train5_real_t _t239 = -TRAIN5_LIT(1.6666666666666667)*_t238;
-    const train5_real_t _t240 = TRAIN5_LIT(0.2)*_t239;
-    const train5_real_t _t241 = _t219*_t91 - _t231 + _t41;
-    const train5_real_t _t242 = _t201 - _t222*_t42 + _t95;
-    const train5_real_t _t243 = -TRAIN5_LIT(1.6666666666666667)*_t242;
-    const train5_real_t _t244 = TRAIN5_LIT(0.2)*_t243;
-    const train5_real_t _t245 = _t222*_t91 - _t236 + _t46;
-    const train5_real_t _t246 = -_t224*_t42 - _t93;
-    const train5_real_t _t247 = -TRAIN5_LIT(1.6666666666666667)*_t246;
-    const train5_real_t _t248 = TRAIN5_LIT(0.2)*_t247;
-    const train5_real_t _t249 = _t224*_t91 + _t44;
-    const train5_real_t _t250 = -_t226*_t42 + _t96;
-    const train5_real_t _t251 = -TRAIN5_LIT(1.6666666666666667)*_t250;
-    const train5_real_t _t252 = TRAIN5_LIT(0.2)*_t251;
-    const train5_real_t _t253 = _t226*_t91 + _t48;
-    const train5_real_t _t254 = TRAIN5_LIT(1.6666666666666667)*_t98;
-    const train5_real_t _t255 = TRAIN5_LIT(0.2)*_t254;
-    const train5_real_t _t256 = TRAIN5_LIT(1.6666666666666667)*_t97;
-    const train5_real_t _t257 = TRAIN5_LIT(0.2)*_t256;
-    const train5_real_t _t258 = -_t19 - _t202 - _t209*_t52 - _t229*_t54;
-    const train5_real_t _t259 = -TRAIN5_LIT(1.6666666666666667)*_t258;
-    const train5_real_t _t260 = TRAIN5_LIT(0.2)*_t259;
-    const train5_real_t _t261 = _t100*_t196;
-    const train5_real_t _t262 = _t102*_t209 + _t104*_t229 - _t18 + _t261;
-    const train5_real_t _t263 = -_t203 - _t214*_t52 - _t234*_t54 + _t31;
-    const train5_real_t _t264 = -TRAIN5_LIT(1.6666666666666667)*_t263;
-    const train5_real_t _t265 = TRAIN5_LIT(0.2)*_t264;
-    const train5_real_t _t266 = _t100*_t198;
-    const train5_real_t _t267 = _t102*_t214 + _t104*_t234 - _t20 + _t266;
-    const train5_real_t _t268 = _t101 + _t202 - _t219*_t52 - _t239*_t54;
-    const train5_real_t _t269 = -TRAIN5_LIT(1.6666666666666667)*_t268;
-    const train5_real_t _t270 = TRAIN5_LIT(0.2)*_t269;
-    const train5_real_t _t271 = _t102*_t219 + _t104*_t239 - _t261 + _t51;
-    const train5_real_t _t272 = _t108 + _t203 - _t222*_t52 - _t243*_t54;
-    const train5_real_t _t273 = -TRAIN5_LIT(1.6666666666666667)*_t272;
-    const train5_real_t _t274 = TRAIN5_LIT(0.2)*_t273;
-    const train5_real_t _t275 = _t102*_t222 + _t104*_t243 - _t266 + _t58;
-    const train5_real_t _t276 = _t103 - _t224*_t52 - _t247*_t54;
-    const train5_real_t _t277 = -TRAIN5_LIT(1.6666666666666667)*_t276;
-    const train5_real_t _t278 = TRAIN5_LIT(0.2)*_t277;
-    const train5_real_t _t279 = _t102*_t224 + _t104*_t247 + _t53;
-    const train5_real_t _t280 = _t109 - _t226*_t52 - _t251*_t54;
-    const train5_real_t _t281 = -TRAIN5_LIT(1.6666666666666667)*_t280;
-    const train5_real_t _t282 = TRAIN5_LIT(0.2)*_t281;
-    const train5_real_t _t283 = _t102*_t226 + _t104*_t251 + _t59;
-    const train5_real_t _t284 = _t105 - _t254*_t54;
-    const train5_real_t _t285 = -TRAIN5_LIT(1.6666666666666667)*_t284;
-    const train5_real_t _t286 = TRAIN5_LIT(0.2)*_t285;
-    const train5_real_t _t287 = _t104*_t254 + _t56;
-    const train5_real_t _t288 = _t110 - _t256*_t54;
-    const train5_real_t _t289 = -TRAIN5_LIT(1.6666666666666667)*_t288;
-    const train5_real_t _t290 = TRAIN5_LIT(0.2)*_t289;
-    const train5_real_t _t291 = _t104*_t256 + _t61;
-    const train5_real_t _t292 = TRAIN5_LIT(1.6666666666666667)*_t106;
-    const train5_real_t _t293 = TRAIN5_LIT(0.2)*_t292;
-    const train5_real_t _t294 = TRAIN5_LIT(1.6666666666666667)*_t111;
-    const train5_real_t _t295 = TRAIN5_LIT(0.2)*_t294;
-    const train5_real_t _t296 = -_t204 - _t209*_t65 - _t229*_t67 - _t25 - _t259*_t69;
-    const train5_real_t _t297 = -TRAIN5_LIT(1.6666666666666667)*_t296;
-    const train5_real_t _t298 = TRAIN5_LIT(0.2)*_t297;
-    const train5_real_t _t299 = _t114*_t196;
-    const train5_real_t _t300 = _t116*_t209 + _t118*_t229 + _t120*_t259 - _t24 + _t299;
-    const train5_real_t _t301 = -_t205 - _t214*_t65 - _t234*_t67 - _t264*_t69 + _t32;
-    const train5_real_t _t302 = -TRAIN5_LIT(1.6666666666666667)*_t301;
-    const train5_real_t _t303 = TRAIN5_LIT(0.2)*_t302;
-    const train5_real_t _t304 = _t114*_t198;
-    const train5_real_t _t305 = _t116*_t214 + _t118*_t234 + _t120*_t264 - _t26 + _t304;
-    const train5_real_t _t306 = _t115 + _t204 - _t219*_t65 - _t239*_t67 - _t269*_t69;
-    const train5_real_t _t307 = -TRAIN5_LIT(1.6666666666666667)*_t306;
-    const train5_real_t _t308 = TRAIN5_LIT(0.2)*_t307;
-    const train5_real_t _t309 = _t116*_t219 + _t118*_t239 + _t120*_t269 - _t299 + _t64;
-    const train5_real_t _t310 = _t125 + _t205 - _t222*_t65 - _t243*_t67 - _t273*_t69;
-    const train5_real_t _t311 = -TRAIN5_LIT(1.6666666666666667)*_t310;
-    const train5_real_t _t312 = TRAIN5_LIT(0.2)*_t311;
-    const train5_real_t _t313 = _t116*_t222 + _t118*_t243 + _t120*_t273 - _t304 + _t73;
-    const train5_real_t _t314 = _t117 - _t224*_t65 - _t247*_t67 - _t277*_t69;
-    const train5_real_t _t315 = -TRAIN5_LIT(1.6666666666666667)*_t314;
-    const train5_real_t _t316 = TRAIN5_LIT(0.2)*_t315;
-    const train5_real_t _t317 = _t116*_t224 + _t118*_t247 + _t120*_t277 + _t66;
-    const train5_real_t _t318 = _t126 - _t226*_t65 - _t251*_t67 - _t281*_t69;
-    const train5_real_t _t319 = -TRAIN5_LIT(1.6666666666666667)*_t318;
-    const train5_real_t _t320 = TRAIN5_LIT(0.2)*_t319;
-    const train5_real_t _t321 = _t116*_t226 + _t118*_t251 + _t120*_t281 + _t74;
-    const train5_real_t _t322 = _t119 - _t254*_t67 - _t285*_t69;
-    const train5_real_t _t323 = -TRAIN5_LIT(1.6666666666666667)*_t322;
-    const train5_real_t _t324 = TRAIN5_LIT(0.2)*_t323;
-    const train5_real_t _t325 = _t118*_t254 + _t120*_t285 + _t68;
-    const train5_real_t _t326 = _t127 - _t256*_t67 - _t289*_t69;
-    const train5_real_t _t327 = -TRAIN5_LIT(1.6666666666666667)*_t326;
-    const train5_real_t _t328 = TRAIN5_LIT(0.2)*_t327;
-    const train5_real_t _t329 = _t118*_t256 + _t120*_t289 + _t75;
-    const train5_real_t _t330 = _t121 - _t292*_t69;
-    const train5_real_t _t331 = -TRAIN5_LIT(1.6666666666666667)*_t330;
-    const train5_real_t _t332 = TRAIN5_LIT(0.2)*_t331;
-    const train5_real_t _t333 = _t120*_t292 + _t71;
-    const train5_real_t _t334 = _t128 - _t294*_t69;
-    const train5_real_t _t335 = -TRAIN5_LIT(1.6666666666666667)*_t334;
-    const train5_real_t _t336 = TRAIN5_LIT(0.2)*_t335;
-    const train5_real_t _t337 = _t120*_t294 + _t77;
-    const train5_real_t _t338 = TRAIN5_LIT(1.6666666666666667)*_t122;
-    const train5_real_t _t339 = TRAIN5_LIT(0.2)*_t338;
-    const train5_real_t _t340 = TRAIN5_LIT(1.6666666666666667)*_t129;
-    const train5_real_t _t341 = TRAIN5_LIT(0.2)*_t340;
-    const train5_real_t _t342 = _t151*_t155;
-    const train5_real_t _t343 = _t155*_t166;
-    const train5_real_t _t344 = _t151*_t166;
-    const train5_real_t _t345 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t _t346 = _t3 + _t79;
-    const train5_real_t _t347 = _t345*_t346;
-    const train5_real_t _t348 = J_theta_cart_right*_t347;
-    const train5_real_t _t349 = -_t28 + _t80;
-    const train5_real_t _t350 = _t345*_t349;
-    const train5_real_t _t351 = J_theta_cart_right*_t350;
-    const train5_real_t _t352 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t _t353 = _t3 - _t79;
-    const train5_real_t _t354 = _t352*_t353;
-    const train5_real_t _t355 = J_theta_cart_left*_t354;
-    const train5_real_t _t356 = -_t28 - _t80;
-    const train5_real_t _t357 = _t352*_t356;
-    const train5_real_t _t358 = J_theta_cart_left*_t357;
-    const train5_real_t _t359 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t _t360 = _t81 + _t84;
-    const train5_real_t _t361 = _t359*_t360;
-    const train5_real_t _t362 = J_theta_cart2_right*_t361;
-    const train5_real_t _t363 = _t85 - _t87;
-    const train5_real_t _t364 = _t359*_t363;
-    const train5_real_t _t365 = J_theta_cart2_right*_t364;
-    const train5_real_t _t366 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t _t367 = _t7 - _t81 - _t83;
-    const train5_real_t _t368 = _t366*_t367;
-    const train5_real_t _t369 = J_theta_cart2_left*_t368;
-    const train5_real_t _t370 = -_t85 - _t87;
-    const train5_real_t _t371 = _t366*_t370;
-    const train5_real_t _t372 = J_theta_cart2_left*_t371;
-    const train5_real_t _t373 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t _t374 = _t13 + _t88 - _t90 + _t93;
-    const train5_real_t _t375 = _t373*_t374;
-    const train5_real_t _t376 = J_theta_cart3_right*_t375;
-    const train5_real_t _t377 = _t94 - _t97;
-    const train5_real_t _t378 = _t373*_t377;
-    const train5_real_t _t379 = J_theta_cart3_right*_t378;
-    const train5_real_t _t380 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t _t381 = -_t88 - _t98;
-    const train5_real_t _t382 = _t380*_t381;
-    const train5_real_t _t383 = J_theta_cart3_left*_t382;
-    const train5_real_t _t384 = -_t94 - _t97;
-    const train5_real_t _t385 = _t380*_t384;
-    const train5_real_t _t386 = J_theta_cart3_left*_t385;
-    const train5_real_t _t387 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t _t388 = -_t106 + _t99;
-    const train5_real_t _t389 = _t387*_t388;
-    const train5_real_t _t390 = J_theta_cart4_right*_t389;
-    const train5_real_t _t391 = _t107 - _t111;
-    const train5_real_t _t392 = _t387*_t391;
-    const train5_real_t _t393 = J_theta_cart4_right*_t392;
-    const train5_real_t _t394 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t _t395 = -_t106 - _t99;
-    const train5_real_t _t396 = _t394*_t395;
-    const train5_real_t _t397 = J_theta_cart4_left*_t396;
-    const train5_real_t _t398 = -_t107 - _t111;
-    const train5_real_t _t399 = _t394*_t398;
-    const train5_real_t _t400 = J_theta_cart4_left*_t399;
-    const train5_real_t _t401 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t _t402 = _t113 - _t122;
-    const train5_real_t _t403 = _t401*_t402;
-    const train5_real_t _t404 = J_theta_cart5_right*_t403;
-    const train5_real_t _t405 = _t124 - _t129;
-    const train5_real_t _t406 = _t401*_t405;
-    const train5_real_t _t407 = J_theta_cart5_right*_t406;
-    const train5_real_t _t408 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t409 = -_t113 - _t122;
-    const train5_real_t _t410 = _t408*_t409;
-    const train5_real_t _t411 = J_theta_cart5_left*_t410;
-    const train5_real_t _t412 = -_t124 - _t129;
-    const train5_real_t _t413 = _t408*_t412;
-    const train5_real_t _t414 = J_theta_cart5_left*_t413;
-    const train5_real_t _t415 = K_theta_cart_x_tractor_2*_t2 - _t138;
-    const train5_real_t _t416 = _t10*_t139 - _t10*_t143 + _t130*_t9 + _t131*_t9;
-    const train5_real_t _t417 = _t10*_t140 - _t10*_t144 + _t132*_t9 + _t133*_t9;
-    const train5_real_t _t418 = _t10*_t141 - _t10*_t145 + _t134*_t9 + _t135*_t9;
-    const train5_real_t _t419 = _t10*_t142 - _t10*_t146 + _t136*_t9 + _t137*_t9;
-    const train5_real_t _t420 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t157*_t2*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t159*_t2
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t161*_t19*_t2
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t164*_t2*_t25
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor*_t152*_t2
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor_2*_t152*_t3 - _t130*_t178 - _t131*_t178
-            - _t132*_t179 - _t133*_t179 - _t134*_t180 - _t135*_t180 - _t136*_t181 - _t137*_t181
-            - _t168*_t9 - _t169*_t9 - _t170*_t9 - _t171*_t9;
-    const train5_real_t _t421 = _t342 - _t343;
-    const train5_real_t _t422 = _t152 - _t344;
-    const train5_real_t _t423 = _t196*_t421 + _t198*_t422;
-    const train5_real_t _t424 = _t155*_t156;
-    const train5_real_t _t425 = _t151*_t156;
-    const train5_real_t _t426 = _t152*_t214 + _t209*_t342 + _t219*_t343 + _t222*_t344 + _t224*_t424
-            + _t226*_t425;
-    const train5_real_t _t427 = _t155*_t158;
-    const train5_real_t _t428 = _t151*_t158;
-    const train5_real_t _t429 = _t152*_t234 + _t229*_t342 + _t239*_t343 + _t243*_t344 + _t247*_t424
-            + _t251*_t425 + _t254*_t427 + _t256*_t428;
-    const train5_real_t _t430 = _t155*_t160;
-    const train5_real_t _t431 = _t151*_t160;
-    const train5_real_t _t432 = _t152*_t264 + _t259*_t342 + _t269*_t343 + _t273*_t344 + _t277*_t424
-            + _t281*_t425 + _t285*_t427 + _t289*_t428 + _t292*_t430 + _t294*_t431;
-    const train5_real_t _t433 = _t155*_t163;
-    const train5_real_t _t434 = _t151*_t163;
-    const train5_real_t _t435 = _t152*_t302 + _t297*_t342 + _t307*_t343 + _t311*_t344 + _t315*_t424
-            + _t319*_t425 + _t323*_t427 + _t327*_t428 + _t331*_t430 + _t335*_t431 + _t338*_t433
-            + _t340*_t434;
-    const train5_real_t _t436 = J_theta_cart*_t423 + _t342*_t415 + _t416*_t426 + _t417*_t429
-            + _t418*_t432 + _t419*_t435 + _t420;
-    const train5_real_t _t437 = K_theta_cart2_x_tractor_2*_t6 - _t139;
-    const train5_real_t _t438 = _t132*_t15 + _t133*_t15 + _t140*_t16 - _t144*_t16;
-    const train5_real_t _t439 = _t134*_t15 + _t135*_t15 + _t141*_t16 - _t145*_t16;
-    const train5_real_t _t440 = _t136*_t15 + _t137*_t15 + _t142*_t16 - _t146*_t16;
-    const train5_real_t _t441 = TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor*_t152*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t167*_t3*_t6
-            + TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor_2*_t152*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t167*_t2*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t167*_t3*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t159*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t161*_t19*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t164*_t25*_t6 - _t132*_t183 - _t133*_t183
-            - _t134*_t184 - _t135*_t184 - _t136*_t185 - _t137*_t185 - _t139*_t182 - _t15*_t169
-            - _t15*_t170 - _t15*_t171;
-    const train5_real_t _t442 = J_theta_cart2*_t426 + _t342*_t437 + _t416*_t423 + _t429*_t438
-            + _t432*_t439 + _t435*_t440 + _t441;
-    const train5_real_t _t443 = K_theta_cart3_x_tractor_2*_t12 - _t140;
-    const train5_real_t _t444 = _t134*_t21 + _t135*_t21 + _t141*_t22 - _t145*_t22;
-    const train5_real_t _t445 = _t136*_t21 + _t137*_t21 + _t142*_t22 - _t146*_t22;
-    const train5_real_t _t446 = _t132*_t186 + _t132*_t188 + _t133*_t186 + _t133*_t188 - _t134*_t189
-            - _t135*_t189 - _t136*_t190 - _t137*_t190 - _t140*_t182 - _t140*_t187 + _t144*_t182
-            + _t144*_t187 + _t152*_t172 + _t152*_t173 + _t162*_t21 + _t165*_t21 - _t170*_t21
-            - _t171*_t21;
-    const train5_real_t _t447 = J_theta_cart3*_t429 + _t342*_t443 + _t417*_t423 + _t426*_t438
-            + _t432*_t444 + _t435*_t445 + _t446;
-    const train5_real_t _t448 = K_theta_cart4_x_tractor_2*_t18 - _t141;
-    const train5_real_t _t449 = _t136*_t147 + _t137*_t147 + _t142*_t148 - _t146*_t148;
-    const train5_real_t _t450 = _t134*_t186 + _t134*_t188 + _t134*_t192 + _t135*_t186 + _t135*_t188
-            + _t135*_t192 - _t136*_t193 - _t137*_t193 - _t141*_t182 - _t141*_t187 - _t141*_t191
-            + _t145*_t182 + _t145*_t187 + _t145*_t191 + _t147*_t165 - _t147*_t171 + _t152*_t174
-            + _t152*_t175;
-    const train5_real_t _t451 = J_theta_cart4*_t432 + _t342*_t448 + _t418*_t423 + _t426*_t439
-            + _t429*_t444 + _t435*_t449 + _t450;
-    const train5_real_t _t452 = K_theta_cart5_x_tractor_2*_t24 - _t142;
-    const train5_real_t _t453 = _t136*_t186 + _t136*_t188 + _t136*_t192 + _t136*_t195 + _t137*_t186
-            + _t137*_t188 + _t137*_t192 + _t137*_t195 - _t142*_t182 - _t142*_t187 - _t142*_t191
-            - _t142*_t194 + _t146*_t182 + _t146*_t187 + _t146*_t191 + _t146*_t194 + _t152*_t176
-            + _t152*_t177;
-    const train5_real_t _t454 = J_theta_cart5*_t435 + _t342*_t452 + _t419*_t423 + _t426*_t440
-            + _t429*_t445 + _t432*_t449 + _t453;
-    const train5_real_t _t455 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t456 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t457 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t458 = _t130 + _t131;
-    const train5_real_t _t459 = _t132 + _t133;
-    const train5_real_t _t460 = _t134 + _t135;
-    const train5_real_t _t461 = _t136 + _t137;
-    const train5_real_t _t462 = J_x_tractor + _t112*_t461 + _t34*_t457 + _t43*_t458 + _t459*_t55
-            + _t460*_t70;
-    const train5_real_t _t463 = J_theta_cart*_t34 + _t112*_t419 + _t416*_t43 + _t417*_t55
-            + _t418*_t70 + _t457;
-    const train5_real_t _t464 = J_theta_cart2*_t43 + _t112*_t440 + _t34*_t416 + _t438*_t55
-            + _t439*_t70 + _t458;
-    const train5_real_t _t465 = J_theta_cart3*_t55 + _t112*_t445 + _t34*_t417 + _t43*_t438
-            + _t444*_t70 + _t459;
-    const train5_real_t _t466 = J_theta_cart4*_t70 + _t112*_t449 + _t34*_t418 + _t43*_t439
-            + _t444*_t55 + _t460;
-    const train5_real_t _t467 = J_theta_cart5*_t112 + _t34*_t419 + _t43*_t440 + _t445*_t55
-            + _t449*_t70 + _t461;
-    const train5_real_t _t468 = J_theta_right*_t455;
-    const train5_real_t _t469 = J_theta_left*_t456;
-    const train5_real_t _t470 = _t112*_t467 + _t34*_t463 + _t347*_t348 + _t354*_t355 + _t361*_t362
-            + _t368*_t369 + _t375*_t376 + _t382*_t383 + _t389*_t390 + _t396*_t397 + _t403*_t404
-            + _t410*_t411 + _t43*_t464 + _t455*_t468 + _t456*_t469 + _t462 + _t465*_t55
-            + _t466*_t70;
-    const train5_real_t _t471 = K_theta_tractor_x_tractor_2 + _t123*_t461 + _t37*_t457 + _t458*_t47
-            + _t459*_t60 + _t460*_t76;
-    const train5_real_t _t472 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t28;
-    const train5_real_t _t473 = J_theta_cart*_t37 + _t123*_t419 + _t416*_t47 + _t417*_t60
-            + _t418*_t76 + _t472;
-    const train5_real_t _t474 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t29;
-    const train5_real_t _t475 = J_theta_cart2*_t47 + _t123*_t440 + _t37*_t416 + _t438*_t60
-            + _t439*_t76 + _t474;
-    const train5_real_t _t476 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t30;
-    const train5_real_t _t477 = J_theta_cart3*_t60 + _t123*_t445 + _t37*_t417 + _t438*_t47
-            + _t444*_t76 + _t476;
-    const train5_real_t _t478 = K_theta_cart4_x_tractor*_t20 - K_theta_cart4_x_tractor_2*_t31;
-    const train5_real_t _t479 = J_theta_cart4*_t76 + _t123*_t449 + _t37*_t418 + _t439*_t47
-            + _t444*_t60 + _t478;
-    const train5_real_t _t480 = K_theta_cart5_x_tractor*_t26 - K_theta_cart5_x_tractor_2*_t32;
-    const train5_real_t _t481 = J_theta_cart5*_t123 + _t37*_t419 + _t440*_t47 + _t445*_t60
-            + _t449*_t76 + _t480;
-    const train5_real_t _t482 = TRAIN5_LIT(0.207)*_t455;
-    const train5_real_t _t483 = J_theta_right*_t482;
-    const train5_real_t _t484 = -TRAIN5_LIT(0.207)*_t456;
-    const train5_real_t _t485 = J_theta_left*_t484;
-    const train5_real_t _t486 = _t112*_t481 + _t34*_t473 + _t347*_t351 + _t354*_t358 + _t361*_t365
-            + _t368*_t372 + _t375*_t379 + _t382*_t386 + _t389*_t393 + _t396*_t400 + _t403*_t407
-            + _t410*_t414 + _t43*_t475 + _t455*_t483 + _t456*_t485 + _t471 + _t477*_t55
-            + _t479*_t70;
-    const train5_real_t _t487 = J_theta_tractor + _t123*_t480 + _t37*_t472 + _t47*_t474 + _t476*_t60
-            + _t478*_t76;
-    const train5_real_t _t488 = _t123*_t481 + _t350*_t351 + _t357*_t358 + _t364*_t365 + _t37*_t473
-            + _t371*_t372 + _t378*_t379 + _t385*_t386 + _t392*_t393 + _t399*_t400 + _t406*_t407
-            + _t413*_t414 + _t47*_t475 + _t477*_t60 + _t479*_t76 + _t482*_t483 + _t484*_t485
-            + _t487;
-    const train5_real_t _t489 = _t470*_t488 - _t486*_t486;
-    const train5_real_t _t490 = -K_theta_cart_x_tractor_2*_t167*_t2
-            + K_theta_tractor_x_tractor*_t152 + _t138*_t167 + _t139*_t157 + _t140*_t159 + _t162
-            + _t165 - _t168 - _t169 - _t170 - _t171;
-    const train5_real_t _t491 = -K_theta_cart2_x_tractor*_t157*_t29
-            - K_theta_cart2_x_tractor_2*_t157*_t8 - K_theta_cart_x_tractor*_t167*_t28
-            - K_theta_cart_x_tractor_2*_t167*_t4 - _t159*_t172 - _t159*_t173 - _t161*_t174
-            - _t161*_t175 - _t164*_t176 - _t164*_t177;
-    const train5_real_t _t492 = _t2 + _t206;
-    const train5_real_t _t493 = _t345*_t492;
-    const train5_real_t _t494 = _t207 + _t4;
-    const train5_real_t _t495 = _t345*_t494;
-    const train5_real_t _t496 = _t2 - _t206;
-    const train5_real_t _t497 = _t352*_t496;
-    const train5_real_t _t498 = -_t207 + _t4;
-    const train5_real_t _t499 = _t352*_t498;
-    const train5_real_t _t500 = _t210 - _t212;
-    const train5_real_t _t501 = _t359*_t500;
-    const train5_real_t _t502 = _t215 - _t217;
-    const train5_real_t _t503 = _t359*_t502;
-    const train5_real_t _t504 = _t211 + _t220 - _t35;
-    const train5_real_t _t505 = _t359*_t504;
-    const train5_real_t _t506 = _t216 + _t223 - _t38;
-    const train5_real_t _t507 = _t359*_t506;
-    const train5_real_t _t508 = _t225 + _t36;
-    const train5_real_t _t509 = _t359*_t508;
-    const train5_real_t _t510 = _t227 + _t39;
-    const train5_real_t _t511 = _t359*_t510;
-    const train5_real_t _t512 = -_t210 - _t212;
-    const train5_real_t _t513 = _t366*_t512;
-    const train5_real_t _t514 = -_t215 - _t217;
-    const train5_real_t _t515 = _t366*_t514;
-    const train5_real_t _t516 = _t211 - _t220 - _t35;
-    const train5_real_t _t517 = _t366*_t516;
-    const train5_real_t _t518 = _t216 - _t223 - _t38;
-    const train5_real_t _t519 = _t366*_t518;
-    const train5_real_t _t520 = -_t225 + _t36;
-    const train5_real_t _t521 = _t366*_t520;
-    const train5_real_t _t522 = -_t227 + _t39;
-    const train5_real_t _t523 = _t366*_t522;
-    const train5_real_t _t524 = _t230 - _t232;
-    const train5_real_t _t525 = _t373*_t524;
-    const train5_real_t _t526 = _t235 - _t237;
-    const train5_real_t _t527 = _t373*_t526;
-    const train5_real_t _t528 = _t240 - _t241;
-    const train5_real_t _t529 = _t373*_t528;
-    const train5_real_t _t530 = _t244 - _t245;
-    const train5_real_t _t531 = _t373*_t530;
-    const train5_real_t _t532 = _t248 - _t249;
-    const train5_real_t _t533 = _t373*_t532;
-    const train5_real_t _t534 = _t252 - _t253;
-    const train5_real_t _t535 = _t373*_t534;
-    const train5_real_t _t536 = _t255 + _t45;
-    const train5_real_t _t537 = _t373*_t536;
-    const train5_real_t _t538 = _t257 + _t49;
-    const train5_real_t _t539 = _t373*_t538;
-    const train5_real_t _t540 = -_t230 - _t232;
-    const train5_real_t _t541 = _t380*_t540;
-    const train5_real_t _t542 = -_t235 - _t237;
-    const train5_real_t _t543 = _t380*_t542;
-    const train5_real_t _t544 = -_t240 - _t241;
-    const train5_real_t _t545 = _t380*_t544;
-    const train5_real_t _t546 = -_t244 - _t245;
-    const train5_real_t _t547 = _t380*_t546;
-    const train5_real_t _t548 = -_t248 - _t249;
-    const train5_real_t _t549 = _t380*_t548;
-    const train5_real_t _t550 = -_t252 - _t253;
-    const train5_real_t _t551 = _t380*_t550;
-    const train5_real_t _t552 = -_t255 + _t45;
-    const train5_real_t _t553 = _t380*_t552;
-    const train5_real_t _t554 = -_t257 + _t49;
-    const train5_real_t _t555 = _t380*_t554;
-    const train5_real_t _t556 = _t260 - _t262;
-    const train5_real_t _t557 = _t387*_t556;
-    const train5_real_t _t558 = _t265 - _t267;
-    const train5_real_t _t559 = _t387*_t558;
-    const train5_real_t _t560 = _t270 - _t271;
-    const train5_real_t _t561 = _t387*_t560;
-    const train5_real_t _t562 = _t274 - _t275;
-    const train5_real_t _t563 = _t387*_t562;
-    const train5_real_t _t564 = _t278 - _t279;
-    const train5_real_t _t565 = _t387*_t564;
-    const train5_real_t _t566 = _t282 - _t283;
-    const train5_real_t _t567 = _t387*_t566;
-    const train5_real_t _t568 = _t286 - _t287;
-    const train5_real_t _t569 = _t387*_t568;
-    const train5_real_t _t570 = _t290 - _t291;
-    const train5_real_t _t571 = _t387*_t570;
-    const train5_real_t _t572 = _t293 + _t57;
-    const train5_real_t _t573 = _t387*_t572;
-    const train5_real_t _t574 = _t295 + _t62;
-    const train5_real_t _t575 = _t387*_t574;
-    const train5_real_t _t576 = -_t260 - _t262;
-    const train5_real_t _t577 = _t394*_t576;
-    const train5_real_t _t578 = -_t265 - _t267;
-    const train5_real_t _t579 = _t394*_t578;
-    const train5_real_t _t580 = -_t270 - _t271;
-    const train5_real_t _t581 = _t394*_t580;
-    const train5_real_t _t582 = -_t274 - _t275;
-    const train5_real_t _t583 = _t394*_t582;
-    const train5_real_t _t584 = -_t278 - _t279;
-    const train5_real_t _t585 = _t394*_t584;
-    const train5_real_t _t586 = -_t282 - _t283;
-    const train5_real_t _t587 = _t394*_t586;
-    const train5_real_t _t588 = -_t286 - _t287;
-    const train5_real_t _t589 = _t394*_t588;
-    const train5_real_t _t590 = -_t290 - _t291;
-    const train5_real_t _t591 = _t394*_t590;
-    const train5_real_t _t592 = -_t293 + _t57;
-    const train5_real_t _t593 = _t394*_t592;
-    const train5_real_t _t594 = -_t295 + _t62;
-    const train5_real_t _t595 = _t394*_t594;
-    const train5_real_t _t596 = _t298 - _t300;
-    const train5_real_t _t597 = _t401*_t596;
-    const train5_real_t _t598 = _t303 - _t305;
-    const train5_real_t _t599 = _t401*_t598;
-    const train5_real_t _t600 = _t308 - _t309;
-    const train5_real_t _t601 = _t401*_t600;
-    const train5_real_t _t602 = _t312 - _t313;
-    const train5_real_t _t603 = _t401*_t602;
-    const train5_real_t _t604 = _t316 - _t317;
-    const train5_real_t _t605 = _t401*_t604;
-    const train5_real_t _t606 = _t320 - _t321;
-    const train5_real_t _t607 = _t401*_t606;
-    const train5_real_t _t608 = _t324 - _t325;
-    const train5_real_t _t609 = _t401*_t608;
-    const train5_real_t _t610 = _t328 - _t329;
-    const train5_real_t _t611 = _t401*_t610;
-    const train5_real_t _t612 = _t332 - _t333;
-    const train5_real_t _t613 = _t401*_t612;
-    const train5_real_t _t614 = _t336 - _t337;
-    const train5_real_t _t615 = _t401*_t614;
-    const train5_real_t _t616 = _t339 + _t72;
-    const train5_real_t _t617 = _t401*_t616;
-    const train5_real_t _t618 = _t341 + _t78;
-    const train5_real_t _t619 = _t401*_t618;
-    const train5_real_t _t620 = -_t298 - _t300;
-    const train5_real_t _t621 = _t408*_t620;
-    const train5_real_t _t622 = -_t303 - _t305;
-    const train5_real_t _t623 = _t408*_t622;
-    const train5_real_t _t624 = -_t308 - _t309;
-    const train5_real_t _t625 = _t408*_t624;
-    const train5_real_t _t626 = -_t312 - _t313;
-    const train5_real_t _t627 = _t408*_t626;
-    const train5_real_t _t628 = -_t316 - _t317;
-    const train5_real_t _t629 = _t408*_t628;
-    const train5_real_t _t630 = -_t320 - _t321;
-    const train5_real_t _t631 = _t408*_t630;
-    const train5_real_t _t632 = -_t324 - _t325;
-    const train5_real_t _t633 = _t408*_t632;
-    const train5_real_t _t634 = -_t328 - _t329;
-    const train5_real_t _t635 = _t408*_t634;
-    const train5_real_t _t636 = -_t332 - _t333;
-    const train5_real_t _t637 = _t408*_t636;
-    const train5_real_t _t638 = -_t336 - _t337;
-    const train5_real_t _t639 = _t408*_t638;
-    const train5_real_t _t640 = -_t339 + _t72;
-    const train5_real_t _t641 = _t408*_t640;
-    const train5_real_t _t642 = -_t341 + _t78;
-    const train5_real_t _t643 = _t408*_t642;
-    const train5_real_t _t644 = _t421*_t493 + _t422*_t495;
-    const train5_real_t _t645 = _t421*_t497 + _t422*_t499;
-    const train5_real_t _t646 = _t152*_t503 + _t342*_t501 + _t343*_t505 + _t344*_t507 + _t424*_t509
-            + _t425*_t511;
-    const train5_real_t _t647 = _t152*_t515 + _t342*_t513 + _t343*_t517 + _t344*_t519 + _t424*_t521
-            + _t425*_t523;
-    const train5_real_t _t648 = _t152*_t527 + _t342*_t525 + _t343*_t529 + _t344*_t531 + _t424*_t533
-            + _t425*_t535 + _t427*_t537 + _t428*_t539;
-    const train5_real_t _t649 = _t152*_t543 + _t342*_t541 + _t343*_t545 + _t344*_t547 + _t424*_t549
-            + _t425*_t551 + _t427*_t553 + _t428*_t555;
-    const train5_real_t _t650 = _t152*_t559 + _t342*_t557 + _t343*_t561 + _t344*_t563 + _t424*_t565
-            + _t425*_t567 + _t427*_t569 + _t428*_t571 + _t430*_t573 + _t431*_t575;
-    const train5_real_t _t651 = _t152*_t579 + _t342*_t577 + _t343*_t581 + _t344*_t583 + _t424*_t585
-            + _t425*_t587 + _t427*_t589 + _t428*_t591 + _t430*_t593 + _t431*_t595;
-    const train5_real_t _t652 = _t152*_t599 + _t342*_t597 + _t343*_t601 + _t344*_t603 + _t424*_t605
-            + _t425*_t607 + _t427*_t609 + _t428*_t611 + _t430*_t613 + _t431*_t615 + _t433*_t617
-            + _t434*_t619;
-    const train5_real_t _t653 = _t152*_t623 + _t342*_t621 + _t343*_t625 + _t344*_t627 + _t424*_t629
-            + _t425*_t631 + _t427*_t633 + _t428*_t635 + _t430*_t637 + _t431*_t639 + _t433*_t641
-            + _t434*_t643;
-    const train5_real_t _t654 = _t112*_t454 + _t34*_t436 + _t348*_t644 + _t355*_t645 + _t362*_t646
-            + _t369*_t647 + _t376*_t648 + _t383*_t649 + _t390*_t650 + _t397*_t651 + _t404*_t652
-            + _t411*_t653 + _t423*_t457 + _t426*_t458 + _t429*_t459 + _t43*_t442 + _t432*_t460
-            + _t435*_t461 + _t447*_t55 + _t451*_t70 + _t490;
-    const train5_real_t _t655 = -K_theta_tractor_x_tractor*_t342 + _t123*_t454 + _t351*_t644
-            + _t358*_t645 + _t365*_t646 + _t37*_t436 + _t372*_t647 + _t379*_t648 + _t386*_t649
-            + _t393*_t650 + _t400*_t651 + _t407*_t652 + _t414*_t653 + _t423*_t472 + _t426*_t474
-            + _t429*_t476 + _t432*_t478 + _t435*_t480 + _t442*_t47 + _t447*_t60 + _t451*_t76
-            + _t491;
-    const train5_real_t _t656 = _t455*tau_right + _t456*tau_left - _t654;
-    const train5_real_t _t657 = _t482*tau_right + _t484*tau_left - _t655;
-    const train5_real_t _t658 = TRAIN5_LIT(1.0)/_t489;
-    const train5_real_t _t659 = _t658*(-_t486*_t657 + _t488*_t656);
-    const train5_real_t _t660 = _t658*(_t470*_t657 - _t486*_t656);
-    const train5_real_t _t661 = _t455*_t659 + _t482*_t660;
-    const train5_real_t _t662 = _t456*_t659 + _t484*_t660;
+    (void)K_theta_cart2_x_tractor;
+    (void)K_theta_cart2_x_tractor_2;
+    (void)K_theta_cart3_x_tractor;
+    (void)K_theta_cart3_x_tractor_2;
+    (void)K_theta_cart4_x_tractor;
+    (void)K_theta_cart4_x_tractor_2;
+    (void)K_theta_cart5_x_tractor;
+    (void)K_theta_cart5_x_tractor_2;
+    (void)K_theta_cart_x_tractor;
+    (void)K_theta_cart_x_tractor_2;
+    (void)K_theta_tractor_x_tractor;
+    (void)theta_cart;
+    (void)theta_cart2;
+    (void)theta_cart3;
+    (void)theta_cart4;
+    (void)theta_cart5;
+    (void)theta_tractor;
+    (void)thetadot_left;
+    (void)thetadot_right;
+    train5_real_t _shared[408];
+    train5_staged_quantities(p, q, wheel_rates, _shared);
+    const train5_real_t _ms224 = _shared[54];
+    const train5_real_t _ms225 = _shared[55];
+    const train5_real_t _ms228 = _shared[58];
+    const train5_real_t _ms229 = _shared[59];
+    const train5_real_t _ms232 = _shared[62];
+    const train5_real_t _ms233 = _shared[63];
+    const train5_real_t _ms236 = _shared[66];
+    const train5_real_t _ms237 = _shared[67];
+    const train5_real_t _ms240 = _shared[70];
+    const train5_real_t _ms241 = _shared[71];
+    const train5_real_t _ms248 = _shared[74];
+    const train5_real_t _ms249 = _shared[75];
+    const train5_real_t _ms252 = _shared[78];
+    const train5_real_t _ms253 = _shared[79];
+    const train5_real_t _ms256 = _shared[82];
+    const train5_real_t _ms257 = _shared[83];
+    const train5_real_t _ms260 = _shared[86];
+    const train5_real_t _ms261 = _shared[87];
+    const train5_real_t _ms264 = _shared[90];
+    const train5_real_t _ms265 = _shared[91];
+    const train5_real_t _ms268 = _shared[94];
+    const train5_real_t _ms269 = _shared[95];
+    const train5_real_t _ms272 = _shared[98];
+    const train5_real_t _ms273 = _shared[99];
+    const train5_real_t _ms276 = _shared[102];
+    const train5_real_t _ms277 = _shared[103];
+    const train5_real_t _ms280 = _shared[106];
+    const train5_real_t _ms281 = _shared[107];
+    const train5_real_t _ms284 = _shared[110];
+    const train5_real_t _ms285 = _shared[111];
+    const train5_real_t _ms305 = _shared[119];
+    const train5_real_t _ms306 = _shared[120];
+    const train5_real_t _ms307 = _shared[121];
+    const train5_real_t _ms308 = _shared[122];
+    const train5_real_t _ms309 = _shared[123];
+    const train5_real_t _ms315 = _shared[129];
+    const train5_real_t _ms316 = _shared[130];
+    const train5_real_t _ms317 = _shared[131];
+    const train5_real_t _ms318 = _shared[132];
+    const train5_real_t _ms319 = _shared[133];
+    const train5_real_t _ms320 = _shared[134];
+    const train5_real_t _ms321 = _shared[135];
+    const train5_real_t _ms322 = _shared[136];
+    const train5_real_t _ms323 = _shared[137];
+    const train5_real_t _ms324 = _shared[138];
+    const train5_real_t _ms325 = _shared[139];
+    const train5_real_t _ms326 = _shared[140];
+    const train5_real_t _ms327 = _shared[141];
+    const train5_real_t _ms328 = _shared[142];
+    const train5_real_t _ms329 = _shared[143];
+    const train5_real_t _ms636 = _shared[406];
+    const train5_real_t _ms637 = _shared[407];
+    const train5_real_t _t0 = TRAIN5_LIT(1.0)/radius_right;
+    const train5_real_t _t1 = TRAIN5_LIT(1.0)/radius_left;
+    const train5_real_t _t2 = J_x_tractor + _ms224*_ms305 + _ms228*_ms306 + _ms232*_ms307
+            + _ms236*_ms308 + _ms240*_ms309;
+    const train5_real_t _t3 = J_theta_cart*_ms224 + _ms228*_ms320 + _ms232*_ms321 + _ms236*_ms322
+            + _ms240*_ms323 + _ms305;
+    const train5_real_t _t4 = J_theta_cart2*_ms228 + _ms224*_ms320 + _ms232*_ms324 + _ms236*_ms325
+            + _ms240*_ms326 + _ms306;
+    const train5_real_t _t5 = J_theta_cart3*_ms232 + _ms224*_ms321 + _ms228*_ms324 + _ms236*_ms327
+            + _ms240*_ms328 + _ms307;
+    const train5_real_t _t6 = J_theta_cart4*_ms236 + _ms224*_ms322 + _ms228*_ms325 + _ms232*_ms327
+            + _ms240*_ms329 + _ms308;
+    const train5_real_t _t7 = J_theta_cart5*_ms240 + _ms224*_ms323 + _ms228*_ms326 + _ms232*_ms328
+            + _ms236*_ms329 + _ms309;
+    const train5_real_t _t8 = J_theta_right*_t0;
+    const train5_real_t _t9 = J_theta_left*_t1;
+    const train5_real_t _t10 = J_theta_cart_right*_ms248;
+    const train5_real_t _t11 = J_theta_cart_left*_ms252;
+    const train5_real_t _t12 = J_theta_cart2_right*_ms256;
+    const train5_real_t _t13 = J_theta_cart2_left*_ms260;
+    const train5_real_t _t14 = J_theta_cart3_right*_ms264;
+    const train5_real_t _t15 = J_theta_cart3_left*_ms268;
+    const train5_real_t _t16 = J_theta_cart4_right*_ms272;
+    const train5_real_t _t17 = J_theta_cart4_left*_ms276;
+    const train5_real_t _t18 = J_theta_cart5_right*_ms280;
+    const train5_real_t _t19 = J_theta_cart5_left*_ms284;
+    const train5_real_t _t20 = _ms224*_t3 + _ms228*_t4 + _ms232*_t5 + _ms236*_t6 + _ms240*_t7
+            + _ms248*_t10 + _ms252*_t11 + _ms256*_t12 + _ms260*_t13 + _ms264*_t14 + _ms268*_t15
+            + _ms272*_t16 + _ms276*_t17 + _ms280*_t18 + _ms284*_t19 + _t0*_t8 + _t1*_t9 + _t2;
+    const train5_real_t _t21 = K_theta_tractor_x_tractor_2 + _ms225*_ms305 + _ms229*_ms306
+            + _ms233*_ms307 + _ms237*_ms308 + _ms241*_ms309;
+    const train5_real_t _t22 = J_theta_cart*_ms225 + _ms229*_ms320 + _ms233*_ms321 + _ms237*_ms322
+            + _ms241*_ms323 + _ms315;
+    const train5_real_t _t23 = J_theta_cart2*_ms229 + _ms225*_ms320 + _ms233*_ms324 + _ms237*_ms325
+            + _ms241*_ms326 + _ms316;
+    const train5_real_t _t24 = J_theta_cart3*_ms233 + _ms225*_ms321 + _ms229*_ms324 + _ms237*_ms327
+            + _ms241*_ms328 + _ms317;
+    const train5_real_t _t25 = J_theta_cart4*_ms237 + _ms225*_ms322 + _ms229*_ms325 + _ms233*_ms327
+            + _ms241*_ms329 + _ms318;
+    const train5_real_t _t26 = J_theta_cart5*_ms241 + _ms225*_ms323 + _ms229*_ms326 + _ms233*_ms328
+            + _ms237*_ms329 + _ms319;
+    const train5_real_t _t27 = TRAIN5_LIT(0.207)*_t0;
+    const train5_real_t _t28 = J_theta_right*_t27;
+    const train5_real_t _t29 = -TRAIN5_LIT(0.207)*_t1;
+    const train5_real_t _t30 = J_theta_left*_t29;
+    const train5_real_t _t31 = J_theta_cart_right*_ms249;
+    const train5_real_t _t32 = J_theta_cart_left*_ms253;
+    const train5_real_t _t33 = J_theta_cart2_right*_ms257;
+    const train5_real_t _t34 = J_theta_cart2_left*_ms261;
+    const train5_real_t _t35 = J_theta_cart3_right*_ms265;
+    const train5_real_t _t36 = J_theta_cart3_left*_ms269;
+    const train5_real_t _t37 = J_theta_cart4_right*_ms273;
+    const train5_real_t _t38 = J_theta_cart4_left*_ms277;
+    const train5_real_t _t39 = J_theta_cart5_right*_ms281;
+    const train5_real_t _t40 = J_theta_cart5_left*_ms285;
+    const train5_real_t _t41 = _ms224*_t22 + _ms228*_t23 + _ms232*_t24 + _ms236*_t25 + _ms240*_t26
+            + _ms248*_t31 + _ms252*_t32 + _ms256*_t33 + _ms260*_t34 + _ms264*_t35 + _ms268*_t36
+            + _ms272*_t37 + _ms276*_t38 + _ms280*_t39 + _ms284*_t40 + _t0*_t28 + _t1*_t30 + _t21;
+    const train5_real_t _t42 = J_theta_tractor + _ms225*_ms315 + _ms229*_ms316 + _ms233*_ms317
+            + _ms237*_ms318 + _ms241*_ms319;
+    const train5_real_t _t43 = _ms225*_t22 + _ms229*_t23 + _ms233*_t24 + _ms237*_t25 + _ms241*_t26
+            + _ms249*_t31 + _ms253*_t32 + _ms257*_t33 + _ms261*_t34 + _ms265*_t35 + _ms269*_t36
+            + _ms273*_t37 + _ms277*_t38 + _ms281*_t39 + _ms285*_t40 + _t27*_t28 + _t29*_t30 + _t42;
+    const train5_real_t _t44 = _t20*_t43 - _t41*_t41;
+    const train5_real_t _t45 = -_ms636 + _t0*tau_right + _t1*tau_left;
+    const train5_real_t _t46 = -_ms637 + _t27*tau_right + _t29*tau_left;
+    const train5_real_t _t47 = TRAIN5_LIT(1.0)/_t44;
+    const train5_real_t _t48 = _t47*(-_t41*_t46 + _t43*_t45);
+    const train5_real_t _t49 = _t47*(_t20*_t46 - _t41*_t45);
+    const train5_real_t _t50 = _t0*_t48 + _t27*_t49;
+    const train5_real_t _t51 = _t1*_t48 + _t29*_t49;
     if (!(radius_cart2_left > TRAIN5_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
@@ -4328,14 +3186,14 @@ train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const 
     if (!(J_x_tractor > TRAIN5_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    if (!(_t470 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t20 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    if (!(_t489 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t44 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    const train5_real_t r_0 = _t661;
-    const train5_real_t r_1 = _t662;
+    const train5_real_t r_0 = _t50;
+    const train5_real_t r_1 = _t51;
     if (((train5_exp_carry(r_0) | train5_exp_carry(r_1)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_OUTPUT;
     }
@@ -4345,2940 +3203,2621 @@ train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const 
 }
 
 /* train5_linearization: documented in train5_model.h.
-   operations after CSE: 3930 add, 4803 mul, 13 div, 12 sin/cos, 0 sqrt */
+   operations after CSE: 4085 add, 5081 mul, 13 div, 22 sin/cos, 0 sqrt */
 void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *A, train5_real_t *B)
 {
-    const train5_real_t theta_tractor = q[2];
-    const train5_real_t _t0 = -theta_tractor;
-    const train5_real_t theta_cart = q[3];
-    const train5_real_t _t1 = _t0 + theta_cart;
-    const train5_real_t _t2 = TRAIN5_SIN(_t1);
-    const train5_real_t _t3 = TRAIN5_COS(_t1);
-    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t theta_cart2 = q[4];
-    const train5_real_t _t5 = _t0 + theta_cart2;
-    const train5_real_t _t6 = TRAIN5_SIN(_t5);
-    const train5_real_t _t7 = TRAIN5_COS(_t5);
-    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
-    const train5_real_t theta_cart3 = q[5];
-    const train5_real_t _t11 = _t0 + theta_cart3;
-    const train5_real_t _t12 = TRAIN5_SIN(_t11);
-    const train5_real_t _t13 = TRAIN5_COS(_t11);
-    const train5_real_t _t14 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t15 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t16 = TRAIN5_LIT(0.85)*_t7;
-    const train5_real_t theta_cart4 = q[6];
-    const train5_real_t _t17 = _t0 + theta_cart4;
-    const train5_real_t _t18 = TRAIN5_SIN(_t17);
-    const train5_real_t _t19 = TRAIN5_COS(_t17);
-    const train5_real_t _t20 = TRAIN5_LIT(0.3)*_t19;
-    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t12;
-    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t13;
-    const train5_real_t theta_cart5 = q[7];
-    const train5_real_t _t23 = _t0 + theta_cart5;
-    const train5_real_t _t24 = TRAIN5_SIN(_t23);
-    const train5_real_t _t25 = TRAIN5_COS(_t23);
-    const train5_real_t _t26 = TRAIN5_LIT(0.3)*_t25;
-    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t25;
-    const train5_real_t _t28 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t29 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t30 = TRAIN5_LIT(0.3)*_t12;
-    const train5_real_t _t31 = TRAIN5_LIT(0.3)*_t18;
-    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t24;
-    const train5_real_t _t33 = -_t10*_t7 - _t6*_t9;
-    const train5_real_t _t34 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t35 = _t33*_t34;
-    const train5_real_t _t36 = _t35 - _t6;
-    const train5_real_t _t37 = -TRAIN5_LIT(1.6666666666666667)*_t4;
-    const train5_real_t _t38 = _t33*_t37;
-    const train5_real_t _t39 = _t38 - _t8;
-    const train5_real_t _t40 = -_t10*_t13 - _t12*_t9;
-    const train5_real_t _t41 = _t34*_t40;
-    const train5_real_t _t42 = -_t12*_t15 - _t13*_t16;
-    const train5_real_t _t43 = TRAIN5_LIT(1.6666666666666667)*_t36;
-    const train5_real_t _t44 = _t42*_t43;
-    const train5_real_t _t45 = -_t12 + _t41 + _t44;
-    const train5_real_t _t46 = _t37*_t40;
-    const train5_real_t _t47 = TRAIN5_LIT(1.6666666666666667)*_t39;
-    const train5_real_t _t48 = _t42*_t47;
-    const train5_real_t _t49 = -_t14 + _t46 + _t48;
-    const train5_real_t _t50 = -_t10*_t19 - _t18*_t9;
-    const train5_real_t _t51 = _t34*_t50;
-    const train5_real_t _t52 = -_t15*_t18 - _t16*_t19;
-    const train5_real_t _t53 = _t43*_t52;
-    const train5_real_t _t54 = -_t18*_t21 - _t19*_t22;
-    const train5_real_t _t55 = TRAIN5_LIT(1.6666666666666667)*_t45;
-    const train5_real_t _t56 = _t54*_t55;
-    const train5_real_t _t57 = -_t18 + _t51 + _t53 + _t56;
-    const train5_real_t _t58 = _t37*_t50;
-    const train5_real_t _t59 = _t47*_t52;
-    const train5_real_t _t60 = TRAIN5_LIT(1.6666666666666667)*_t49;
-    const train5_real_t _t61 = _t54*_t60;
-    const train5_real_t _t62 = -_t20 + _t58 + _t59 + _t61;
-    const train5_real_t _t63 = -_t10*_t25 - _t24*_t9;
-    const train5_real_t _t64 = _t34*_t63;
-    const train5_real_t _t65 = -_t15*_t24 - _t16*_t25;
-    const train5_real_t _t66 = _t43*_t65;
-    const train5_real_t _t67 = -_t21*_t24 - _t22*_t25;
-    const train5_real_t _t68 = _t55*_t67;
-    const train5_real_t _t69 = -TRAIN5_LIT(0.85)*_t18*_t24 - _t19*_t27;
-    const train5_real_t _t70 = TRAIN5_LIT(1.6666666666666667)*_t57;
-    const train5_real_t _t71 = _t69*_t70;
-    const train5_real_t _t72 = -_t24 + _t64 + _t66 + _t68 + _t71;
-    const train5_real_t _t73 = _t37*_t63;
-    const train5_real_t _t74 = _t47*_t65;
-    const train5_real_t _t75 = _t60*_t67;
-    const train5_real_t _t76 = TRAIN5_LIT(1.6666666666666667)*_t62;
-    const train5_real_t _t77 = _t69*_t76;
-    const train5_real_t _t78 = -_t26 + _t73 + _t74 + _t75 + _t77;
-    const train5_real_t _t79 = TRAIN5_LIT(0.2)*_t34;
-    const train5_real_t _t80 = TRAIN5_LIT(0.2)*_t37;
-    const train5_real_t _t81 = TRAIN5_LIT(0.2)*_t43;
-    const train5_real_t _t82 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const train5_real_t _t83 = _t34*_t82;
-    const train5_real_t _t84 = _t7 - _t83;
-    const train5_real_t _t85 = TRAIN5_LIT(0.2)*_t47;
-    const train5_real_t _t86 = _t37*_t82;
-    const train5_real_t _t87 = _t29 + _t86;
-    const train5_real_t _t88 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t89 = TRAIN5_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const train5_real_t _t90 = _t34*_t89;
-    const train5_real_t _t91 = -_t90;
-    const train5_real_t _t92 = TRAIN5_LIT(0.85)*_t12*_t7 - _t13*_t15;
-    const train5_real_t _t93 = _t43*_t92;
-    const train5_real_t _t94 = -_t93;
-    const train5_real_t _t95 = TRAIN5_LIT(0.2)*_t60;
-    const train5_real_t _t96 = _t37*_t89;
-    const train5_real_t _t97 = _t47*_t92;
-    const train5_real_t _t98 = _t30 + _t96 + _t97;
-    const train5_real_t _t99 = -_t13 + _t90 + _t93;
-    const train5_real_t _t100 = TRAIN5_LIT(0.2)*_t70;
-    const train5_real_t _t101 = TRAIN5_LIT(0.85)*_t18*_t3 - _t19*_t9;
-    const train5_real_t _t102 = _t101*_t34;
-    const train5_real_t _t103 = -_t15*_t19 + TRAIN5_LIT(0.85)*_t18*_t7;
-    const train5_real_t _t104 = _t103*_t43;
-    const train5_real_t _t105 = TRAIN5_LIT(0.85)*_t13*_t18 - _t19*_t21;
-    const train5_real_t _t106 = _t105*_t55;
-    const train5_real_t _t107 = _t102 + _t104 + _t106 - _t19;
-    const train5_real_t _t108 = TRAIN5_LIT(0.2)*_t76;
-    const train5_real_t _t109 = _t101*_t37;
-    const train5_real_t _t110 = _t103*_t47;
-    const train5_real_t _t111 = _t105*_t60;
-    const train5_real_t _t112 = _t109 + _t110 + _t111 + _t31;
-    const train5_real_t _t113 = TRAIN5_LIT(1.6666666666666667)*_t72;
-    const train5_real_t _t114 = TRAIN5_LIT(0.2)*_t113;
-    const train5_real_t _t115 = TRAIN5_LIT(0.85)*_t24*_t3 - _t25*_t9;
-    const train5_real_t _t116 = _t115*_t34;
-    const train5_real_t _t117 = -_t15*_t25 + TRAIN5_LIT(0.85)*_t24*_t7;
-    const train5_real_t _t118 = _t117*_t43;
-    const train5_real_t _t119 = TRAIN5_LIT(0.85)*_t13*_t24 - _t21*_t25;
-    const train5_real_t _t120 = _t119*_t55;
-    const train5_real_t _t121 = -_t18*_t27 + TRAIN5_LIT(0.85)*_t19*_t24;
-    const train5_real_t _t122 = _t121*_t70;
-    const train5_real_t _t123 = _t116 + _t118 + _t120 + _t122 - _t25;
-    const train5_real_t _t124 = TRAIN5_LIT(1.6666666666666667)*_t78;
-    const train5_real_t _t125 = TRAIN5_LIT(0.2)*_t124;
-    const train5_real_t _t126 = _t115*_t37;
-    const train5_real_t _t127 = _t117*_t47;
-    const train5_real_t _t128 = _t119*_t60;
-    const train5_real_t _t129 = _t121*_t76;
-    const train5_real_t _t130 = _t126 + _t127 + _t128 + _t129 + _t32;
-    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const train5_real_t _t131 = K_theta_cart_x_tractor*_t2;
-    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t132 = K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t _t133 = K_theta_cart2_x_tractor*_t6;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t134 = K_theta_cart2_x_tractor_2*_t7;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t _t135 = K_theta_cart3_x_tractor*_t12;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t136 = K_theta_cart3_x_tractor_2*_t13;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t _t137 = K_theta_cart4_x_tractor*_t18;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t138 = K_theta_cart4_x_tractor_2*_t19;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t _t139 = K_theta_cart5_x_tractor*_t24;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t140 = K_theta_cart5_x_tractor_2*_t25;
-    const train5_real_t _t141 = K_theta_cart_x_tractor*_t3;
-    const train5_real_t _t142 = K_theta_cart2_x_tractor*_t7;
-    const train5_real_t _t143 = K_theta_cart3_x_tractor*_t13;
-    const train5_real_t _t144 = K_theta_cart4_x_tractor*_t19;
-    const train5_real_t _t145 = K_theta_cart5_x_tractor*_t25;
-    const train5_real_t _t146 = K_theta_cart_x_tractor*_t4;
-    const train5_real_t _t147 = K_theta_cart_x_tractor_2*_t28;
-    const train5_real_t _t148 = K_theta_cart2_x_tractor*_t8;
-    const train5_real_t _t149 = K_theta_cart2_x_tractor_2*_t29;
-    const train5_real_t _t150 = K_theta_cart3_x_tractor*_t14;
-    const train5_real_t _t151 = K_theta_cart3_x_tractor_2*_t30;
-    const train5_real_t _t152 = K_theta_cart4_x_tractor*_t20;
-    const train5_real_t _t153 = K_theta_cart4_x_tractor_2*_t31;
-    const train5_real_t _t154 = K_theta_cart5_x_tractor*_t26;
-    const train5_real_t _t155 = K_theta_cart5_x_tractor_2*_t32;
-    const train5_real_t _t156 = _t133*_t9;
-    const train5_real_t _t157 = _t10*_t142;
-    const train5_real_t _t158 = _t134*_t9;
-    const train5_real_t _t159 = K_theta_cart2_x_tractor_2*_t6;
-    const train5_real_t _t160 = _t10*_t159;
-    const train5_real_t _t161 = _t135*_t9;
-    const train5_real_t _t162 = _t10*_t143;
-    const train5_real_t _t163 = _t136*_t9;
-    const train5_real_t _t164 = K_theta_cart3_x_tractor_2*_t12;
-    const train5_real_t _t165 = _t10*_t164;
-    const train5_real_t _t166 = _t137*_t9;
-    const train5_real_t _t167 = _t10*_t144;
-    const train5_real_t _t168 = _t138*_t9;
-    const train5_real_t _t169 = K_theta_cart4_x_tractor_2*_t18;
-    const train5_real_t _t170 = _t10*_t169;
-    const train5_real_t _t171 = _t139*_t9;
-    const train5_real_t _t172 = _t10*_t145;
-    const train5_real_t _t173 = _t140*_t9;
-    const train5_real_t _t174 = K_theta_cart5_x_tractor_2*_t24;
-    const train5_real_t _t175 = _t10*_t174;
-    const train5_real_t _t176 = _t135*_t15;
-    const train5_real_t _t177 = _t143*_t16;
-    const train5_real_t _t178 = _t136*_t15;
-    const train5_real_t _t179 = _t16*_t164;
-    const train5_real_t _t180 = _t137*_t15;
-    const train5_real_t _t181 = _t144*_t16;
-    const train5_real_t _t182 = _t138*_t15;
-    const train5_real_t _t183 = _t16*_t169;
-    const train5_real_t _t184 = _t139*_t15;
-    const train5_real_t _t185 = _t145*_t16;
-    const train5_real_t _t186 = _t140*_t15;
-    const train5_real_t _t187 = _t16*_t174;
-    const train5_real_t _t188 = _t137*_t21;
-    const train5_real_t _t189 = _t144*_t22;
-    const train5_real_t _t190 = _t138*_t21;
-    const train5_real_t _t191 = _t169*_t22;
-    const train5_real_t _t192 = _t139*_t21;
-    const train5_real_t _t193 = _t145*_t22;
-    const train5_real_t _t194 = _t140*_t21;
-    const train5_real_t _t195 = _t174*_t22;
-    const train5_real_t _t196 = TRAIN5_LIT(0.85)*_t18;
-    const train5_real_t _t197 = _t139*_t196;
-    const train5_real_t _t198 = TRAIN5_LIT(0.85)*_t19;
-    const train5_real_t _t199 = _t145*_t198;
-    const train5_real_t _t200 = _t140*_t196;
-    const train5_real_t _t201 = _t174*_t198;
-    const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t202 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t203 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t thetadot_right = wheel_rates[0];
-    const train5_real_t thetadot_left = wheel_rates[1];
-    const train5_real_t _t204 = _t202*thetadot_right + _t203*thetadot_left;
-    const train5_real_t _t205 = _t204*_t204;
-    const train5_real_t _t206 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t207 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t208 = _t206*thetadot_right + _t207*thetadot_left;
-    const train5_real_t _t209 = _t204*_t47 + _t208*_t43;
-    const train5_real_t _t210 = _t209*_t209;
-    const train5_real_t _t211 = _t142*_t210;
-    const train5_real_t _t212 = _t204*_t60 + _t208*_t55;
-    const train5_real_t _t213 = _t212*_t212;
-    const train5_real_t _t214 = _t143*_t213;
-    const train5_real_t _t215 = _t204*_t76 + _t208*_t70;
-    const train5_real_t _t216 = _t215*_t215;
-    const train5_real_t _t217 = _t144*_t216;
-    const train5_real_t _t218 = _t113*_t208 + _t124*_t204;
-    const train5_real_t _t219 = _t218*_t218;
-    const train5_real_t _t220 = _t145*_t219;
-    const train5_real_t _t221 = _t204*_t37 + _t208*_t34;
-    const train5_real_t _t222 = _t221*_t221;
-    const train5_real_t _t223 = _t159*_t210;
-    const train5_real_t _t224 = _t164*_t213;
-    const train5_real_t _t225 = _t169*_t216;
-    const train5_real_t _t226 = _t174*_t219;
-    const train5_real_t _t227 = K_theta_cart_x_tractor_2*_t2;
-    const train5_real_t _t228 = K_theta_cart2_x_tractor*_t29;
-    const train5_real_t _t229 = K_theta_cart2_x_tractor_2*_t8;
-    const train5_real_t _t230 = K_theta_cart3_x_tractor*_t30;
-    const train5_real_t _t231 = K_theta_cart3_x_tractor_2*_t14;
-    const train5_real_t _t232 = K_theta_cart4_x_tractor*_t31;
-    const train5_real_t _t233 = K_theta_cart4_x_tractor_2*_t20;
-    const train5_real_t _t234 = K_theta_cart5_x_tractor*_t32;
-    const train5_real_t _t235 = K_theta_cart5_x_tractor_2*_t26;
-    const train5_real_t _t236 = K_theta_cart_x_tractor*_t28;
-    const train5_real_t _t237 = K_theta_cart_x_tractor_2*_t4;
-    const train5_real_t _t238 = _t133*_t210;
-    const train5_real_t _t239 = _t134*_t210;
-    const train5_real_t _t240 = _t135*_t213;
-    const train5_real_t _t241 = _t136*_t213;
-    const train5_real_t _t242 = _t137*_t216;
-    const train5_real_t _t243 = _t138*_t216;
-    const train5_real_t _t244 = _t139*_t219;
-    const train5_real_t _t245 = _t140*_t219;
-    const train5_real_t _t246 = _t142*_t9;
-    const train5_real_t _t247 = _t143*_t9;
-    const train5_real_t _t248 = _t10*_t135;
-    const train5_real_t _t249 = _t143*_t15;
-    const train5_real_t _t250 = _t135*_t16;
-    const train5_real_t _t251 = _t164*_t9;
-    const train5_real_t _t252 = _t10*_t136;
-    const train5_real_t _t253 = _t15*_t164;
-    const train5_real_t _t254 = _t136*_t16;
-    const train5_real_t _t255 = _t144*_t9;
-    const train5_real_t _t256 = _t10*_t137;
-    const train5_real_t _t257 = _t144*_t15;
-    const train5_real_t _t258 = _t137*_t16;
-    const train5_real_t _t259 = _t144*_t21;
-    const train5_real_t _t260 = _t137*_t22;
-    const train5_real_t _t261 = _t169*_t9;
-    const train5_real_t _t262 = _t10*_t138;
-    const train5_real_t _t263 = _t15*_t169;
-    const train5_real_t _t264 = _t138*_t16;
-    const train5_real_t _t265 = _t169*_t21;
-    const train5_real_t _t266 = _t138*_t22;
-    const train5_real_t _t267 = _t145*_t9;
-    const train5_real_t _t268 = _t10*_t139;
-    const train5_real_t _t269 = _t145*_t15;
-    const train5_real_t _t270 = _t139*_t16;
-    const train5_real_t _t271 = _t145*_t21;
-    const train5_real_t _t272 = _t139*_t22;
-    const train5_real_t _t273 = _t145*_t196;
-    const train5_real_t _t274 = _t139*_t198;
-    const train5_real_t _t275 = _t174*_t9;
-    const train5_real_t _t276 = _t10*_t140;
-    const train5_real_t _t277 = _t15*_t174;
-    const train5_real_t _t278 = _t140*_t16;
-    const train5_real_t _t279 = _t174*_t21;
-    const train5_real_t _t280 = _t140*_t22;
-    const train5_real_t _t281 = _t174*_t196;
-    const train5_real_t _t282 = _t140*_t198;
-    const train5_real_t _t283 = TRAIN5_LIT(1.6666666666666667)*_t3;
-    const train5_real_t _t284 = _t283*_t33;
-    const train5_real_t _t285 = _t284 + _t7;
-    const train5_real_t _t286 = -TRAIN5_LIT(1.6666666666666667)*_t28;
-    const train5_real_t _t287 = _t286*_t33;
-    const train5_real_t _t288 = _t287 - _t29;
-    const train5_real_t _t289 = _t284 + _t83;
-    const train5_real_t _t290 = _t287 + _t86;
-    const train5_real_t _t291 = _t283*_t40;
-    const train5_real_t _t292 = TRAIN5_LIT(1.6666666666666667)*_t285;
-    const train5_real_t _t293 = _t292*_t42;
-    const train5_real_t _t294 = _t13 + _t291 + _t293;
-    const train5_real_t _t295 = _t286*_t40;
-    const train5_real_t _t296 = TRAIN5_LIT(1.6666666666666667)*_t288;
-    const train5_real_t _t297 = _t296*_t42;
-    const train5_real_t _t298 = _t295 + _t297 - _t30;
-    const train5_real_t _t299 = -TRAIN5_LIT(1.6666666666666667)*_t289;
-    const train5_real_t _t300 = _t299*_t42;
-    const train5_real_t _t301 = _t291 + _t90;
-    const train5_real_t _t302 = -_t300 + _t301;
-    const train5_real_t _t303 = -TRAIN5_LIT(1.6666666666666667)*_t290;
-    const train5_real_t _t304 = _t303*_t42;
-    const train5_real_t _t305 = _t295 + _t96;
-    const train5_real_t _t306 = -_t304 + _t305;
-    const train5_real_t _t307 = -TRAIN5_LIT(1.6666666666666667)*_t84;
-    const train5_real_t _t308 = _t307*_t42;
-    const train5_real_t _t309 = _t308 + _t94;
-    const train5_real_t _t310 = TRAIN5_LIT(1.6666666666666667)*_t87;
-    const train5_real_t _t311 = _t310*_t42;
-    const train5_real_t _t312 = _t311 - _t97;
-    const train5_real_t _t313 = _t283*_t50;
-    const train5_real_t _t314 = _t292*_t52;
-    const train5_real_t _t315 = TRAIN5_LIT(1.6666666666666667)*_t294;
-    const train5_real_t _t316 = _t315*_t54;
-    const train5_real_t _t317 = _t19 + _t313 + _t314 + _t316;
-    const train5_real_t _t318 = _t286*_t50;
-    const train5_real_t _t319 = _t296*_t52;
-    const train5_real_t _t320 = TRAIN5_LIT(1.6666666666666667)*_t298;
-    const train5_real_t _t321 = _t320*_t54;
-    const train5_real_t _t322 = -_t31 + _t318 + _t319 + _t321;
-    const train5_real_t _t323 = _t299*_t52;
-    const train5_real_t _t324 = -TRAIN5_LIT(1.6666666666666667)*_t302;
-    const train5_real_t _t325 = _t324*_t54;
-    const train5_real_t _t326 = _t102 + _t313;
-    const train5_real_t _t327 = -_t323 - _t325 + _t326;
-    const train5_real_t _t328 = _t303*_t52;
-    const train5_real_t _t329 = -TRAIN5_LIT(1.6666666666666667)*_t306;
-    const train5_real_t _t330 = _t329*_t54;
-    const train5_real_t _t331 = _t109 + _t318;
-    const train5_real_t _t332 = -_t328 - _t330 + _t331;
-    const train5_real_t _t333 = _t307*_t52;
-    const train5_real_t _t334 = TRAIN5_LIT(1.6666666666666667)*_t309;
-    const train5_real_t _t335 = _t334*_t54;
-    const train5_real_t _t336 = -_t104 + _t333 + _t335;
-    const train5_real_t _t337 = _t310*_t52;
-    const train5_real_t _t338 = TRAIN5_LIT(1.6666666666666667)*_t312;
-    const train5_real_t _t339 = _t338*_t54;
-    const train5_real_t _t340 = -_t110 + _t337 + _t339;
-    const train5_real_t _t341 = TRAIN5_LIT(1.6666666666666667)*_t99;
-    const train5_real_t _t342 = _t341*_t54;
-    const train5_real_t _t343 = -_t106 + _t342;
-    const train5_real_t _t344 = TRAIN5_LIT(1.6666666666666667)*_t98;
-    const train5_real_t _t345 = _t344*_t54;
-    const train5_real_t _t346 = -_t111 + _t345;
-    const train5_real_t _t347 = _t283*_t63;
-    const train5_real_t _t348 = _t292*_t65;
-    const train5_real_t _t349 = _t315*_t67;
-    const train5_real_t _t350 = TRAIN5_LIT(1.6666666666666667)*_t317;
-    const train5_real_t _t351 = _t350*_t69;
-    const train5_real_t _t352 = _t25 + _t347 + _t348 + _t349 + _t351;
-    const train5_real_t _t353 = _t286*_t63;
-    const train5_real_t _t354 = _t296*_t65;
-    const train5_real_t _t355 = _t320*_t67;
-    const train5_real_t _t356 = TRAIN5_LIT(1.6666666666666667)*_t322;
-    const train5_real_t _t357 = _t356*_t69;
-    const train5_real_t _t358 = -_t32 + _t353 + _t354 + _t355 + _t357;
-    const train5_real_t _t359 = _t299*_t65;
-    const train5_real_t _t360 = _t324*_t67;
-    const train5_real_t _t361 = -TRAIN5_LIT(1.6666666666666667)*_t327;
-    const train5_real_t _t362 = _t361*_t69;
-    const train5_real_t _t363 = -_t116 - _t347 + _t359 + _t360 + _t362;
-    const train5_real_t _t364 = _t303*_t65;
-    const train5_real_t _t365 = _t329*_t67;
-    const train5_real_t _t366 = -TRAIN5_LIT(1.6666666666666667)*_t332;
-    const train5_real_t _t367 = _t366*_t69;
-    const train5_real_t _t368 = -_t126 - _t353 + _t364 + _t365 + _t367;
-    const train5_real_t _t369 = _t307*_t65;
-    const train5_real_t _t370 = _t334*_t67;
-    const train5_real_t _t371 = TRAIN5_LIT(1.6666666666666667)*_t336;
-    const train5_real_t _t372 = _t371*_t69;
-    const train5_real_t _t373 = -_t118 + _t369 + _t370 + _t372;
-    const train5_real_t _t374 = _t310*_t65;
-    const train5_real_t _t375 = _t338*_t67;
-    const train5_real_t _t376 = TRAIN5_LIT(1.6666666666666667)*_t340;
-    const train5_real_t _t377 = _t376*_t69;
-    const train5_real_t _t378 = -_t127 + _t374 + _t375 + _t377;
-    const train5_real_t _t379 = _t341*_t67;
-    const train5_real_t _t380 = TRAIN5_LIT(1.6666666666666667)*_t343;
-    const train5_real_t _t381 = _t380*_t69;
-    const train5_real_t _t382 = -_t120 + _t379 + _t381;
-    const train5_real_t _t383 = _t344*_t67;
-    const train5_real_t _t384 = TRAIN5_LIT(1.6666666666666667)*_t346;
-    const train5_real_t _t385 = _t384*_t69;
-    const train5_real_t _t386 = -_t128 + _t383 + _t385;
-    const train5_real_t _t387 = TRAIN5_LIT(1.6666666666666667)*_t107;
-    const train5_real_t _t388 = _t387*_t69;
-    const train5_real_t _t389 = -_t122 + _t388;
-    const train5_real_t _t390 = TRAIN5_LIT(1.6666666666666667)*_t112;
-    const train5_real_t _t391 = _t390*_t69;
-    const train5_real_t _t392 = -_t129 + _t391;
-    const train5_real_t _t393 = TRAIN5_LIT(0.2)*_t283;
-    const train5_real_t _t394 = TRAIN5_LIT(0.2)*_t286;
-    const train5_real_t _t395 = TRAIN5_LIT(0.2)*_t292;
-    const train5_real_t _t396 = _t283*_t82;
-    const train5_real_t _t397 = _t396 - _t6;
-    const train5_real_t _t398 = TRAIN5_LIT(0.2)*_t296;
-    const train5_real_t _t399 = _t286*_t82;
-    const train5_real_t _t400 = _t399 - _t8;
-    const train5_real_t _t401 = TRAIN5_LIT(0.2)*_t299;
-    const train5_real_t _t402 = TRAIN5_LIT(0.2)*_t303;
-    const train5_real_t _t403 = TRAIN5_LIT(0.2)*_t307;
-    const train5_real_t _t404 = TRAIN5_LIT(0.2)*_t310;
-    const train5_real_t _t405 = _t35 - _t396;
-    const train5_real_t _t406 = _t38 - _t399;
-    const train5_real_t _t407 = TRAIN5_LIT(0.2)*_t315;
-    const train5_real_t _t408 = _t283*_t89;
-    const train5_real_t _t409 = _t292*_t92;
-    const train5_real_t _t410 = -_t12 + _t408 + _t409;
-    const train5_real_t _t411 = TRAIN5_LIT(0.2)*_t320;
-    const train5_real_t _t412 = _t286*_t89;
-    const train5_real_t _t413 = _t296*_t92;
-    const train5_real_t _t414 = -_t14 + _t412 + _t413;
-    const train5_real_t _t415 = TRAIN5_LIT(0.2)*_t324;
-    const train5_real_t _t416 = _t299*_t92;
-    const train5_real_t _t417 = -_t408 + _t41;
-    const train5_real_t _t418 = _t416 + _t417;
-    const train5_real_t _t419 = TRAIN5_LIT(0.2)*_t329;
-    const train5_real_t _t420 = _t303*_t92;
-    const train5_real_t _t421 = -_t412 + _t46;
-    const train5_real_t _t422 = _t420 + _t421;
-    const train5_real_t _t423 = TRAIN5_LIT(0.2)*_t334;
-    const train5_real_t _t424 = _t307*_t92;
-    const train5_real_t _t425 = _t424 + _t44;
-    const train5_real_t _t426 = TRAIN5_LIT(0.2)*_t338;
-    const train5_real_t _t427 = _t310*_t92;
-    const train5_real_t _t428 = _t427 + _t48;
-    const train5_real_t _t429 = TRAIN5_LIT(0.2)*_t341;
-    const train5_real_t _t430 = TRAIN5_LIT(0.2)*_t344;
-    const train5_real_t _t431 = TRAIN5_LIT(0.2)*_t350;
-    const train5_real_t _t432 = _t101*_t283;
-    const train5_real_t _t433 = _t103*_t292;
-    const train5_real_t _t434 = _t105*_t315;
-    const train5_real_t _t435 = -_t18 + _t432 + _t433 + _t434;
-    const train5_real_t _t436 = TRAIN5_LIT(0.2)*_t356;
-    const train5_real_t _t437 = _t101*_t286;
-    const train5_real_t _t438 = _t103*_t296;
-    const train5_real_t _t439 = _t105*_t320;
-    const train5_real_t _t440 = -_t20 + _t437 + _t438 + _t439;
-    const train5_real_t _t441 = TRAIN5_LIT(0.2)*_t361;
-    const train5_real_t _t442 = _t103*_t299;
-    const train5_real_t _t443 = _t105*_t324;
-    const train5_real_t _t444 = -_t432 + _t51;
-    const train5_real_t _t445 = _t442 + _t443 + _t444;
-    const train5_real_t _t446 = TRAIN5_LIT(0.2)*_t366;
-    const train5_real_t _t447 = _t103*_t303;
-    const train5_real_t _t448 = _t105*_t329;
-    const train5_real_t _t449 = -_t437 + _t58;
-    const train5_real_t _t450 = _t447 + _t448 + _t449;
-    const train5_real_t _t451 = TRAIN5_LIT(0.2)*_t371;
-    const train5_real_t _t452 = _t103*_t307;
-    const train5_real_t _t453 = _t105*_t334;
-    const train5_real_t _t454 = _t452 + _t453 + _t53;
-    const train5_real_t _t455 = TRAIN5_LIT(0.2)*_t376;
-    const train5_real_t _t456 = _t103*_t310;
-    const train5_real_t _t457 = _t105*_t338;
-    const train5_real_t _t458 = _t456 + _t457 + _t59;
-    const train5_real_t _t459 = TRAIN5_LIT(0.2)*_t380;
-    const train5_real_t _t460 = _t105*_t341;
-    const train5_real_t _t461 = _t460 + _t56;
-    const train5_real_t _t462 = TRAIN5_LIT(0.2)*_t384;
-    const train5_real_t _t463 = _t105*_t344;
-    const train5_real_t _t464 = _t463 + _t61;
-    const train5_real_t _t465 = TRAIN5_LIT(0.2)*_t387;
-    const train5_real_t _t466 = TRAIN5_LIT(0.2)*_t390;
-    const train5_real_t _t467 = TRAIN5_LIT(1.6666666666666667)*_t352;
-    const train5_real_t _t468 = TRAIN5_LIT(0.2)*_t467;
-    const train5_real_t _t469 = _t115*_t283;
-    const train5_real_t _t470 = _t117*_t292;
-    const train5_real_t _t471 = _t119*_t315;
-    const train5_real_t _t472 = _t121*_t350;
-    const train5_real_t _t473 = -_t24 + _t469 + _t470 + _t471 + _t472;
-    const train5_real_t _t474 = TRAIN5_LIT(1.6666666666666667)*_t358;
-    const train5_real_t _t475 = TRAIN5_LIT(0.2)*_t474;
-    const train5_real_t _t476 = _t115*_t286;
-    const train5_real_t _t477 = _t117*_t296;
-    const train5_real_t _t478 = _t119*_t320;
-    const train5_real_t _t479 = _t121*_t356;
-    const train5_real_t _t480 = -_t26 + _t476 + _t477 + _t478 + _t479;
-    const train5_real_t _t481 = TRAIN5_LIT(1.6666666666666667)*_t363;
-    const train5_real_t _t482 = TRAIN5_LIT(0.2)*_t481;
-    const train5_real_t _t483 = _t117*_t299;
-    const train5_real_t _t484 = _t119*_t324;
-    const train5_real_t _t485 = _t121*_t361;
-    const train5_real_t _t486 = -_t469 + _t64;
-    const train5_real_t _t487 = _t483 + _t484 + _t485 + _t486;
-    const train5_real_t _t488 = TRAIN5_LIT(1.6666666666666667)*_t368;
-    const train5_real_t _t489 = TRAIN5_LIT(0.2)*_t488;
-    const train5_real_t _t490 = _t117*_t303;
-    const train5_real_t _t491 = _t119*_t329;
-    const train5_real_t _t492 = _t121*_t366;
-    const train5_real_t _t493 = -_t476 + _t73;
-    const train5_real_t _t494 = _t490 + _t491 + _t492 + _t493;
-    const train5_real_t _t495 = TRAIN5_LIT(1.6666666666666667)*_t373;
-    const train5_real_t _t496 = TRAIN5_LIT(0.2)*_t495;
-    const train5_real_t _t497 = _t119*_t334;
-    const train5_real_t _t498 = _t121*_t371;
-    const train5_real_t _t499 = _t117*_t307 + _t497 + _t498 + _t66;
-    const train5_real_t _t500 = TRAIN5_LIT(1.6666666666666667)*_t378;
-    const train5_real_t _t501 = TRAIN5_LIT(0.2)*_t500;
-    const train5_real_t _t502 = _t119*_t338;
-    const train5_real_t _t503 = _t121*_t376;
-    const train5_real_t _t504 = _t117*_t310 + _t502 + _t503 + _t74;
-    const train5_real_t _t505 = TRAIN5_LIT(1.6666666666666667)*_t382;
-    const train5_real_t _t506 = TRAIN5_LIT(0.2)*_t505;
-    const train5_real_t _t507 = _t119*_t341;
-    const train5_real_t _t508 = _t121*_t380;
-    const train5_real_t _t509 = _t507 + _t508 + _t68;
-    const train5_real_t _t510 = TRAIN5_LIT(1.6666666666666667)*_t386;
-    const train5_real_t _t511 = TRAIN5_LIT(0.2)*_t510;
-    const train5_real_t _t512 = _t119*_t344;
-    const train5_real_t _t513 = _t121*_t384;
-    const train5_real_t _t514 = _t512 + _t513 + _t75;
-    const train5_real_t _t515 = TRAIN5_LIT(1.6666666666666667)*_t389;
-    const train5_real_t _t516 = TRAIN5_LIT(0.2)*_t515;
-    const train5_real_t _t517 = _t121*_t387;
-    const train5_real_t _t518 = _t517 + _t71;
-    const train5_real_t _t519 = TRAIN5_LIT(1.6666666666666667)*_t392;
-    const train5_real_t _t520 = TRAIN5_LIT(0.2)*_t519;
-    const train5_real_t _t521 = _t121*_t390;
-    const train5_real_t _t522 = _t521 + _t77;
-    const train5_real_t _t523 = TRAIN5_LIT(1.6666666666666667)*_t123;
-    const train5_real_t _t524 = TRAIN5_LIT(0.2)*_t523;
-    const train5_real_t _t525 = TRAIN5_LIT(1.6666666666666667)*_t130;
-    const train5_real_t _t526 = TRAIN5_LIT(0.2)*_t525;
-    const train5_real_t _t527 = _t204*_t208;
-    const train5_real_t _t528 = _t208*_t221;
-    const train5_real_t _t529 = _t204*_t221;
-    const train5_real_t _t530 = _t131 + _t132;
-    const train5_real_t _t531 = _t34*_t530;
-    const train5_real_t _t532 = _t133 + _t134;
-    const train5_real_t _t533 = _t43*_t532;
-    const train5_real_t _t534 = _t135 + _t136;
-    const train5_real_t _t535 = _t534*_t55;
-    const train5_real_t _t536 = _t137 + _t138;
-    const train5_real_t _t537 = _t536*_t70;
-    const train5_real_t _t538 = _t139 + _t140;
-    const train5_real_t _t539 = _t113*_t538;
-    const train5_real_t _t540 = _t37*_t530;
-    const train5_real_t _t541 = _t47*_t532;
-    const train5_real_t _t542 = _t534*_t60;
-    const train5_real_t _t543 = _t536*_t76;
-    const train5_real_t _t544 = _t124*_t538;
-    const train5_real_t _t545 = _t156 + _t157 + _t158 - _t160;
-    const train5_real_t _t546 = _t161 + _t162 + _t163 - _t165;
-    const train5_real_t _t547 = _t166 + _t167 + _t168 - _t170;
-    const train5_real_t _t548 = _t171 + _t172 + _t173 - _t175;
     const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t549 = J_theta_cart*_t34 + _t113*_t548 + _t43*_t545 + _t530 + _t546*_t55
-            + _t547*_t70;
-    const train5_real_t _t550 = _t146 - _t147;
-    const train5_real_t _t551 = J_theta_cart*_t37 + _t124*_t548 + _t47*_t545 + _t546*_t60
-            + _t547*_t76 + _t550;
-    const train5_real_t _t552 = _t176 + _t177 + _t178 - _t179;
-    const train5_real_t _t553 = _t180 + _t181 + _t182 - _t183;
-    const train5_real_t _t554 = _t184 + _t185 + _t186 - _t187;
     const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t555 = J_theta_cart2*_t43 + _t113*_t554 + _t34*_t545 + _t532 + _t55*_t552
-            + _t553*_t70;
-    const train5_real_t _t556 = _t148 - _t149;
-    const train5_real_t _t557 = J_theta_cart2*_t47 + _t124*_t554 + _t37*_t545 + _t552*_t60
-            + _t553*_t76 + _t556;
-    const train5_real_t _t558 = _t188 + _t189 + _t190 - _t191;
-    const train5_real_t _t559 = _t192 + _t193 + _t194 - _t195;
-    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t560 = J_theta_cart3*_t55 + _t113*_t559 + _t34*_t546 + _t43*_t552 + _t534
-            + _t558*_t70;
-    const train5_real_t _t561 = _t150 - _t151;
-    const train5_real_t _t562 = J_theta_cart3*_t60 + _t124*_t559 + _t37*_t546 + _t47*_t552
-            + _t558*_t76 + _t561;
-    const train5_real_t _t563 = _t197 + _t199 + _t200 - _t201;
-    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t564 = J_theta_cart4*_t70 + _t113*_t563 + _t34*_t547 + _t43*_t553 + _t536
-            + _t55*_t558;
-    const train5_real_t _t565 = _t152 - _t153;
-    const train5_real_t _t566 = J_theta_cart4*_t76 + _t124*_t563 + _t37*_t547 + _t47*_t553
-            + _t558*_t60 + _t565;
-    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t567 = J_theta_cart5*_t113 + _t34*_t548 + _t43*_t554 + _t538 + _t55*_t559
-            + _t563*_t70;
-    const train5_real_t _t568 = _t154 - _t155;
-    const train5_real_t _t569 = J_theta_cart5*_t124 + _t37*_t548 + _t47*_t554 + _t559*_t60
-            + _t563*_t76 + _t568;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t570 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t _t571 = _t3 + _t79;
-    const train5_real_t _t572 = _t570*_t571;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t573 = J_theta_cart_right*_t572;
-    const train5_real_t _t574 = -_t28 + _t80;
-    const train5_real_t _t575 = _t570*_t574;
-    const train5_real_t _t576 = J_theta_cart_right*_t575;
-    const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t577 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t _t578 = _t3 - _t79;
-    const train5_real_t _t579 = _t577*_t578;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t580 = J_theta_cart_left*_t579;
-    const train5_real_t _t581 = -_t28 - _t80;
-    const train5_real_t _t582 = _t577*_t581;
-    const train5_real_t _t583 = J_theta_cart_left*_t582;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t584 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t _t585 = _t81 + _t84;
-    const train5_real_t _t586 = _t584*_t585;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t587 = J_theta_cart2_right*_t586;
-    const train5_real_t _t588 = _t85 - _t87;
-    const train5_real_t _t589 = _t584*_t588;
-    const train5_real_t _t590 = J_theta_cart2_right*_t589;
-    const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t591 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t _t592 = _t7 - _t81 - _t83;
-    const train5_real_t _t593 = _t591*_t592;
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t594 = J_theta_cart2_left*_t593;
-    const train5_real_t _t595 = -_t85 - _t87;
-    const train5_real_t _t596 = _t591*_t595;
-    const train5_real_t _t597 = J_theta_cart2_left*_t596;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t598 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t _t599 = _t13 + _t88 + _t91 + _t94;
-    const train5_real_t _t600 = _t598*_t599;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t601 = J_theta_cart3_right*_t600;
-    const train5_real_t _t602 = _t95 - _t98;
-    const train5_real_t _t603 = _t598*_t602;
-    const train5_real_t _t604 = J_theta_cart3_right*_t603;
-    const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t605 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t _t606 = -_t88 - _t99;
-    const train5_real_t _t607 = _t605*_t606;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t608 = J_theta_cart3_left*_t607;
-    const train5_real_t _t609 = -_t95 - _t98;
-    const train5_real_t _t610 = _t605*_t609;
-    const train5_real_t _t611 = J_theta_cart3_left*_t610;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t612 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t _t613 = _t100 - _t107;
-    const train5_real_t _t614 = _t612*_t613;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t615 = J_theta_cart4_right*_t614;
-    const train5_real_t _t616 = _t108 - _t112;
-    const train5_real_t _t617 = _t612*_t616;
-    const train5_real_t _t618 = J_theta_cart4_right*_t617;
-    const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t619 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t _t620 = -_t100 - _t107;
-    const train5_real_t _t621 = _t619*_t620;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t622 = J_theta_cart4_left*_t621;
-    const train5_real_t _t623 = -_t108 - _t112;
-    const train5_real_t _t624 = _t619*_t623;
-    const train5_real_t _t625 = J_theta_cart4_left*_t624;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t626 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t _t627 = _t114 - _t123;
-    const train5_real_t _t628 = _t626*_t627;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t629 = J_theta_cart5_right*_t628;
-    const train5_real_t _t630 = _t125 - _t130;
-    const train5_real_t _t631 = _t626*_t630;
-    const train5_real_t _t632 = J_theta_cart5_right*_t631;
-    const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t633 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t634 = -_t114 - _t123;
-    const train5_real_t _t635 = _t633*_t634;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
+    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t636 = J_theta_cart5_left*_t635;
-    const train5_real_t _t637 = -_t125 - _t130;
-    const train5_real_t _t638 = _t633*_t637;
-    const train5_real_t _t639 = J_theta_cart5_left*_t638;
-    const train5_real_t _t640 = K_theta_cart_x_tractor_2*_t2 - _t141;
-    const train5_real_t _t641 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t2*_t210*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t2*_t213
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t19*_t2*_t216
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t2*_t219*_t25
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor*_t2*_t205
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor_2*_t205*_t3 - _t10*_t238 - _t10*_t239
-            - _t10*_t240 - _t10*_t241 - _t10*_t242 - _t10*_t243 - _t10*_t244 - _t10*_t245
-            - _t223*_t9 - _t224*_t9 - _t225*_t9 - _t226*_t9;
-    const train5_real_t _t642 = _t527 - _t528;
-    const train5_real_t _t643 = _t205 - _t529;
-    const train5_real_t _t644 = _t283*_t642 + _t286*_t643;
-    const train5_real_t _t645 = _t208*_t209;
-    const train5_real_t _t646 = _t204*_t209;
-    const train5_real_t _t647 = _t205*_t296 + _t292*_t527 + _t299*_t528 + _t303*_t529 + _t307*_t645
-            + _t310*_t646;
-    const train5_real_t _t648 = _t208*_t212;
-    const train5_real_t _t649 = _t204*_t212;
-    const train5_real_t _t650 = _t205*_t320 + _t315*_t527 + _t324*_t528 + _t329*_t529 + _t334*_t645
-            + _t338*_t646 + _t341*_t648 + _t344*_t649;
-    const train5_real_t _t651 = _t208*_t215;
-    const train5_real_t _t652 = _t204*_t215;
-    const train5_real_t _t653 = _t205*_t356 + _t350*_t527 + _t361*_t528 + _t366*_t529 + _t371*_t645
-            + _t376*_t646 + _t380*_t648 + _t384*_t649 + _t387*_t651 + _t390*_t652;
-    const train5_real_t _t654 = _t208*_t218;
-    const train5_real_t _t655 = _t204*_t218;
-    const train5_real_t _t656 = _t205*_t474 + _t467*_t527 + _t481*_t528 + _t488*_t529 + _t495*_t645
-            + _t500*_t646 + _t505*_t648 + _t510*_t649 + _t515*_t651 + _t519*_t652 + _t523*_t654
-            + _t525*_t655;
-    const train5_real_t _t657 = J_theta_cart*_t644 + _t527*_t640 + _t545*_t647 + _t546*_t650
-            + _t547*_t653 + _t548*_t656 + _t641;
-    const train5_real_t _t658 = K_theta_cart2_x_tractor_2*_t6 - _t142;
-    const train5_real_t _t659 = TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor*_t205*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t222*_t3*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t2*_t222*_t6
-            + TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor_2*_t205*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t222*_t3*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t213*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t19*_t216*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t219*_t25*_t6 - _t15*_t224 - _t15*_t225
-            - _t15*_t226 - _t16*_t240 - _t16*_t241 - _t16*_t242 - _t16*_t243 - _t16*_t244
-            - _t16*_t245 - _t222*_t246;
-    const train5_real_t _t660 = J_theta_cart2*_t647 + _t527*_t658 + _t545*_t644 + _t552*_t650
-            + _t553*_t653 + _t554*_t656 + _t659;
-    const train5_real_t _t661 = K_theta_cart3_x_tractor_2*_t12 - _t143;
-    const train5_real_t _t662 = _t205*_t230 + _t205*_t231 + _t21*_t217 + _t21*_t220 - _t21*_t225
-            - _t21*_t226 - _t210*_t249 + _t210*_t250 + _t210*_t253 + _t210*_t254 - _t22*_t242
-            - _t22*_t243 - _t22*_t244 - _t22*_t245 - _t222*_t247 + _t222*_t248 + _t222*_t251
-            + _t222*_t252;
-    const train5_real_t _t663 = J_theta_cart3*_t650 + _t527*_t661 + _t546*_t644 + _t552*_t647
-            + _t558*_t653 + _t559*_t656 + _t662;
-    const train5_real_t _t664 = K_theta_cart4_x_tractor_2*_t18 - _t144;
-    const train5_real_t _t665 = _t196*_t220 - _t196*_t226 - _t198*_t244 - _t198*_t245 + _t205*_t232
-            + _t205*_t233 - _t210*_t257 + _t210*_t258 + _t210*_t263 + _t210*_t264 - _t213*_t259
-            + _t213*_t260 + _t213*_t265 + _t213*_t266 - _t222*_t255 + _t222*_t256 + _t222*_t261
-            + _t222*_t262;
-    const train5_real_t _t666 = J_theta_cart4*_t653 + _t527*_t664 + _t547*_t644 + _t553*_t647
-            + _t558*_t650 + _t563*_t656 + _t665;
-    const train5_real_t _t667 = K_theta_cart5_x_tractor_2*_t24 - _t145;
-    const train5_real_t _t668 = _t205*_t234 + _t205*_t235 - _t210*_t269 + _t210*_t270 + _t210*_t277
-            + _t210*_t278 - _t213*_t271 + _t213*_t272 + _t213*_t279 + _t213*_t280 - _t216*_t273
-            + _t216*_t274 + _t216*_t281 + _t216*_t282 - _t222*_t267 + _t222*_t268 + _t222*_t275
-            + _t222*_t276;
-    const train5_real_t _t669 = J_theta_cart5*_t656 + _t527*_t667 + _t548*_t644 + _t554*_t647
-            + _t559*_t650 + _t563*_t653 + _t668;
-    const train5_real_t _t670 = TRAIN5_COS(theta_tractor);
-    const train5_real_t _t671 = TRAIN5_SIN(theta_tractor);
-    const train5_real_t _t672 = _t286*_t530;
-    const train5_real_t _t673 = _t124*_t667;
-    const train5_real_t _t674 = _t37*_t640;
-    const train5_real_t _t675 = _t47*_t658;
-    const train5_real_t _t676 = _t60*_t661;
-    const train5_real_t _t677 = _t664*_t76;
-    const train5_real_t _t678 = _t673 + _t674 + _t675 + _t676 + _t677;
-    const train5_real_t _t679 = J_theta_cart*_t286;
-    const train5_real_t _t680 = _t286*_t545;
-    const train5_real_t _t681 = _t286*_t546;
-    const train5_real_t _t682 = _t286*_t547;
-    const train5_real_t _t683 = _t286*_t548;
-    const train5_real_t _t684 = _t394 + _t4;
-    const train5_real_t _t685 = _t570*_t684;
-    const train5_real_t _t686 = J_theta_cart_right*_t685;
-    const train5_real_t _t687 = -_t394 + _t4;
-    const train5_real_t _t688 = _t577*_t687;
-    const train5_real_t _t689 = J_theta_cart_left*_t688;
-    const train5_real_t _t690 = _t398 - _t400;
-    const train5_real_t _t691 = _t584*_t690;
-    const train5_real_t _t692 = J_theta_cart2_right*_t691;
-    const train5_real_t _t693 = -_t398 - _t400;
-    const train5_real_t _t694 = _t591*_t693;
-    const train5_real_t _t695 = J_theta_cart2_left*_t694;
-    const train5_real_t _t696 = _t411 - _t414;
-    const train5_real_t _t697 = _t598*_t696;
-    const train5_real_t _t698 = J_theta_cart3_right*_t697;
-    const train5_real_t _t699 = -_t411 - _t414;
-    const train5_real_t _t700 = _t605*_t699;
-    const train5_real_t _t701 = J_theta_cart3_left*_t700;
-    const train5_real_t _t702 = _t436 - _t440;
-    const train5_real_t _t703 = _t612*_t702;
-    const train5_real_t _t704 = J_theta_cart4_right*_t703;
-    const train5_real_t _t705 = -_t436 - _t440;
-    const train5_real_t _t706 = _t619*_t705;
-    const train5_real_t _t707 = J_theta_cart4_left*_t706;
-    const train5_real_t _t708 = _t475 - _t480;
-    const train5_real_t _t709 = _t626*_t708;
-    const train5_real_t _t710 = J_theta_cart5_right*_t709;
-    const train5_real_t _t711 = -_t475 - _t480;
-    const train5_real_t _t712 = _t633*_t711;
-    const train5_real_t _t713 = J_theta_cart5_left*_t712;
-    const train5_real_t _t714 = _t572*_t686;
-    const train5_real_t _t715 = _t579*_t689;
-    const train5_real_t _t716 = _t283*_t551;
-    const train5_real_t _t717 = _t2 + _t393;
-    const train5_real_t _t718 = _t570*_t717;
-    const train5_real_t _t719 = _t576*_t718;
-    const train5_real_t _t720 = _t2 - _t393;
-    const train5_real_t _t721 = _t577*_t720;
-    const train5_real_t _t722 = _t583*_t721;
-    const train5_real_t _t723 = _t236 + _t237;
-    const train5_real_t _t724 = _t37*_t723;
-    const train5_real_t _t725 = _t228 + _t229;
-    const train5_real_t _t726 = _t47*_t725;
-    const train5_real_t _t727 = _t230 + _t231;
-    const train5_real_t _t728 = _t60*_t727;
-    const train5_real_t _t729 = _t232 + _t233;
-    const train5_real_t _t730 = _t729*_t76;
-    const train5_real_t _t731 = _t234 + _t235;
-    const train5_real_t _t732 = _t124*_t731;
-    const train5_real_t _t733 = _t286*_t550;
-    const train5_real_t _t734 = _t575*_t686;
-    const train5_real_t _t735 = _t582*_t689;
-    const train5_real_t _t736 = _t286*_t551;
-    const train5_real_t _t737 = _t576*_t685;
-    const train5_real_t _t738 = _t583*_t688;
-    const train5_real_t _t739 = TRAIN5_LIT(2.0)*_t221;
-    const train5_real_t _t740 = _t141*_t739 - _t227*_t739;
-    const train5_real_t _t741 = _t204*_t286 + _t208*_t283;
-    const train5_real_t _t742 = _t740*_t741;
-    const train5_real_t _t743 = TRAIN5_LIT(2.0)*_t209;
-    const train5_real_t _t744 = _t142*_t743 - _t159*_t743;
-    const train5_real_t _t745 = TRAIN5_LIT(2.0)*_t212;
-    const train5_real_t _t746 = _t143*_t745 - _t164*_t745;
-    const train5_real_t _t747 = TRAIN5_LIT(2.0)*_t215;
-    const train5_real_t _t748 = _t144*_t747 - _t169*_t747;
-    const train5_real_t _t749 = TRAIN5_LIT(2.0)*_t218;
-    const train5_real_t _t750 = _t145*_t749 - _t174*_t749;
-    const train5_real_t _t751 = _t131*_t222;
-    const train5_real_t _t752 = _t132*_t222;
-    const train5_real_t _t753 = _t244 + _t245;
-    const train5_real_t _t754 = _t242 + _t243;
-    const train5_real_t _t755 = _t146*_t205;
-    const train5_real_t _t756 = _t147*_t205;
-    const train5_real_t _t757 = TRAIN5_LIT(1.7)*_t209;
-    const train5_real_t _t758 = _t3*_t757;
-    const train5_real_t _t759 = TRAIN5_LIT(1.7)*K_theta_cart2_x_tractor*_t2*_t209*_t7 - _t133*_t758
-            - _t134*_t758 - _t159*_t2*_t757;
-    const train5_real_t _t760 = TRAIN5_LIT(1.7)*_t212;
-    const train5_real_t _t761 = _t3*_t760;
-    const train5_real_t _t762 = TRAIN5_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t2*_t212 - _t135*_t761
-            - _t136*_t761 - _t164*_t2*_t760;
-    const train5_real_t _t763 = TRAIN5_LIT(1.7)*_t215;
-    const train5_real_t _t764 = _t3*_t763;
-    const train5_real_t _t765 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_t19*_t2*_t215 - _t137*_t764
-            - _t138*_t764 - _t169*_t2*_t763;
-    const train5_real_t _t766 = TRAIN5_LIT(1.7)*_t218;
-    const train5_real_t _t767 = _t3*_t766;
-    const train5_real_t _t768 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_t2*_t218*_t25 - _t139*_t767
-            - _t140*_t767 - _t174*_t2*_t766;
-    const train5_real_t _t769 = _t148*_t205;
-    const train5_real_t _t770 = _t149*_t205;
-    const train5_real_t _t771 = TRAIN5_LIT(1.7)*_t221;
-    const train5_real_t _t772 = _t2*_t771;
-    const train5_real_t _t773 = _t3*_t771;
-    const train5_real_t _t774 = _t133*_t773 + _t134*_t773 - _t142*_t772 + _t159*_t772;
-    const train5_real_t _t775 = _t741*_t774;
-    const train5_real_t _t776 = _t7*_t760;
-    const train5_real_t _t777 = TRAIN5_LIT(1.7)*K_theta_cart3_x_tractor*_t13*_t212*_t6 - _t135*_t776
-            - _t136*_t776 - _t164*_t6*_t760;
-    const train5_real_t _t778 = _t7*_t763;
-    const train5_real_t _t779 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_t19*_t215*_t6 - _t137*_t778
-            - _t138*_t778 - _t169*_t6*_t763;
-    const train5_real_t _t780 = _t7*_t766;
-    const train5_real_t _t781 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_t218*_t25*_t6 - _t139*_t780
-            - _t140*_t780 - _t174*_t6*_t766;
-    const train5_real_t _t782 = _t150*_t205;
-    const train5_real_t _t783 = _t151*_t205;
-    const train5_real_t _t784 = _t135*_t773 + _t136*_t773 - _t143*_t772 + _t164*_t772;
-    const train5_real_t _t785 = _t741*_t784;
-    const train5_real_t _t786 = _t6*_t757;
-    const train5_real_t _t787 = _t7*_t757;
-    const train5_real_t _t788 = _t135*_t787 + _t136*_t787 - _t143*_t786 + _t164*_t786;
-    const train5_real_t _t789 = _t13*_t763;
-    const train5_real_t _t790 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_t12*_t19*_t215
-            - _t12*_t169*_t763 - _t137*_t789 - _t138*_t789;
-    const train5_real_t _t791 = _t13*_t766;
-    const train5_real_t _t792 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_t12*_t218*_t25
-            - _t12*_t174*_t766 - _t139*_t791 - _t140*_t791;
-    const train5_real_t _t793 = _t152*_t205;
-    const train5_real_t _t794 = _t153*_t205;
-    const train5_real_t _t795 = _t137*_t773 + _t138*_t773 - _t144*_t772 + _t169*_t772;
-    const train5_real_t _t796 = _t741*_t795;
-    const train5_real_t _t797 = _t137*_t787 + _t138*_t787 - _t144*_t786 + _t169*_t786;
-    const train5_real_t _t798 = _t12*_t760;
-    const train5_real_t _t799 = _t13*_t760;
-    const train5_real_t _t800 = _t137*_t799 + _t138*_t799 - _t144*_t798 + _t169*_t798;
-    const train5_real_t _t801 = _t19*_t766;
-    const train5_real_t _t802 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_t18*_t218*_t25
-            - _t139*_t801 - _t140*_t801 - _t174*_t18*_t766;
-    const train5_real_t _t803 = _t154*_t205;
-    const train5_real_t _t804 = _t155*_t205;
-    const train5_real_t _t805 = _t139*_t773 + _t140*_t773 - _t145*_t772 + _t174*_t772;
-    const train5_real_t _t806 = _t741*_t805;
-    const train5_real_t _t807 = _t139*_t787 + _t140*_t787 - _t145*_t786 + _t174*_t786;
-    const train5_real_t _t808 = _t139*_t799 + _t140*_t799 - _t145*_t798 + _t174*_t798;
-    const train5_real_t _t809 = _t18*_t763;
-    const train5_real_t _t810 = _t19*_t763;
-    const train5_real_t _t811 = _t139*_t810 + _t140*_t810 - _t145*_t809 + _t174*_t809;
-    const train5_real_t _t812 = -_t208*_t741;
-    const train5_real_t _t813 = _t299*_t812;
-    const train5_real_t _t814 = -_t204*_t741;
-    const train5_real_t _t815 = _t303*_t814;
-    const train5_real_t _t816 = TRAIN5_LIT(1.6666666666666667)*_t405;
-    const train5_real_t _t817 = TRAIN5_LIT(1.6666666666666667)*_t406;
-    const train5_real_t _t818 = _t528*_t816 + _t529*_t817;
-    const train5_real_t _t819 = _t42*_t816;
-    const train5_real_t _t820 = _t42*_t817;
-    const train5_real_t _t821 = _t324*_t812;
-    const train5_real_t _t822 = _t329*_t814;
-    const train5_real_t _t823 = _t52*_t816;
-    const train5_real_t _t824 = _t52*_t817;
-    const train5_real_t _t825 = _t361*_t812;
-    const train5_real_t _t826 = _t366*_t814;
-    const train5_real_t _t827 = _t65*_t816;
-    const train5_real_t _t828 = _t65*_t817;
-    const train5_real_t _t829 = _t481*_t812;
-    const train5_real_t _t830 = _t488*_t814;
-    const train5_real_t _t831 = TRAIN5_LIT(0.2)*_t816;
-    const train5_real_t _t832 = TRAIN5_LIT(0.2)*_t817;
-    const train5_real_t _t833 = TRAIN5_LIT(1.6666666666666667)*_t397;
-    const train5_real_t _t834 = TRAIN5_LIT(0.2)*_t833;
-    const train5_real_t _t835 = TRAIN5_LIT(1.6666666666666667)*_t400;
-    const train5_real_t _t836 = TRAIN5_LIT(0.2)*_t835;
-    const train5_real_t _t837 = -_t35 + _t396 + _t401;
-    const train5_real_t _t838 = _t584*_t837;
-    const train5_real_t _t839 = _t812*_t838;
-    const train5_real_t _t840 = -_t38 + _t399 + _t402;
-    const train5_real_t _t841 = _t584*_t840;
-    const train5_real_t _t842 = _t814*_t841;
-    const train5_real_t _t843 = -_t289 + _t831;
-    const train5_real_t _t844 = _t584*_t843;
-    const train5_real_t _t845 = -_t290 + _t832;
-    const train5_real_t _t846 = _t584*_t845;
-    const train5_real_t _t847 = _t528*_t844 + _t529*_t846;
-    const train5_real_t _t848 = -_t401 - _t405;
-    const train5_real_t _t849 = _t591*_t848;
-    const train5_real_t _t850 = _t812*_t849;
-    const train5_real_t _t851 = -_t402 - _t406;
-    const train5_real_t _t852 = _t591*_t851;
-    const train5_real_t _t853 = _t814*_t852;
-    const train5_real_t _t854 = -_t289 - _t831;
-    const train5_real_t _t855 = _t591*_t854;
-    const train5_real_t _t856 = -_t290 - _t832;
-    const train5_real_t _t857 = _t591*_t856;
-    const train5_real_t _t858 = _t528*_t855 + _t529*_t857;
-    const train5_real_t _t859 = -_t417 - _t819;
-    const train5_real_t _t860 = -TRAIN5_LIT(1.6666666666666667)*_t859;
-    const train5_real_t _t861 = TRAIN5_LIT(0.2)*_t860;
-    const train5_real_t _t862 = _t816*_t92;
-    const train5_real_t _t863 = _t301 + _t862;
-    const train5_real_t _t864 = -_t421 - _t820;
-    const train5_real_t _t865 = -TRAIN5_LIT(1.6666666666666667)*_t864;
-    const train5_real_t _t866 = TRAIN5_LIT(0.2)*_t865;
-    const train5_real_t _t867 = _t817*_t92;
-    const train5_real_t _t868 = _t305 + _t867;
-    const train5_real_t _t869 = _t409 - _t42*_t833;
-    const train5_real_t _t870 = -TRAIN5_LIT(1.6666666666666667)*_t869;
-    const train5_real_t _t871 = TRAIN5_LIT(0.2)*_t870;
-    const train5_real_t _t872 = _t293 + _t833*_t92;
-    const train5_real_t _t873 = _t413 - _t42*_t835;
-    const train5_real_t _t874 = -TRAIN5_LIT(1.6666666666666667)*_t873;
-    const train5_real_t _t875 = TRAIN5_LIT(0.2)*_t874;
-    const train5_real_t _t876 = _t297 + _t835*_t92;
-    const train5_real_t _t877 = TRAIN5_LIT(1.6666666666666667)*_t410;
-    const train5_real_t _t878 = TRAIN5_LIT(0.2)*_t877;
-    const train5_real_t _t879 = TRAIN5_LIT(1.6666666666666667)*_t414;
-    const train5_real_t _t880 = TRAIN5_LIT(0.2)*_t879;
-    const train5_real_t _t881 = _t415 - _t418;
-    const train5_real_t _t882 = _t598*_t881;
-    const train5_real_t _t883 = _t812*_t882;
-    const train5_real_t _t884 = _t419 - _t422;
-    const train5_real_t _t885 = _t598*_t884;
-    const train5_real_t _t886 = _t814*_t885;
-    const train5_real_t _t887 = -_t415 - _t418;
-    const train5_real_t _t888 = _t605*_t887;
-    const train5_real_t _t889 = _t812*_t888;
-    const train5_real_t _t890 = -_t419 - _t422;
-    const train5_real_t _t891 = _t605*_t890;
-    const train5_real_t _t892 = _t814*_t891;
-    const train5_real_t _t893 = -_t444 - _t54*_t860 - _t823;
-    const train5_real_t _t894 = -TRAIN5_LIT(1.6666666666666667)*_t893;
-    const train5_real_t _t895 = TRAIN5_LIT(0.2)*_t894;
-    const train5_real_t _t896 = _t103*_t816;
-    const train5_real_t _t897 = _t105*_t860 + _t326 + _t896;
-    const train5_real_t _t898 = -_t449 - _t54*_t865 - _t824;
-    const train5_real_t _t899 = -TRAIN5_LIT(1.6666666666666667)*_t898;
-    const train5_real_t _t900 = TRAIN5_LIT(0.2)*_t899;
-    const train5_real_t _t901 = _t103*_t817;
-    const train5_real_t _t902 = _t105*_t865 + _t331 + _t901;
-    const train5_real_t _t903 = _t433 - _t52*_t833 - _t54*_t870;
-    const train5_real_t _t904 = -TRAIN5_LIT(1.6666666666666667)*_t903;
-    const train5_real_t _t905 = TRAIN5_LIT(0.2)*_t904;
-    const train5_real_t _t906 = _t103*_t833 + _t105*_t870 + _t314;
-    const train5_real_t _t907 = _t438 - _t52*_t835 - _t54*_t874;
-    const train5_real_t _t908 = -TRAIN5_LIT(1.6666666666666667)*_t907;
-    const train5_real_t _t909 = TRAIN5_LIT(0.2)*_t908;
-    const train5_real_t _t910 = _t103*_t835 + _t105*_t874 + _t319;
-    const train5_real_t _t911 = _t434 - _t54*_t877;
-    const train5_real_t _t912 = -TRAIN5_LIT(1.6666666666666667)*_t911;
-    const train5_real_t _t913 = TRAIN5_LIT(0.2)*_t912;
-    const train5_real_t _t914 = _t105*_t877 + _t316;
-    const train5_real_t _t915 = _t439 - _t54*_t879;
-    const train5_real_t _t916 = -TRAIN5_LIT(1.6666666666666667)*_t915;
-    const train5_real_t _t917 = TRAIN5_LIT(0.2)*_t916;
-    const train5_real_t _t918 = _t105*_t879 + _t321;
-    const train5_real_t _t919 = TRAIN5_LIT(1.6666666666666667)*_t435;
-    const train5_real_t _t920 = TRAIN5_LIT(0.2)*_t919;
-    const train5_real_t _t921 = TRAIN5_LIT(1.6666666666666667)*_t440;
-    const train5_real_t _t922 = TRAIN5_LIT(0.2)*_t921;
-    const train5_real_t _t923 = _t441 - _t445;
-    const train5_real_t _t924 = _t612*_t923;
-    const train5_real_t _t925 = _t812*_t924;
-    const train5_real_t _t926 = _t446 - _t450;
-    const train5_real_t _t927 = _t612*_t926;
-    const train5_real_t _t928 = _t814*_t927;
-    const train5_real_t _t929 = -_t441 - _t445;
-    const train5_real_t _t930 = _t619*_t929;
-    const train5_real_t _t931 = _t812*_t930;
-    const train5_real_t _t932 = -_t446 - _t450;
-    const train5_real_t _t933 = _t619*_t932;
-    const train5_real_t _t934 = _t814*_t933;
-    const train5_real_t _t935 = -_t486 - _t67*_t860 - _t69*_t894 - _t827;
-    const train5_real_t _t936 = -TRAIN5_LIT(1.6666666666666667)*_t935;
-    const train5_real_t _t937 = TRAIN5_LIT(0.2)*_t936;
-    const train5_real_t _t938 = _t117*_t816;
-    const train5_real_t _t939 = _t116 + _t347;
-    const train5_real_t _t940 = _t119*_t860 + _t121*_t894 + _t938 + _t939;
-    const train5_real_t _t941 = -_t493 - _t67*_t865 - _t69*_t899 - _t828;
-    const train5_real_t _t942 = -TRAIN5_LIT(1.6666666666666667)*_t941;
-    const train5_real_t _t943 = TRAIN5_LIT(0.2)*_t942;
-    const train5_real_t _t944 = _t117*_t817;
-    const train5_real_t _t945 = _t126 + _t353;
-    const train5_real_t _t946 = _t119*_t865 + _t121*_t899 + _t944 + _t945;
-    const train5_real_t _t947 = _t470 - _t65*_t833 - _t67*_t870 - _t69*_t904;
-    const train5_real_t _t948 = -TRAIN5_LIT(1.6666666666666667)*_t947;
-    const train5_real_t _t949 = TRAIN5_LIT(0.2)*_t948;
-    const train5_real_t _t950 = _t117*_t833 + _t119*_t870 + _t121*_t904 + _t348;
-    const train5_real_t _t951 = _t477 - _t65*_t835 - _t67*_t874 - _t69*_t908;
-    const train5_real_t _t952 = -TRAIN5_LIT(1.6666666666666667)*_t951;
-    const train5_real_t _t953 = TRAIN5_LIT(0.2)*_t952;
-    const train5_real_t _t954 = _t117*_t835 + _t119*_t874 + _t121*_t908 + _t354;
-    const train5_real_t _t955 = _t471 - _t67*_t877 - _t69*_t912;
-    const train5_real_t _t956 = -TRAIN5_LIT(1.6666666666666667)*_t955;
-    const train5_real_t _t957 = TRAIN5_LIT(0.2)*_t956;
-    const train5_real_t _t958 = _t119*_t877 + _t121*_t912 + _t349;
-    const train5_real_t _t959 = _t478 - _t67*_t879 - _t69*_t916;
-    const train5_real_t _t960 = -TRAIN5_LIT(1.6666666666666667)*_t959;
-    const train5_real_t _t961 = TRAIN5_LIT(0.2)*_t960;
-    const train5_real_t _t962 = _t119*_t879 + _t121*_t916 + _t355;
-    const train5_real_t _t963 = _t472 - _t69*_t919;
-    const train5_real_t _t964 = -TRAIN5_LIT(1.6666666666666667)*_t963;
-    const train5_real_t _t965 = TRAIN5_LIT(0.2)*_t964;
-    const train5_real_t _t966 = _t121*_t919 + _t351;
-    const train5_real_t _t967 = _t479 - _t69*_t921;
-    const train5_real_t _t968 = -TRAIN5_LIT(1.6666666666666667)*_t967;
-    const train5_real_t _t969 = TRAIN5_LIT(0.2)*_t968;
-    const train5_real_t _t970 = _t121*_t921 + _t357;
-    const train5_real_t _t971 = TRAIN5_LIT(1.6666666666666667)*_t473;
-    const train5_real_t _t972 = TRAIN5_LIT(0.2)*_t971;
-    const train5_real_t _t973 = TRAIN5_LIT(1.6666666666666667)*_t480;
-    const train5_real_t _t974 = TRAIN5_LIT(0.2)*_t973;
-    const train5_real_t _t975 = _t482 - _t487;
-    const train5_real_t _t976 = _t626*_t975;
-    const train5_real_t _t977 = _t812*_t976;
-    const train5_real_t _t978 = _t489 - _t494;
-    const train5_real_t _t979 = _t626*_t978;
-    const train5_real_t _t980 = _t814*_t979;
-    const train5_real_t _t981 = -_t482 - _t487;
-    const train5_real_t _t982 = _t633*_t981;
-    const train5_real_t _t983 = _t812*_t982;
-    const train5_real_t _t984 = -_t489 - _t494;
-    const train5_real_t _t985 = _t633*_t984;
-    const train5_real_t _t986 = _t814*_t985;
-    const train5_real_t _t987 = _t640*_t644;
-    const train5_real_t _t988 = _t647*_t658;
-    const train5_real_t _t989 = _t650*_t661;
-    const train5_real_t _t990 = _t653*_t664;
-    const train5_real_t _t991 = _t656*_t667;
-    const train5_real_t _t992 = -_t395 - _t397;
-    const train5_real_t _t993 = _t591*_t992;
-    const train5_real_t _t994 = J_theta_cart2_left*_t993;
-    const train5_real_t _t995 = _t395 - _t397;
-    const train5_real_t _t996 = _t584*_t995;
-    const train5_real_t _t997 = J_theta_cart2_right*_t996;
-    const train5_real_t _t998 = -_t407 - _t410;
-    const train5_real_t _t999 = _t605*_t998;
-    const train5_real_t _t1000 = J_theta_cart3_left*_t999;
-    const train5_real_t _t1001 = _t407 - _t410;
-    const train5_real_t _t1002 = _t1001*_t598;
-    const train5_real_t _t1003 = J_theta_cart3_right*_t1002;
-    const train5_real_t _t1004 = -_t431 - _t435;
-    const train5_real_t _t1005 = _t1004*_t619;
-    const train5_real_t _t1006 = J_theta_cart4_left*_t1005;
-    const train5_real_t _t1007 = _t431 - _t435;
-    const train5_real_t _t1008 = _t1007*_t612;
-    const train5_real_t _t1009 = J_theta_cart4_right*_t1008;
-    const train5_real_t _t1010 = -_t468 - _t473;
-    const train5_real_t _t1011 = _t1010*_t633;
-    const train5_real_t _t1012 = J_theta_cart5_left*_t1011;
-    const train5_real_t _t1013 = _t468 - _t473;
-    const train5_real_t _t1014 = _t1013*_t626;
-    const train5_real_t _t1015 = J_theta_cart5_right*_t1014;
-    const train5_real_t _t1016 = -_t579*_t642 - _t582*_t643 + _t688*_t814 + _t721*_t812;
-    const train5_real_t _t1017 = _t1016*_t580;
-    const train5_real_t _t1018 = J_theta_cart_left*_t721;
-    const train5_real_t _t1019 = _t642*_t721 + _t643*_t688;
-    const train5_real_t _t1020 = _t1018*_t1019;
-    const train5_real_t _t1021 = -_t572*_t642 - _t575*_t643 + _t685*_t814 + _t718*_t812;
-    const train5_real_t _t1022 = _t1021*_t573;
-    const train5_real_t _t1023 = J_theta_cart_right*_t718;
-    const train5_real_t _t1024 = _t642*_t718 + _t643*_t685;
-    const train5_real_t _t1025 = _t1023*_t1024;
-    const train5_real_t _t1026 = _t527*_t531;
-    const train5_real_t _t1027 = _t527*_t533;
-    const train5_real_t _t1028 = _t527*_t535;
-    const train5_real_t _t1029 = _t527*_t537;
-    const train5_real_t _t1030 = _t527*_t539;
-    const train5_real_t _t1031 = _t283*_t812 + _t286*_t814 - _t34*_t642 - _t37*_t643;
-    const train5_real_t _t1032 = _t1031*_t549;
-    const train5_real_t _t1033 = _t283*_t657;
-    const train5_real_t _t1034 = _t148*_t210;
-    const train5_real_t _t1035 = _t149*_t210;
-    const train5_real_t _t1036 = _t150*_t213;
-    const train5_real_t _t1037 = _t151*_t213;
-    const train5_real_t _t1038 = _t152*_t216;
-    const train5_real_t _t1039 = _t153*_t216;
-    const train5_real_t _t1040 = _t154*_t219;
-    const train5_real_t _t1041 = _t155*_t219;
-    const train5_real_t _t1042 = _t146*_t222;
-    const train5_real_t _t1043 = _t147*_t222;
-    const train5_real_t _t1044 = TRAIN5_LIT(0.6)*_t221;
-    const train5_real_t _t1045 = -_t1044*_t131 - _t1044*_t132;
-    const train5_real_t _t1046 = _t1045*_t741;
-    const train5_real_t _t1047 = TRAIN5_LIT(0.6)*_t209;
-    const train5_real_t _t1048 = -_t1047*_t133 - _t1047*_t134;
-    const train5_real_t _t1049 = TRAIN5_LIT(0.6)*_t212;
-    const train5_real_t _t1050 = -_t1049*_t135 - _t1049*_t136;
-    const train5_real_t _t1051 = TRAIN5_LIT(0.6)*_t215;
-    const train5_real_t _t1052 = -_t1051*_t137 - _t1051*_t138;
-    const train5_real_t _t1053 = TRAIN5_LIT(0.6)*_t218;
-    const train5_real_t _t1054 = -_t1053*_t139 - _t1053*_t140;
-    const train5_real_t _t1055 = _t644*_t723;
-    const train5_real_t _t1056 = _t647*_t725;
-    const train5_real_t _t1057 = _t650*_t727;
-    const train5_real_t _t1058 = _t653*_t729;
-    const train5_real_t _t1059 = _t656*_t731;
-    const train5_real_t _t1060 = _t1016*_t583;
-    const train5_real_t _t1061 = _t1019*_t689;
-    const train5_real_t _t1062 = _t1021*_t576;
-    const train5_real_t _t1063 = _t1024*_t686;
-    const train5_real_t _t1064 = _t527*_t540;
-    const train5_real_t _t1065 = _t527*_t541;
-    const train5_real_t _t1066 = _t527*_t542;
-    const train5_real_t _t1067 = _t527*_t543;
-    const train5_real_t _t1068 = _t527*_t544;
-    const train5_real_t _t1069 = _t1031*_t551;
-    const train5_real_t _t1070 = _t286*_t657;
-    const train5_real_t _t1071 = _t283*_t530;
-    const train5_real_t _t1072 = _t34*_t640;
-    const train5_real_t _t1073 = _t43*_t658;
-    const train5_real_t _t1074 = _t55*_t661;
-    const train5_real_t _t1075 = _t664*_t70;
-    const train5_real_t _t1076 = _t113*_t667;
-    const train5_real_t _t1077 = _t1072 + _t1073 + _t1074 + _t1075 + _t1076;
-    const train5_real_t _t1078 = J_theta_cart*_t283;
-    const train5_real_t _t1079 = _t283*_t545;
-    const train5_real_t _t1080 = _t283*_t546;
-    const train5_real_t _t1081 = _t283*_t547;
-    const train5_real_t _t1082 = _t283*_t548;
-    const train5_real_t _t1083 = _t1023*_t572;
-    const train5_real_t _t1084 = _t1018*_t579;
-    const train5_real_t _t1085 = _t283*_t549;
-    const train5_real_t _t1086 = _t573*_t718;
-    const train5_real_t _t1087 = _t580*_t721;
-    const train5_real_t _t1088 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t1089 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t1090 = K_theta_tractor_x_tractor_2 + _t540 + _t541 + _t542 + _t543
-            + _t544;
-    const train5_real_t _t1091 = TRAIN5_LIT(0.207)*_t1088;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t1092 = J_theta_right*_t1091;
-    const train5_real_t _t1093 = -TRAIN5_LIT(0.207)*_t1089;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t1094 = J_theta_left*_t1093;
-    const train5_real_t _t1095 = _t1088*_t1092 + _t1089*_t1094 + _t1090 + _t113*_t569 + _t34*_t551
-            + _t43*_t557 + _t55*_t562 + _t566*_t70 + _t572*_t576 + _t579*_t583 + _t586*_t590
-            + _t593*_t597 + _t600*_t604 + _t607*_t611 + _t614*_t618 + _t621*_t625 + _t628*_t632
-            + _t635*_t639;
-    const train5_real_t _t1096 = TRAIN5_LIT(2.0)*_t1095;
-    const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t1097 = J_x_tractor + _t531 + _t533 + _t535 + _t537 + _t539;
-    const train5_real_t _t1098 = J_theta_right*_t1088;
-    const train5_real_t _t1099 = J_theta_left*_t1089;
-    const train5_real_t _t1100 = _t1088*_t1098 + _t1089*_t1099 + _t1097 + _t113*_t567 + _t34*_t549
-            + _t43*_t555 + _t55*_t560 + _t564*_t70 + _t572*_t573 + _t579*_t580 + _t586*_t587
-            + _t593*_t594 + _t600*_t601 + _t607*_t608 + _t614*_t615 + _t621*_t622 + _t628*_t629
-            + _t635*_t636;
-    const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t1101 = J_theta_tractor + _t124*_t568 + _t37*_t550 + _t47*_t556
-            + _t561*_t60 + _t565*_t76;
-    const train5_real_t _t1102 = _t1091*_t1092 + _t1093*_t1094 + _t1101 + _t124*_t569 + _t37*_t551
-            + _t47*_t557 + _t562*_t60 + _t566*_t76 + _t575*_t576 + _t582*_t583 + _t589*_t590
-            + _t596*_t597 + _t603*_t604 + _t610*_t611 + _t617*_t618 + _t624*_t625 + _t631*_t632
-            + _t638*_t639;
-    const train5_real_t _t1103 = -_t1095*_t1095 + _t1100*_t1102;
-    const train5_real_t _t1104 = TRAIN5_LIT(1.0)/_t1103;
-    const train5_real_t _t1105 = _t1104*_t1104;
-    const train5_real_t _t1106 = _t1104;
-    const train5_real_t _t1107 = _t1095*_t1106;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
+    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
+    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
+    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
     const train5_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const train5_real_t _t1108 = K_theta_tractor_x_tractor*_t205 + _t141*_t222 + _t211 + _t214
-            + _t217 + _t220 - _t222*_t227 - _t223 - _t224 - _t225 - _t226;
-    const train5_real_t _t1109 = _t36 + _t403;
-    const train5_real_t _t1110 = _t1109*_t584;
-    const train5_real_t _t1111 = _t39 + _t404;
-    const train5_real_t _t1112 = _t1111*_t584;
-    const train5_real_t _t1113 = _t1110*_t645 + _t1112*_t646 + _t205*_t691 + _t527*_t996
-            + _t528*_t838 + _t529*_t841;
-    const train5_real_t _t1114 = _t36 - _t403;
-    const train5_real_t _t1115 = _t1114*_t591;
-    const train5_real_t _t1116 = _t39 - _t404;
-    const train5_real_t _t1117 = _t1116*_t591;
-    const train5_real_t _t1118 = _t1115*_t645 + _t1117*_t646 + _t205*_t694 + _t527*_t993
-            + _t528*_t849 + _t529*_t852;
-    const train5_real_t _t1119 = _t423 - _t425;
-    const train5_real_t _t1120 = _t1119*_t598;
-    const train5_real_t _t1121 = _t426 - _t428;
-    const train5_real_t _t1122 = _t1121*_t598;
-    const train5_real_t _t1123 = _t429 + _t45;
-    const train5_real_t _t1124 = _t1123*_t598;
-    const train5_real_t _t1125 = _t430 + _t49;
-    const train5_real_t _t1126 = _t1125*_t598;
-    const train5_real_t _t1127 = _t1002*_t527 + _t1120*_t645 + _t1122*_t646 + _t1124*_t648
-            + _t1126*_t649 + _t205*_t697 + _t528*_t882 + _t529*_t885;
-    const train5_real_t _t1128 = -_t423 - _t425;
-    const train5_real_t _t1129 = _t1128*_t605;
-    const train5_real_t _t1130 = -_t426 - _t428;
-    const train5_real_t _t1131 = _t1130*_t605;
-    const train5_real_t _t1132 = -_t429 + _t45;
-    const train5_real_t _t1133 = _t1132*_t605;
-    const train5_real_t _t1134 = -_t430 + _t49;
-    const train5_real_t _t1135 = _t1134*_t605;
-    const train5_real_t _t1136 = _t1129*_t645 + _t1131*_t646 + _t1133*_t648 + _t1135*_t649
-            + _t205*_t700 + _t527*_t999 + _t528*_t888 + _t529*_t891;
-    const train5_real_t _t1137 = _t451 - _t454;
-    const train5_real_t _t1138 = _t1137*_t612;
-    const train5_real_t _t1139 = _t455 - _t458;
-    const train5_real_t _t1140 = _t1139*_t612;
-    const train5_real_t _t1141 = _t459 - _t461;
-    const train5_real_t _t1142 = _t1141*_t612;
-    const train5_real_t _t1143 = _t462 - _t464;
-    const train5_real_t _t1144 = _t1143*_t612;
-    const train5_real_t _t1145 = _t465 + _t57;
-    const train5_real_t _t1146 = _t1145*_t612;
-    const train5_real_t _t1147 = _t466 + _t62;
-    const train5_real_t _t1148 = _t1147*_t612;
-    const train5_real_t _t1149 = _t1008*_t527 + _t1138*_t645 + _t1140*_t646 + _t1142*_t648
-            + _t1144*_t649 + _t1146*_t651 + _t1148*_t652 + _t205*_t703 + _t528*_t924 + _t529*_t927;
-    const train5_real_t _t1150 = -_t451 - _t454;
-    const train5_real_t _t1151 = _t1150*_t619;
-    const train5_real_t _t1152 = -_t455 - _t458;
-    const train5_real_t _t1153 = _t1152*_t619;
-    const train5_real_t _t1154 = -_t459 - _t461;
-    const train5_real_t _t1155 = _t1154*_t619;
-    const train5_real_t _t1156 = -_t462 - _t464;
-    const train5_real_t _t1157 = _t1156*_t619;
-    const train5_real_t _t1158 = -_t465 + _t57;
-    const train5_real_t _t1159 = _t1158*_t619;
-    const train5_real_t _t1160 = -_t466 + _t62;
-    const train5_real_t _t1161 = _t1160*_t619;
-    const train5_real_t _t1162 = _t1005*_t527 + _t1151*_t645 + _t1153*_t646 + _t1155*_t648
-            + _t1157*_t649 + _t1159*_t651 + _t1161*_t652 + _t205*_t706 + _t528*_t930 + _t529*_t933;
-    const train5_real_t _t1163 = _t496 - _t499;
-    const train5_real_t _t1164 = _t1163*_t626;
-    const train5_real_t _t1165 = _t501 - _t504;
-    const train5_real_t _t1166 = _t1165*_t626;
-    const train5_real_t _t1167 = _t506 - _t509;
-    const train5_real_t _t1168 = _t1167*_t626;
-    const train5_real_t _t1169 = _t511 - _t514;
-    const train5_real_t _t1170 = _t1169*_t626;
-    const train5_real_t _t1171 = _t516 - _t518;
-    const train5_real_t _t1172 = _t1171*_t626;
-    const train5_real_t _t1173 = _t520 - _t522;
-    const train5_real_t _t1174 = _t1173*_t626;
-    const train5_real_t _t1175 = _t524 + _t72;
-    const train5_real_t _t1176 = _t1175*_t626;
-    const train5_real_t _t1177 = _t526 + _t78;
-    const train5_real_t _t1178 = _t1177*_t626;
-    const train5_real_t _t1179 = _t1014*_t527 + _t1164*_t645 + _t1166*_t646 + _t1168*_t648
-            + _t1170*_t649 + _t1172*_t651 + _t1174*_t652 + _t1176*_t654 + _t1178*_t655 + _t205*_t709
-            + _t528*_t976 + _t529*_t979;
-    const train5_real_t _t1180 = -_t496 - _t499;
-    const train5_real_t _t1181 = _t1180*_t633;
-    const train5_real_t _t1182 = -_t501 - _t504;
-    const train5_real_t _t1183 = _t1182*_t633;
-    const train5_real_t _t1184 = -_t506 - _t509;
-    const train5_real_t _t1185 = _t1184*_t633;
-    const train5_real_t _t1186 = -_t511 - _t514;
-    const train5_real_t _t1187 = _t1186*_t633;
-    const train5_real_t _t1188 = -_t516 - _t518;
-    const train5_real_t _t1189 = _t1188*_t633;
-    const train5_real_t _t1190 = -_t520 - _t522;
-    const train5_real_t _t1191 = _t1190*_t633;
-    const train5_real_t _t1192 = -_t524 + _t72;
-    const train5_real_t _t1193 = _t1192*_t633;
-    const train5_real_t _t1194 = -_t526 + _t78;
-    const train5_real_t _t1195 = _t1194*_t633;
-    const train5_real_t _t1196 = _t1011*_t527 + _t1181*_t645 + _t1183*_t646 + _t1185*_t648
-            + _t1187*_t649 + _t1189*_t651 + _t1191*_t652 + _t1193*_t654 + _t1195*_t655 + _t205*_t712
-            + _t528*_t982 + _t529*_t985;
-    const train5_real_t _t1197 = _t1019*_t580 + _t1024*_t573 + _t1108 + _t1113*_t587 + _t1118*_t594
-            + _t1127*_t601 + _t113*_t669 + _t1136*_t608 + _t1149*_t615 + _t1162*_t622 + _t1179*_t629
-            + _t1196*_t636 + _t34*_t657 + _t43*_t660 + _t530*_t644 + _t532*_t647 + _t534*_t650
-            + _t536*_t653 + _t538*_t656 + _t55*_t663 + _t666*_t70;
+    const train5_real_t radius_left = p->radius_left;
+    const train5_real_t radius_right = p->radius_right;
+    const train5_real_t theta_tractor = q[2];
+    const train5_real_t theta_cart = q[3];
+    const train5_real_t theta_cart2 = q[4];
+    const train5_real_t theta_cart3 = q[5];
+    const train5_real_t theta_cart4 = q[6];
+    const train5_real_t theta_cart5 = q[7];
+    train5_real_t _shared[408];
+    train5_staged_quantities(p, q, wheel_rates, _shared);
+    const train5_real_t _ms48 = _shared[0];
+    const train5_real_t _ms49 = _shared[1];
+    const train5_real_t _ms84 = _shared[4];
+    const train5_real_t _ms89 = _shared[5];
+    const train5_real_t _ms94 = _shared[6];
+    const train5_real_t _ms99 = _shared[7];
+    const train5_real_t _ms104 = _shared[8];
+    const train5_real_t _ms109 = _shared[9];
+    const train5_real_t _ms114 = _shared[10];
+    const train5_real_t _ms119 = _shared[11];
+    const train5_real_t _ms125 = _shared[15];
+    const train5_real_t _ms126 = _shared[16];
+    const train5_real_t _ms127 = _shared[17];
+    const train5_real_t _ms128 = _shared[18];
+    const train5_real_t _ms129 = _shared[19];
+    const train5_real_t _ms130 = _shared[20];
+    const train5_real_t _ms131 = _shared[21];
+    const train5_real_t _ms132 = _shared[22];
+    const train5_real_t _ms133 = _shared[23];
+    const train5_real_t _ms134 = _shared[24];
+    const train5_real_t _ms135 = _shared[25];
+    const train5_real_t _ms136 = _shared[26];
+    const train5_real_t _ms137 = _shared[27];
+    const train5_real_t _ms138 = _shared[28];
+    const train5_real_t _ms139 = _shared[29];
+    const train5_real_t _ms140 = _shared[30];
+    const train5_real_t _ms141 = _shared[31];
+    const train5_real_t _ms142 = _shared[32];
+    const train5_real_t _ms143 = _shared[33];
+    const train5_real_t _ms144 = _shared[34];
+    const train5_real_t _ms145 = _shared[35];
+    const train5_real_t _ms146 = _shared[36];
+    const train5_real_t _ms148 = _shared[38];
+    const train5_real_t _ms149 = _shared[39];
+    const train5_real_t _ms150 = _shared[40];
+    const train5_real_t _ms151 = _shared[41];
+    const train5_real_t _ms152 = _shared[42];
+    const train5_real_t _ms153 = _shared[43];
+    const train5_real_t _ms154 = _shared[44];
+    const train5_real_t _ms155 = _shared[45];
+    const train5_real_t _ms156 = _shared[46];
+    const train5_real_t _ms157 = _shared[47];
+    const train5_real_t _ms158 = _shared[48];
+    const train5_real_t _ms159 = _shared[49];
+    const train5_real_t _ms160 = _shared[50];
+    const train5_real_t _ms161 = _shared[51];
+    const train5_real_t _ms162 = _shared[52];
+    const train5_real_t _ms163 = _shared[53];
+    const train5_real_t _ms224 = _shared[54];
+    const train5_real_t _ms225 = _shared[55];
+    const train5_real_t _ms228 = _shared[58];
+    const train5_real_t _ms229 = _shared[59];
+    const train5_real_t _ms232 = _shared[62];
+    const train5_real_t _ms233 = _shared[63];
+    const train5_real_t _ms236 = _shared[66];
+    const train5_real_t _ms237 = _shared[67];
+    const train5_real_t _ms240 = _shared[70];
+    const train5_real_t _ms241 = _shared[71];
+    const train5_real_t _ms248 = _shared[74];
+    const train5_real_t _ms249 = _shared[75];
+    const train5_real_t _ms252 = _shared[78];
+    const train5_real_t _ms253 = _shared[79];
+    const train5_real_t _ms256 = _shared[82];
+    const train5_real_t _ms257 = _shared[83];
+    const train5_real_t _ms260 = _shared[86];
+    const train5_real_t _ms261 = _shared[87];
+    const train5_real_t _ms264 = _shared[90];
+    const train5_real_t _ms265 = _shared[91];
+    const train5_real_t _ms268 = _shared[94];
+    const train5_real_t _ms269 = _shared[95];
+    const train5_real_t _ms272 = _shared[98];
+    const train5_real_t _ms273 = _shared[99];
+    const train5_real_t _ms276 = _shared[102];
+    const train5_real_t _ms277 = _shared[103];
+    const train5_real_t _ms280 = _shared[106];
+    const train5_real_t _ms281 = _shared[107];
+    const train5_real_t _ms284 = _shared[110];
+    const train5_real_t _ms285 = _shared[111];
+    const train5_real_t _ms286 = _shared[112];
+    const train5_real_t _ms287 = _shared[113];
+    const train5_real_t _ms288 = _shared[114];
+    const train5_real_t _ms289 = _shared[115];
+    const train5_real_t _ms290 = _shared[116];
+    const train5_real_t _ms291 = _shared[117];
+    const train5_real_t _ms292 = _shared[118];
+    const train5_real_t _ms305 = _shared[119];
+    const train5_real_t _ms306 = _shared[120];
+    const train5_real_t _ms307 = _shared[121];
+    const train5_real_t _ms308 = _shared[122];
+    const train5_real_t _ms309 = _shared[123];
+    const train5_real_t _ms310 = _shared[124];
+    const train5_real_t _ms311 = _shared[125];
+    const train5_real_t _ms312 = _shared[126];
+    const train5_real_t _ms313 = _shared[127];
+    const train5_real_t _ms314 = _shared[128];
+    const train5_real_t _ms315 = _shared[129];
+    const train5_real_t _ms316 = _shared[130];
+    const train5_real_t _ms317 = _shared[131];
+    const train5_real_t _ms318 = _shared[132];
+    const train5_real_t _ms319 = _shared[133];
+    const train5_real_t _ms320 = _shared[134];
+    const train5_real_t _ms321 = _shared[135];
+    const train5_real_t _ms322 = _shared[136];
+    const train5_real_t _ms323 = _shared[137];
+    const train5_real_t _ms324 = _shared[138];
+    const train5_real_t _ms325 = _shared[139];
+    const train5_real_t _ms326 = _shared[140];
+    const train5_real_t _ms327 = _shared[141];
+    const train5_real_t _ms328 = _shared[142];
+    const train5_real_t _ms329 = _shared[143];
+    const train5_real_t _ms333 = _shared[146];
+    const train5_real_t _ms334 = _shared[147];
+    const train5_real_t _ms335 = _shared[148];
+    const train5_real_t _ms336 = _shared[149];
+    const train5_real_t _ms337 = _shared[150];
+    const train5_real_t _ms338 = _shared[151];
+    const train5_real_t _ms339 = _shared[152];
+    const train5_real_t _ms341 = _shared[154];
+    const train5_real_t _ms343 = _shared[156];
+    const train5_real_t _ms345 = _shared[158];
+    const train5_real_t _ms347 = _shared[160];
+    const train5_real_t _ms349 = _shared[162];
+    const train5_real_t _ms351 = _shared[164];
+    const train5_real_t _ms353 = _shared[166];
+    const train5_real_t _ms355 = _shared[168];
+    const train5_real_t _ms357 = _shared[170];
+    const train5_real_t _ms359 = _shared[172];
+    const train5_real_t _ms361 = _shared[174];
+    const train5_real_t _ms363 = _shared[176];
+    const train5_real_t _ms365 = _shared[178];
+    const train5_real_t _ms367 = _shared[180];
+    const train5_real_t _ms369 = _shared[182];
+    const train5_real_t _ms371 = _shared[184];
+    const train5_real_t _ms373 = _shared[186];
+    const train5_real_t _ms375 = _shared[188];
+    const train5_real_t _ms377 = _shared[190];
+    const train5_real_t _ms379 = _shared[192];
+    const train5_real_t _ms381 = _shared[194];
+    const train5_real_t _ms383 = _shared[196];
+    const train5_real_t _ms385 = _shared[198];
+    const train5_real_t _ms387 = _shared[200];
+    const train5_real_t _ms389 = _shared[202];
+    const train5_real_t _ms391 = _shared[204];
+    const train5_real_t _ms393 = _shared[206];
+    const train5_real_t _ms395 = _shared[208];
+    const train5_real_t _ms397 = _shared[210];
+    const train5_real_t _ms399 = _shared[212];
+    const train5_real_t _ms401 = _shared[214];
+    const train5_real_t _ms403 = _shared[216];
+    const train5_real_t _ms405 = _shared[218];
+    const train5_real_t _ms407 = _shared[220];
+    const train5_real_t _ms409 = _shared[222];
+    const train5_real_t _ms411 = _shared[224];
+    const train5_real_t _ms413 = _shared[226];
+    const train5_real_t _ms415 = _shared[228];
+    const train5_real_t _ms417 = _shared[230];
+    const train5_real_t _ms419 = _shared[232];
+    const train5_real_t _ms421 = _shared[234];
+    const train5_real_t _ms423 = _shared[236];
+    const train5_real_t _ms425 = _shared[238];
+    const train5_real_t _ms427 = _shared[240];
+    const train5_real_t _ms429 = _shared[242];
+    const train5_real_t _ms431 = _shared[244];
+    const train5_real_t _ms433 = _shared[246];
+    const train5_real_t _ms435 = _shared[248];
+    const train5_real_t _ms437 = _shared[250];
+    const train5_real_t _ms439 = _shared[252];
+    const train5_real_t _ms441 = _shared[254];
+    const train5_real_t _ms443 = _shared[256];
+    const train5_real_t _ms445 = _shared[258];
+    const train5_real_t _ms447 = _shared[260];
+    const train5_real_t _ms449 = _shared[262];
+    const train5_real_t _ms451 = _shared[264];
+    const train5_real_t _ms453 = _shared[266];
+    const train5_real_t _ms455 = _shared[268];
+    const train5_real_t _ms457 = _shared[270];
+    const train5_real_t _ms459 = _shared[272];
+    const train5_real_t _ms461 = _shared[274];
+    const train5_real_t _ms463 = _shared[276];
+    const train5_real_t _ms465 = _shared[278];
+    const train5_real_t _ms467 = _shared[280];
+    const train5_real_t _ms469 = _shared[282];
+    const train5_real_t _ms471 = _shared[284];
+    const train5_real_t _ms473 = _shared[286];
+    const train5_real_t _ms475 = _shared[288];
+    const train5_real_t _ms477 = _shared[290];
+    const train5_real_t _ms479 = _shared[292];
+    const train5_real_t _ms481 = _shared[294];
+    const train5_real_t _ms483 = _shared[296];
+    const train5_real_t _ms485 = _shared[298];
+    const train5_real_t _ms487 = _shared[300];
+    const train5_real_t _ms489 = _shared[302];
+    const train5_real_t _ms491 = _shared[304];
+    const train5_real_t _ms493 = _shared[306];
+    const train5_real_t _ms495 = _shared[308];
+    const train5_real_t _ms497 = _shared[310];
+    const train5_real_t _ms499 = _shared[312];
+    const train5_real_t _ms501 = _shared[314];
+    const train5_real_t _ms503 = _shared[316];
+    const train5_real_t _ms505 = _shared[318];
+    const train5_real_t _ms507 = _shared[320];
+    const train5_real_t _ms509 = _shared[322];
+    const train5_real_t _ms511 = _shared[324];
+    const train5_real_t _ms513 = _shared[326];
+    const train5_real_t _ms515 = _shared[328];
+    const train5_real_t _ms517 = _shared[330];
+    const train5_real_t _ms519 = _shared[332];
+    const train5_real_t _ms521 = _shared[334];
+    const train5_real_t _ms523 = _shared[336];
+    const train5_real_t _ms525 = _shared[338];
+    const train5_real_t _ms527 = _shared[340];
+    const train5_real_t _ms529 = _shared[342];
+    const train5_real_t _ms531 = _shared[344];
+    const train5_real_t _ms533 = _shared[346];
+    const train5_real_t _ms535 = _shared[348];
+    const train5_real_t _ms537 = _shared[350];
+    const train5_real_t _ms539 = _shared[352];
+    const train5_real_t _ms541 = _shared[354];
+    const train5_real_t _ms543 = _shared[356];
+    const train5_real_t _ms545 = _shared[358];
+    const train5_real_t _ms547 = _shared[360];
+    const train5_real_t _ms549 = _shared[362];
+    const train5_real_t _ms551 = _shared[364];
+    const train5_real_t _ms553 = _shared[366];
+    const train5_real_t _ms555 = _shared[368];
+    const train5_real_t _ms557 = _shared[370];
+    const train5_real_t _ms559 = _shared[372];
+    const train5_real_t _ms561 = _shared[374];
+    const train5_real_t _ms563 = _shared[376];
+    const train5_real_t _ms564 = _shared[377];
+    const train5_real_t _ms565 = _shared[378];
+    const train5_real_t _ms566 = _shared[379];
+    const train5_real_t _ms567 = _shared[380];
+    const train5_real_t _ms568 = _shared[381];
+    const train5_real_t _ms569 = _shared[382];
+    const train5_real_t _ms570 = _shared[383];
+    const train5_real_t _ms571 = _shared[384];
+    const train5_real_t _ms572 = _shared[385];
+    const train5_real_t _ms573 = _shared[386];
+    const train5_real_t _ms574 = _shared[387];
+    const train5_real_t _ms575 = _shared[388];
+    const train5_real_t _ms576 = _shared[389];
+    const train5_real_t _ms577 = _shared[390];
+    const train5_real_t _ms578 = _shared[391];
+    const train5_real_t _ms579 = _shared[392];
+    const train5_real_t _ms580 = _shared[393];
+    const train5_real_t _ms581 = _shared[394];
+    const train5_real_t _ms582 = _shared[395];
+    const train5_real_t _ms583 = _shared[396];
+    const train5_real_t _ms584 = _shared[397];
+    const train5_real_t _ms585 = _shared[398];
+    const train5_real_t _ms586 = _shared[399];
+    const train5_real_t _ms587 = _shared[400];
+    const train5_real_t _ms588 = _shared[401];
+    const train5_real_t _ms589 = _shared[402];
+    const train5_real_t _ms590 = _shared[403];
+    const train5_real_t _ms591 = _shared[404];
+    const train5_real_t _ms592 = _shared[405];
+    const train5_real_t _ms636 = _shared[406];
+    const train5_real_t _ms637 = _shared[407];
+    const train5_real_t _t0 = _ms224*_ms305;
+    const train5_real_t _t1 = _ms228*_ms306;
+    const train5_real_t _t2 = _ms232*_ms307;
+    const train5_real_t _t3 = _ms236*_ms308;
+    const train5_real_t _t4 = _ms240*_ms309;
+    const train5_real_t _t5 = _ms225*_ms305;
+    const train5_real_t _t6 = _ms229*_ms306;
+    const train5_real_t _t7 = _ms233*_ms307;
+    const train5_real_t _t8 = _ms237*_ms308;
+    const train5_real_t _t9 = _ms241*_ms309;
+    const train5_real_t _t10 = J_theta_cart*_ms224 + _ms228*_ms320 + _ms232*_ms321 + _ms236*_ms322
+            + _ms240*_ms323 + _ms305;
+    const train5_real_t _t11 = J_theta_cart*_ms225 + _ms229*_ms320 + _ms233*_ms321 + _ms237*_ms322
+            + _ms241*_ms323 + _ms315;
+    const train5_real_t _t12 = J_theta_cart2*_ms228 + _ms224*_ms320 + _ms232*_ms324 + _ms236*_ms325
+            + _ms240*_ms326 + _ms306;
+    const train5_real_t _t13 = J_theta_cart2*_ms229 + _ms225*_ms320 + _ms233*_ms324 + _ms237*_ms325
+            + _ms241*_ms326 + _ms316;
+    const train5_real_t _t14 = J_theta_cart3*_ms232 + _ms224*_ms321 + _ms228*_ms324 + _ms236*_ms327
+            + _ms240*_ms328 + _ms307;
+    const train5_real_t _t15 = J_theta_cart3*_ms233 + _ms225*_ms321 + _ms229*_ms324 + _ms237*_ms327
+            + _ms241*_ms328 + _ms317;
+    const train5_real_t _t16 = J_theta_cart4*_ms236 + _ms224*_ms322 + _ms228*_ms325 + _ms232*_ms327
+            + _ms240*_ms329 + _ms308;
+    const train5_real_t _t17 = J_theta_cart4*_ms237 + _ms225*_ms322 + _ms229*_ms325 + _ms233*_ms327
+            + _ms241*_ms329 + _ms318;
+    const train5_real_t _t18 = J_theta_cart5*_ms240 + _ms224*_ms323 + _ms228*_ms326 + _ms232*_ms328
+            + _ms236*_ms329 + _ms309;
+    const train5_real_t _t19 = J_theta_cart5*_ms241 + _ms225*_ms323 + _ms229*_ms326 + _ms233*_ms328
+            + _ms237*_ms329 + _ms319;
+    const train5_real_t _t20 = J_theta_cart_right*_ms248;
+    const train5_real_t _t21 = J_theta_cart_right*_ms249;
+    const train5_real_t _t22 = J_theta_cart_left*_ms252;
+    const train5_real_t _t23 = J_theta_cart_left*_ms253;
+    const train5_real_t _t24 = J_theta_cart2_right*_ms256;
+    const train5_real_t _t25 = J_theta_cart2_right*_ms257;
+    const train5_real_t _t26 = J_theta_cart2_left*_ms260;
+    const train5_real_t _t27 = J_theta_cart2_left*_ms261;
+    const train5_real_t _t28 = J_theta_cart3_right*_ms264;
+    const train5_real_t _t29 = J_theta_cart3_right*_ms265;
+    const train5_real_t _t30 = J_theta_cart3_left*_ms268;
+    const train5_real_t _t31 = J_theta_cart3_left*_ms269;
+    const train5_real_t _t32 = J_theta_cart4_right*_ms272;
+    const train5_real_t _t33 = J_theta_cart4_right*_ms273;
+    const train5_real_t _t34 = J_theta_cart4_left*_ms276;
+    const train5_real_t _t35 = J_theta_cart4_left*_ms277;
+    const train5_real_t _t36 = J_theta_cart5_right*_ms280;
+    const train5_real_t _t37 = J_theta_cart5_right*_ms281;
+    const train5_real_t _t38 = J_theta_cart5_left*_ms284;
+    const train5_real_t _t39 = J_theta_cart5_left*_ms285;
+    const train5_real_t _t40 = TRAIN5_COS(theta_tractor);
+    const train5_real_t _t41 = TRAIN5_SIN(theta_tractor);
+    const train5_real_t _t42 = _ms305*_ms339;
+    const train5_real_t _t43 = _ms241*_ms314;
+    const train5_real_t _t44 = _ms225*_ms310;
+    const train5_real_t _t45 = _ms229*_ms311;
+    const train5_real_t _t46 = _ms233*_ms312;
+    const train5_real_t _t47 = _ms237*_ms313;
+    const train5_real_t _t48 = _t43 + _t44 + _t45 + _t46 + _t47;
+    const train5_real_t _t49 = -theta_tractor;
+    const train5_real_t _t50 = _t49 + theta_cart;
+    const train5_real_t _t51 = TRAIN5_SIN(_t50);
+    const train5_real_t _t52 = K_theta_cart_x_tractor*_t51;
+    const train5_real_t _t53 = TRAIN5_COS(_t50);
+    const train5_real_t _t54 = K_theta_cart_x_tractor_2*_t53;
+    const train5_real_t _t55 = J_theta_cart*_ms339;
+    const train5_real_t _t56 = _t49 + theta_cart2;
+    const train5_real_t _t57 = TRAIN5_SIN(_t56);
+    const train5_real_t _t58 = K_theta_cart2_x_tractor*_t57;
+    const train5_real_t _t59 = TRAIN5_COS(_t56);
+    const train5_real_t _t60 = K_theta_cart2_x_tractor_2*_t59;
+    const train5_real_t _t61 = _ms320*_ms339;
+    const train5_real_t _t62 = _t49 + theta_cart3;
+    const train5_real_t _t63 = TRAIN5_SIN(_t62);
+    const train5_real_t _t64 = K_theta_cart3_x_tractor*_t63;
+    const train5_real_t _t65 = TRAIN5_COS(_t62);
+    const train5_real_t _t66 = K_theta_cart3_x_tractor_2*_t65;
+    const train5_real_t _t67 = _ms321*_ms339;
+    const train5_real_t _t68 = _t49 + theta_cart4;
+    const train5_real_t _t69 = TRAIN5_SIN(_t68);
+    const train5_real_t _t70 = K_theta_cart4_x_tractor*_t69;
+    const train5_real_t _t71 = TRAIN5_COS(_t68);
+    const train5_real_t _t72 = K_theta_cart4_x_tractor_2*_t71;
+    const train5_real_t _t73 = _ms322*_ms339;
+    const train5_real_t _t74 = _t49 + theta_cart5;
+    const train5_real_t _t75 = TRAIN5_SIN(_t74);
+    const train5_real_t _t76 = K_theta_cart5_x_tractor*_t75;
+    const train5_real_t _t77 = TRAIN5_COS(_t74);
+    const train5_real_t _t78 = K_theta_cart5_x_tractor_2*_t77;
+    const train5_real_t _t79 = _ms323*_ms339;
+    const train5_real_t _t80 = J_theta_cart_right*_ms415;
+    const train5_real_t _t81 = J_theta_cart_left*_ms419;
+    const train5_real_t _t82 = J_theta_cart2_right*_ms423;
+    const train5_real_t _t83 = J_theta_cart2_left*_ms435;
+    const train5_real_t _t84 = J_theta_cart3_right*_ms447;
+    const train5_real_t _t85 = J_theta_cart3_left*_ms463;
+    const train5_real_t _t86 = J_theta_cart4_right*_ms479;
+    const train5_real_t _t87 = J_theta_cart4_left*_ms499;
+    const train5_real_t _t88 = J_theta_cart5_right*_ms519;
+    const train5_real_t _t89 = J_theta_cart5_left*_ms543;
+    const train5_real_t _t90 = _ms248*_t80;
+    const train5_real_t _t91 = _ms252*_t81;
+    const train5_real_t _t92 = _ms338*_t11;
+    const train5_real_t _t93 = _ms413*_t21;
+    const train5_real_t _t94 = _ms417*_t23;
+    const train5_real_t _t95 = TRAIN5_LIT(0.3)*_t52 + TRAIN5_LIT(0.3)*_t54;
+    const train5_real_t _t96 = _ms225*_t95;
+    const train5_real_t _t97 = TRAIN5_LIT(0.3)*_t58 + TRAIN5_LIT(0.3)*_t60;
+    const train5_real_t _t98 = _ms229*_t97;
+    const train5_real_t _t99 = TRAIN5_LIT(0.3)*_t64 + TRAIN5_LIT(0.3)*_t66;
+    const train5_real_t _t100 = _ms233*_t99;
+    const train5_real_t _t101 = TRAIN5_LIT(0.3)*_t70 + TRAIN5_LIT(0.3)*_t72;
+    const train5_real_t _t102 = _ms237*_t101;
+    const train5_real_t _t103 = TRAIN5_LIT(0.3)*_t76 + TRAIN5_LIT(0.3)*_t78;
+    const train5_real_t _t104 = _ms241*_t103;
+    const train5_real_t _t105 = _ms315*_ms339;
+    const train5_real_t _t106 = _ms249*_t80;
+    const train5_real_t _t107 = _ms253*_t81;
+    const train5_real_t _t108 = _ms339*_t11;
+    const train5_real_t _t109 = _ms415*_t21;
+    const train5_real_t _t110 = _ms419*_t23;
+    const train5_real_t _t111 = TRAIN5_LIT(2.0)*_ms288;
+    const train5_real_t _t112 = K_theta_cart_x_tractor*_t53;
+    const train5_real_t _t113 = K_theta_cart_x_tractor_2*_t51;
+    const train5_real_t _t114 = _t111*_t112 - _t111*_t113;
+    const train5_real_t _t115 = _ms286*_ms338 + _ms287*_ms339;
+    const train5_real_t _t116 = _t114*_t115;
+    const train5_real_t _t117 = TRAIN5_LIT(2.0)*_ms289;
+    const train5_real_t _t118 = K_theta_cart2_x_tractor*_t59;
+    const train5_real_t _t119 = K_theta_cart2_x_tractor_2*_t57;
+    const train5_real_t _t120 = _t117*_t118 - _t117*_t119;
+    const train5_real_t _t121 = TRAIN5_LIT(2.0)*_ms290;
+    const train5_real_t _t122 = K_theta_cart3_x_tractor*_t65;
+    const train5_real_t _t123 = K_theta_cart3_x_tractor_2*_t63;
+    const train5_real_t _t124 = _t121*_t122 - _t121*_t123;
+    const train5_real_t _t125 = TRAIN5_LIT(2.0)*_ms291;
+    const train5_real_t _t126 = K_theta_cart4_x_tractor*_t71;
+    const train5_real_t _t127 = K_theta_cart4_x_tractor_2*_t69;
+    const train5_real_t _t128 = _t125*_t126 - _t125*_t127;
+    const train5_real_t _t129 = TRAIN5_LIT(2.0)*_ms292;
+    const train5_real_t _t130 = K_theta_cart5_x_tractor*_t77;
+    const train5_real_t _t131 = K_theta_cart5_x_tractor_2*_t75;
+    const train5_real_t _t132 = _t129*_t130 - _t129*_t131;
+    const train5_real_t _t133 = _ms289*_ms289;
+    const train5_real_t _t134 = _t133*_t58;
+    const train5_real_t _t135 = _t133*_t60;
+    const train5_real_t _t136 = _ms290*_ms290;
+    const train5_real_t _t137 = _t136*_t64;
+    const train5_real_t _t138 = _t136*_t66;
+    const train5_real_t _t139 = _ms288*_ms288;
+    const train5_real_t _t140 = _t139*_t52;
+    const train5_real_t _t141 = _t139*_t54;
+    const train5_real_t _t142 = _ms292*_ms292;
+    const train5_real_t _t143 = _t142*_t76;
+    const train5_real_t _t144 = _t142*_t78;
+    const train5_real_t _t145 = _t143 + _t144;
+    const train5_real_t _t146 = _ms291*_ms291;
+    const train5_real_t _t147 = _t146*_t70;
+    const train5_real_t _t148 = _t146*_t72;
+    const train5_real_t _t149 = _t147 + _t148;
+    const train5_real_t _t150 = TRAIN5_LIT(0.3)*_ms287*_ms287;
+    const train5_real_t _t151 = _t112*_t150;
+    const train5_real_t _t152 = _t113*_t150;
+    const train5_real_t _t153 = TRAIN5_LIT(1.7)*_ms289;
+    const train5_real_t _t154 = _t153*_t53;
+    const train5_real_t _t155 = TRAIN5_LIT(1.7)*K_theta_cart2_x_tractor*_ms289*_t51*_t59
+            - _t119*_t153*_t51 - _t154*_t58 - _t154*_t60;
+    const train5_real_t _t156 = TRAIN5_LIT(1.7)*_ms290;
+    const train5_real_t _t157 = _t156*_t53;
+    const train5_real_t _t158 = TRAIN5_LIT(1.7)*K_theta_cart3_x_tractor*_ms290*_t51*_t65
+            - _t123*_t156*_t51 - _t157*_t64 - _t157*_t66;
+    const train5_real_t _t159 = TRAIN5_LIT(1.7)*_ms291;
+    const train5_real_t _t160 = _t159*_t53;
+    const train5_real_t _t161 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_ms291*_t51*_t71
+            - _t127*_t159*_t51 - _t160*_t70 - _t160*_t72;
+    const train5_real_t _t162 = TRAIN5_LIT(1.7)*_ms292;
+    const train5_real_t _t163 = _t162*_t53;
+    const train5_real_t _t164 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_ms292*_t51*_t77
+            - _t131*_t162*_t51 - _t163*_t76 - _t163*_t78;
+    const train5_real_t _t165 = _t118*_t150;
+    const train5_real_t _t166 = _t119*_t150;
+    const train5_real_t _t167 = TRAIN5_LIT(1.7)*_ms288;
+    const train5_real_t _t168 = _t167*_t51;
+    const train5_real_t _t169 = _t167*_t53;
+    const train5_real_t _t170 = -_t118*_t168 + _t119*_t168 + _t169*_t58 + _t169*_t60;
+    const train5_real_t _t171 = _t115*_t170;
+    const train5_real_t _t172 = _t156*_t59;
+    const train5_real_t _t173 = TRAIN5_LIT(1.7)*K_theta_cart3_x_tractor*_ms290*_t57*_t65
+            - _t123*_t156*_t57 - _t172*_t64 - _t172*_t66;
+    const train5_real_t _t174 = _t159*_t59;
+    const train5_real_t _t175 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_ms291*_t57*_t71
+            - _t127*_t159*_t57 - _t174*_t70 - _t174*_t72;
+    const train5_real_t _t176 = _t162*_t59;
+    const train5_real_t _t177 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_ms292*_t57*_t77
+            - _t131*_t162*_t57 - _t176*_t76 - _t176*_t78;
+    const train5_real_t _t178 = _t122*_t150;
+    const train5_real_t _t179 = _t123*_t150;
+    const train5_real_t _t180 = -_t122*_t168 + _t123*_t168 + _t169*_t64 + _t169*_t66;
+    const train5_real_t _t181 = _t115*_t180;
+    const train5_real_t _t182 = _t153*_t57;
+    const train5_real_t _t183 = _t153*_t59;
+    const train5_real_t _t184 = -_t122*_t182 + _t123*_t182 + _t183*_t64 + _t183*_t66;
+    const train5_real_t _t185 = _t159*_t65;
+    const train5_real_t _t186 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_ms291*_t63*_t71
+            - _t127*_t159*_t63 - _t185*_t70 - _t185*_t72;
+    const train5_real_t _t187 = _t162*_t65;
+    const train5_real_t _t188 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_ms292*_t63*_t77
+            - _t131*_t162*_t63 - _t187*_t76 - _t187*_t78;
+    const train5_real_t _t189 = _t126*_t150;
+    const train5_real_t _t190 = _t127*_t150;
+    const train5_real_t _t191 = -_t126*_t168 + _t127*_t168 + _t169*_t70 + _t169*_t72;
+    const train5_real_t _t192 = _t115*_t191;
+    const train5_real_t _t193 = -_t126*_t182 + _t127*_t182 + _t183*_t70 + _t183*_t72;
+    const train5_real_t _t194 = _t156*_t63;
+    const train5_real_t _t195 = _t156*_t65;
+    const train5_real_t _t196 = -_t126*_t194 + _t127*_t194 + _t195*_t70 + _t195*_t72;
+    const train5_real_t _t197 = _t162*_t71;
+    const train5_real_t _t198 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_ms292*_t69*_t77
+            - _t131*_t162*_t69 - _t197*_t76 - _t197*_t78;
+    const train5_real_t _t199 = _t130*_t150;
+    const train5_real_t _t200 = _t131*_t150;
+    const train5_real_t _t201 = -_t130*_t168 + _t131*_t168 + _t169*_t76 + _t169*_t78;
+    const train5_real_t _t202 = _t115*_t201;
+    const train5_real_t _t203 = -_t130*_t182 + _t131*_t182 + _t183*_t76 + _t183*_t78;
+    const train5_real_t _t204 = -_t130*_t194 + _t131*_t194 + _t195*_t76 + _t195*_t78;
+    const train5_real_t _t205 = _t159*_t69;
+    const train5_real_t _t206 = _t159*_t71;
+    const train5_real_t _t207 = -_t130*_t205 + _t131*_t205 + _t206*_t76 + _t206*_t78;
+    const train5_real_t _t208 = _ms128*_ms224;
+    const train5_real_t _t209 = _ms149*_ms338;
+    const train5_real_t _t210 = _ms128*_ms225;
+    const train5_real_t _t211 = _ms149*_ms339;
+    const train5_real_t _t212 = -_ms286*_t115;
+    const train5_real_t _t213 = _ms345*_t212;
+    const train5_real_t _t214 = -_ms287*_t115;
+    const train5_real_t _t215 = _ms347*_t214;
+    const train5_real_t _t216 = -_t208 + _t209;
+    const train5_real_t _t217 = -TRAIN5_LIT(1.6666666666666667)*_t216;
+    const train5_real_t _t218 = -_t210 + _t211;
+    const train5_real_t _t219 = -TRAIN5_LIT(1.6666666666666667)*_t218;
+    const train5_real_t _t220 = _ms569*_t217 + _ms570*_t219;
+    const train5_real_t _t221 = _ms133*_t217;
+    const train5_real_t _t222 = _ms151*_ms338;
+    const train5_real_t _t223 = _ms132*_ms224 - _t222;
+    const train5_real_t _t224 = _ms133*_t219;
+    const train5_real_t _t225 = _ms151*_ms339;
+    const train5_real_t _t226 = _ms132*_ms225 - _t225;
+    const train5_real_t _t227 = _ms152*_ms341;
+    const train5_real_t _t228 = _ms152*_ms343;
+    const train5_real_t _t229 = _ms357*_t212;
+    const train5_real_t _t230 = _ms359*_t214;
+    const train5_real_t _t231 = _ms138*_t217;
+    const train5_real_t _t232 = _ms154*_ms338;
+    const train5_real_t _t233 = _ms137*_ms224 - _t232;
+    const train5_real_t _t234 = _ms138*_t219;
+    const train5_real_t _t235 = _ms154*_ms339;
+    const train5_real_t _t236 = _ms137*_ms225 - _t235;
+    const train5_real_t _t237 = _ms155*_ms341;
+    const train5_real_t _t238 = _ms155*_ms343;
+    const train5_real_t _t239 = _ms156*_ms353;
+    const train5_real_t _t240 = _ms156*_ms355;
+    const train5_real_t _t241 = _ms373*_t212;
+    const train5_real_t _t242 = _ms375*_t214;
+    const train5_real_t _t243 = _ms144*_t217;
+    const train5_real_t _t244 = _ms158*_ms338;
+    const train5_real_t _t245 = _ms143*_ms224 - _t244;
+    const train5_real_t _t246 = _ms144*_t219;
+    const train5_real_t _t247 = _ms158*_ms339;
+    const train5_real_t _t248 = _ms143*_ms225 - _t247;
+    const train5_real_t _t249 = _ms159*_ms341;
+    const train5_real_t _t250 = _ms159*_ms343;
+    const train5_real_t _t251 = _ms160*_ms353;
+    const train5_real_t _t252 = _ms160*_ms355;
+    const train5_real_t _t253 = _ms161*_ms369;
+    const train5_real_t _t254 = _ms161*_ms371;
+    const train5_real_t _t255 = _ms393*_t212;
+    const train5_real_t _t256 = _ms395*_t214;
+    const train5_real_t _t257 = TRAIN5_LIT(0.2)*_t217;
+    const train5_real_t _t258 = _ms128*_ms338;
+    const train5_real_t _t259 = _ms149*_ms224;
+    const train5_real_t _t260 = _t258 + _t259;
+    const train5_real_t _t261 = TRAIN5_LIT(0.2)*_t219;
+    const train5_real_t _t262 = _ms128*_ms339;
+    const train5_real_t _t263 = _ms149*_ms225;
+    const train5_real_t _t264 = _t262 + _t263;
+    const train5_real_t _t265 = -_ms125 - _t209;
+    const train5_real_t _t266 = -TRAIN5_LIT(1.6666666666666667)*_t265;
+    const train5_real_t _t267 = TRAIN5_LIT(0.2)*_t266;
+    const train5_real_t _t268 = _ms126 + _t258;
+    const train5_real_t _t269 = -_ms127 - _t211;
+    const train5_real_t _t270 = -TRAIN5_LIT(1.6666666666666667)*_t269;
+    const train5_real_t _t271 = TRAIN5_LIT(0.2)*_t270;
+    const train5_real_t _t272 = _ms425*_t212;
+    const train5_real_t _t273 = _ms427*_t214;
+    const train5_real_t _t274 = _t257 - _t260;
+    const train5_real_t _t275 = _ms84*_t274;
+    const train5_real_t _t276 = _t261 - _t264;
+    const train5_real_t _t277 = _ms84*_t276;
+    const train5_real_t _t278 = _ms569*_t275 + _ms570*_t277;
+    const train5_real_t _t279 = _ms437*_t212;
+    const train5_real_t _t280 = _ms439*_t214;
+    const train5_real_t _t281 = -_t257 - _t260;
+    const train5_real_t _t282 = _ms89*_t281;
+    const train5_real_t _t283 = -_t261 - _t264;
+    const train5_real_t _t284 = _ms89*_t283;
+    const train5_real_t _t285 = _ms569*_t282 + _ms570*_t284;
+    const train5_real_t _t286 = -_t221 - _t223;
+    const train5_real_t _t287 = -TRAIN5_LIT(1.6666666666666667)*_t286;
+    const train5_real_t _t288 = TRAIN5_LIT(0.2)*_t287;
+    const train5_real_t _t289 = _ms152*_t217;
+    const train5_real_t _t290 = _ms132*_ms338;
+    const train5_real_t _t291 = _ms151*_ms224;
+    const train5_real_t _t292 = _t290 + _t291;
+    const train5_real_t _t293 = _t289 + _t292;
+    const train5_real_t _t294 = -_t224 - _t226;
+    const train5_real_t _t295 = -TRAIN5_LIT(1.6666666666666667)*_t294;
+    const train5_real_t _t296 = TRAIN5_LIT(0.2)*_t295;
+    const train5_real_t _t297 = _ms152*_t219;
+    const train5_real_t _t298 = _ms132*_ms339;
+    const train5_real_t _t299 = _ms151*_ms225;
+    const train5_real_t _t300 = _t298 + _t299;
+    const train5_real_t _t301 = _t297 + _t300;
+    const train5_real_t _t302 = -_ms133*_t266 + _t227;
+    const train5_real_t _t303 = -TRAIN5_LIT(1.6666666666666667)*_t302;
+    const train5_real_t _t304 = TRAIN5_LIT(0.2)*_t303;
+    const train5_real_t _t305 = _ms133*_ms341;
+    const train5_real_t _t306 = _ms152*_t266 + _t305;
+    const train5_real_t _t307 = -_ms133*_t270 + _t228;
+    const train5_real_t _t308 = -TRAIN5_LIT(1.6666666666666667)*_t307;
+    const train5_real_t _t309 = TRAIN5_LIT(0.2)*_t308;
+    const train5_real_t _t310 = _ms133*_ms343;
+    const train5_real_t _t311 = _ms152*_t270 + _t310;
+    const train5_real_t _t312 = -_ms129 - _t222 - _t227;
+    const train5_real_t _t313 = -TRAIN5_LIT(1.6666666666666667)*_t312;
+    const train5_real_t _t314 = TRAIN5_LIT(0.2)*_t313;
+    const train5_real_t _t315 = _ms130 + _t290 + _t305;
+    const train5_real_t _t316 = -_ms131 - _t225 - _t228;
+    const train5_real_t _t317 = -TRAIN5_LIT(1.6666666666666667)*_t316;
+    const train5_real_t _t318 = TRAIN5_LIT(0.2)*_t317;
+    const train5_real_t _t319 = -_ms150 + _t298 + _t310;
+    const train5_real_t _t320 = _ms449*_t212;
+    const train5_real_t _t321 = _ms451*_t214;
+    const train5_real_t _t322 = _ms465*_t212;
+    const train5_real_t _t323 = _ms467*_t214;
+    const train5_real_t _t324 = -_ms139*_t287 - _t231 - _t233;
+    const train5_real_t _t325 = -TRAIN5_LIT(1.6666666666666667)*_t324;
+    const train5_real_t _t326 = TRAIN5_LIT(0.2)*_t325;
+    const train5_real_t _t327 = _ms155*_t217;
+    const train5_real_t _t328 = _ms137*_ms338;
+    const train5_real_t _t329 = _ms154*_ms224;
+    const train5_real_t _t330 = _t328 + _t329;
+    const train5_real_t _t331 = _ms156*_t287 + _t327 + _t330;
+    const train5_real_t _t332 = -_ms139*_t295 - _t234 - _t236;
+    const train5_real_t _t333 = -TRAIN5_LIT(1.6666666666666667)*_t332;
+    const train5_real_t _t334 = TRAIN5_LIT(0.2)*_t333;
+    const train5_real_t _t335 = _ms155*_t219;
+    const train5_real_t _t336 = _ms137*_ms339;
+    const train5_real_t _t337 = _ms154*_ms225;
+    const train5_real_t _t338 = _t336 + _t337;
+    const train5_real_t _t339 = _ms156*_t295 + _t335 + _t338;
+    const train5_real_t _t340 = -_ms138*_t266 - _ms139*_t303 + _t237;
+    const train5_real_t _t341 = -TRAIN5_LIT(1.6666666666666667)*_t340;
+    const train5_real_t _t342 = TRAIN5_LIT(0.2)*_t341;
+    const train5_real_t _t343 = _ms138*_ms341;
+    const train5_real_t _t344 = _ms155*_t266 + _ms156*_t303 + _t343;
+    const train5_real_t _t345 = -_ms138*_t270 - _ms139*_t308 + _t238;
+    const train5_real_t _t346 = -TRAIN5_LIT(1.6666666666666667)*_t345;
+    const train5_real_t _t347 = TRAIN5_LIT(0.2)*_t346;
+    const train5_real_t _t348 = _ms138*_ms343;
+    const train5_real_t _t349 = _ms155*_t270 + _ms156*_t308 + _t348;
+    const train5_real_t _t350 = -_ms139*_t313 + _t239;
+    const train5_real_t _t351 = -TRAIN5_LIT(1.6666666666666667)*_t350;
+    const train5_real_t _t352 = TRAIN5_LIT(0.2)*_t351;
+    const train5_real_t _t353 = _ms139*_ms353;
+    const train5_real_t _t354 = _ms156*_t313 + _t353;
+    const train5_real_t _t355 = -_ms139*_t317 + _t240;
+    const train5_real_t _t356 = -TRAIN5_LIT(1.6666666666666667)*_t355;
+    const train5_real_t _t357 = TRAIN5_LIT(0.2)*_t356;
+    const train5_real_t _t358 = _ms139*_ms355;
+    const train5_real_t _t359 = _ms156*_t317 + _t358;
+    const train5_real_t _t360 = -_ms134 - _t232 - _t237 - _t239;
+    const train5_real_t _t361 = -TRAIN5_LIT(1.6666666666666667)*_t360;
+    const train5_real_t _t362 = TRAIN5_LIT(0.2)*_t361;
+    const train5_real_t _t363 = _ms135 + _t328 + _t343 + _t353;
+    const train5_real_t _t364 = -_ms136 - _t235 - _t238 - _t240;
+    const train5_real_t _t365 = -TRAIN5_LIT(1.6666666666666667)*_t364;
+    const train5_real_t _t366 = TRAIN5_LIT(0.2)*_t365;
+    const train5_real_t _t367 = -_ms153 + _t336 + _t348 + _t358;
+    const train5_real_t _t368 = _ms481*_t212;
+    const train5_real_t _t369 = _ms483*_t214;
+    const train5_real_t _t370 = _ms501*_t212;
+    const train5_real_t _t371 = _ms503*_t214;
+    const train5_real_t _t372 = -_ms145*_t287 - _ms146*_t325 - _t243 - _t245;
+    const train5_real_t _t373 = -TRAIN5_LIT(1.6666666666666667)*_t372;
+    const train5_real_t _t374 = TRAIN5_LIT(0.2)*_t373;
+    const train5_real_t _t375 = _ms159*_t217;
+    const train5_real_t _t376 = _ms143*_ms338;
+    const train5_real_t _t377 = _ms158*_ms224;
+    const train5_real_t _t378 = _t376 + _t377;
+    const train5_real_t _t379 = _ms160*_t287 + _ms161*_t325 + _t375 + _t378;
+    const train5_real_t _t380 = -_ms145*_t295 - _ms146*_t333 - _t246 - _t248;
+    const train5_real_t _t381 = -TRAIN5_LIT(1.6666666666666667)*_t380;
+    const train5_real_t _t382 = TRAIN5_LIT(0.2)*_t381;
+    const train5_real_t _t383 = _ms159*_t219;
+    const train5_real_t _t384 = _ms143*_ms339;
+    const train5_real_t _t385 = _ms158*_ms225;
+    const train5_real_t _t386 = _t384 + _t385;
+    const train5_real_t _t387 = _ms160*_t295 + _ms161*_t333 + _t383 + _t386;
+    const train5_real_t _t388 = -_ms144*_t266 - _ms145*_t303 - _ms146*_t341 + _t249;
+    const train5_real_t _t389 = -TRAIN5_LIT(1.6666666666666667)*_t388;
+    const train5_real_t _t390 = TRAIN5_LIT(0.2)*_t389;
+    const train5_real_t _t391 = _ms144*_ms341;
+    const train5_real_t _t392 = _ms159*_t266 + _ms160*_t303 + _ms161*_t341 + _t391;
+    const train5_real_t _t393 = -_ms144*_t270 - _ms145*_t308 - _ms146*_t346 + _t250;
+    const train5_real_t _t394 = -TRAIN5_LIT(1.6666666666666667)*_t393;
+    const train5_real_t _t395 = TRAIN5_LIT(0.2)*_t394;
+    const train5_real_t _t396 = _ms144*_ms343;
+    const train5_real_t _t397 = _ms159*_t270 + _ms160*_t308 + _ms161*_t346 + _t396;
+    const train5_real_t _t398 = -_ms145*_t313 - _ms146*_t351 + _t251;
+    const train5_real_t _t399 = -TRAIN5_LIT(1.6666666666666667)*_t398;
+    const train5_real_t _t400 = TRAIN5_LIT(0.2)*_t399;
+    const train5_real_t _t401 = _ms145*_ms353;
+    const train5_real_t _t402 = _ms160*_t313 + _ms161*_t351 + _t401;
+    const train5_real_t _t403 = -_ms145*_t317 - _ms146*_t356 + _t252;
+    const train5_real_t _t404 = -TRAIN5_LIT(1.6666666666666667)*_t403;
+    const train5_real_t _t405 = TRAIN5_LIT(0.2)*_t404;
+    const train5_real_t _t406 = _ms145*_ms355;
+    const train5_real_t _t407 = _ms160*_t317 + _ms161*_t356 + _t406;
+    const train5_real_t _t408 = -_ms146*_t361 + _t253;
+    const train5_real_t _t409 = -TRAIN5_LIT(1.6666666666666667)*_t408;
+    const train5_real_t _t410 = TRAIN5_LIT(0.2)*_t409;
+    const train5_real_t _t411 = _ms146*_ms369;
+    const train5_real_t _t412 = _ms161*_t361 + _t411;
+    const train5_real_t _t413 = -_ms146*_t365 + _t254;
+    const train5_real_t _t414 = -TRAIN5_LIT(1.6666666666666667)*_t413;
+    const train5_real_t _t415 = TRAIN5_LIT(0.2)*_t414;
+    const train5_real_t _t416 = _ms146*_ms371;
+    const train5_real_t _t417 = _ms161*_t365 + _t416;
+    const train5_real_t _t418 = -_ms140 - _t244 - _t249 - _t251 - _t253;
+    const train5_real_t _t419 = -TRAIN5_LIT(1.6666666666666667)*_t418;
+    const train5_real_t _t420 = TRAIN5_LIT(0.2)*_t419;
+    const train5_real_t _t421 = _ms141 + _t376 + _t391 + _t401 + _t411;
+    const train5_real_t _t422 = -_ms142 - _t247 - _t250 - _t252 - _t254;
+    const train5_real_t _t423 = -TRAIN5_LIT(1.6666666666666667)*_t422;
+    const train5_real_t _t424 = TRAIN5_LIT(0.2)*_t423;
+    const train5_real_t _t425 = -_ms157 + _t384 + _t396 + _t406 + _t416;
+    const train5_real_t _t426 = _ms521*_t212;
+    const train5_real_t _t427 = _ms523*_t214;
+    const train5_real_t _t428 = _ms545*_t212;
+    const train5_real_t _t429 = _ms547*_t214;
+    const train5_real_t _t430 = _ms310*_ms566;
+    const train5_real_t _t431 = _ms311*_ms573;
+    const train5_real_t _t432 = _ms312*_ms576;
+    const train5_real_t _t433 = _ms313*_ms579;
+    const train5_real_t _t434 = _ms314*_ms582;
+    const train5_real_t _t435 = J_theta_cart2_left*_ms433;
+    const train5_real_t _t436 = J_theta_cart2_right*_ms421;
+    const train5_real_t _t437 = J_theta_cart3_left*_ms461;
+    const train5_real_t _t438 = J_theta_cart3_right*_ms445;
+    const train5_real_t _t439 = J_theta_cart4_left*_ms497;
+    const train5_real_t _t440 = J_theta_cart4_right*_ms477;
+    const train5_real_t _t441 = J_theta_cart5_left*_ms541;
+    const train5_real_t _t442 = J_theta_cart5_right*_ms517;
+    const train5_real_t _t443 = -_ms252*_ms564 - _ms253*_ms565 + _ms417*_t212 + _ms419*_t214;
+    const train5_real_t _t444 = _t22*_t443;
+    const train5_real_t _t445 = J_theta_cart_left*_ms417;
+    const train5_real_t _t446 = _ms584*_t445;
+    const train5_real_t _t447 = -_ms248*_ms564 - _ms249*_ms565 + _ms413*_t212 + _ms415*_t214;
+    const train5_real_t _t448 = _t20*_t447;
+    const train5_real_t _t449 = J_theta_cart_right*_ms413;
+    const train5_real_t _t450 = _ms583*_t449;
+    const train5_real_t _t451 = _ms567*_t0;
+    const train5_real_t _t452 = _ms567*_t1;
+    const train5_real_t _t453 = _ms567*_t2;
+    const train5_real_t _t454 = _ms567*_t3;
+    const train5_real_t _t455 = _ms567*_t4;
+    const train5_real_t _t456 = -_ms224*_ms564 - _ms225*_ms565 + _ms338*_t212 + _ms339*_t214;
+    const train5_real_t _t457 = _t10*_t456;
+    const train5_real_t _t458 = J_theta_cart*_ms566 + _ms310*_ms567 + _ms320*_ms573 + _ms321*_ms576
+            + _ms322*_ms579 + _ms323*_ms582 + _ms333;
+    const train5_real_t _t459 = _ms338*_t458;
+    const train5_real_t _t460 = J_theta_cart2*_ms573 + _ms311*_ms567 + _ms320*_ms566 + _ms324*_ms576
+            + _ms325*_ms579 + _ms326*_ms582 + _ms334;
+    const train5_real_t _t461 = J_theta_cart3*_ms576 + _ms312*_ms567 + _ms321*_ms566 + _ms324*_ms573
+            + _ms327*_ms579 + _ms328*_ms582 + _ms335;
+    const train5_real_t _t462 = J_theta_cart4*_ms579 + _ms313*_ms567 + _ms322*_ms566 + _ms325*_ms573
+            + _ms327*_ms576 + _ms329*_ms582 + _ms336;
+    const train5_real_t _t463 = J_theta_cart5*_ms582 + _ms314*_ms567 + _ms323*_ms566 + _ms326*_ms573
+            + _ms328*_ms576 + _ms329*_ms579 + _ms337;
+    const train5_real_t _t464 = TRAIN5_LIT(0.3)*_t133;
+    const train5_real_t _t465 = _t118*_t464;
+    const train5_real_t _t466 = _t119*_t464;
+    const train5_real_t _t467 = TRAIN5_LIT(0.3)*_t136;
+    const train5_real_t _t468 = _t122*_t467;
+    const train5_real_t _t469 = _t123*_t467;
+    const train5_real_t _t470 = TRAIN5_LIT(0.3)*_t146;
+    const train5_real_t _t471 = _t126*_t470;
+    const train5_real_t _t472 = _t127*_t470;
+    const train5_real_t _t473 = TRAIN5_LIT(0.3)*_t142;
+    const train5_real_t _t474 = _t130*_t473;
+    const train5_real_t _t475 = _t131*_t473;
+    const train5_real_t _t476 = TRAIN5_LIT(0.3)*_t139;
+    const train5_real_t _t477 = _t112*_t476;
+    const train5_real_t _t478 = _t113*_t476;
+    const train5_real_t _t479 = TRAIN5_LIT(0.6)*_ms288;
+    const train5_real_t _t480 = -_t479*_t52 - _t479*_t54;
+    const train5_real_t _t481 = _t115*_t480;
+    const train5_real_t _t482 = TRAIN5_LIT(0.6)*_ms289;
+    const train5_real_t _t483 = -_t482*_t58 - _t482*_t60;
+    const train5_real_t _t484 = TRAIN5_LIT(0.6)*_ms290;
+    const train5_real_t _t485 = -_t484*_t64 - _t484*_t66;
+    const train5_real_t _t486 = TRAIN5_LIT(0.6)*_ms291;
+    const train5_real_t _t487 = -_t486*_t70 - _t486*_t72;
+    const train5_real_t _t488 = TRAIN5_LIT(0.6)*_ms292;
+    const train5_real_t _t489 = -_t488*_t76 - _t488*_t78;
+    const train5_real_t _t490 = _ms566*_t95;
+    const train5_real_t _t491 = _ms573*_t97;
+    const train5_real_t _t492 = _ms576*_t99;
+    const train5_real_t _t493 = _ms579*_t101;
+    const train5_real_t _t494 = _ms582*_t103;
+    const train5_real_t _t495 = _t23*_t443;
+    const train5_real_t _t496 = _ms584*_t81;
+    const train5_real_t _t497 = _t21*_t447;
+    const train5_real_t _t498 = _ms583*_t80;
+    const train5_real_t _t499 = _ms567*_t5;
+    const train5_real_t _t500 = _ms567*_t6;
+    const train5_real_t _t501 = _ms567*_t7;
+    const train5_real_t _t502 = _ms567*_t8;
+    const train5_real_t _t503 = _ms567*_t9;
+    const train5_real_t _t504 = _t11*_t456;
+    const train5_real_t _t505 = _ms339*_t458;
+    const train5_real_t _t506 = _ms305*_ms338;
+    const train5_real_t _t507 = _ms224*_ms310;
+    const train5_real_t _t508 = _ms228*_ms311;
+    const train5_real_t _t509 = _ms232*_ms312;
+    const train5_real_t _t510 = _ms236*_ms313;
+    const train5_real_t _t511 = _ms240*_ms314;
+    const train5_real_t _t512 = _t507 + _t508 + _t509 + _t510 + _t511;
+    const train5_real_t _t513 = J_theta_cart*_ms338;
+    const train5_real_t _t514 = _ms320*_ms338;
+    const train5_real_t _t515 = _ms321*_ms338;
+    const train5_real_t _t516 = _ms322*_ms338;
+    const train5_real_t _t517 = _ms323*_ms338;
+    const train5_real_t _t518 = _ms248*_t449;
+    const train5_real_t _t519 = _ms252*_t445;
+    const train5_real_t _t520 = _ms338*_t10;
+    const train5_real_t _t521 = _ms413*_t20;
+    const train5_real_t _t522 = _ms417*_t22;
+    const train5_real_t _t523 = TRAIN5_LIT(1.0)/radius_right;
+    const train5_real_t _t524 = TRAIN5_LIT(1.0)/radius_left;
+    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const train5_real_t _t525 = K_theta_tractor_x_tractor_2 + _t5 + _t6 + _t7 + _t8 + _t9;
+    const train5_real_t _t526 = TRAIN5_LIT(0.207)*_t523;
+    const train5_real_t J_theta_right = p->J_theta_right;
+    const train5_real_t _t527 = J_theta_right*_t526;
+    const train5_real_t _t528 = -TRAIN5_LIT(0.207)*_t524;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t _t529 = J_theta_left*_t528;
+    const train5_real_t _t530 = _ms224*_t11 + _ms228*_t13 + _ms232*_t15 + _ms236*_t17 + _ms240*_t19
+            + _ms248*_t21 + _ms252*_t23 + _ms256*_t25 + _ms260*_t27 + _ms264*_t29 + _ms268*_t31
+            + _ms272*_t33 + _ms276*_t35 + _ms280*_t37 + _ms284*_t39 + _t523*_t527 + _t524*_t529
+            + _t525;
+    const train5_real_t _t531 = TRAIN5_LIT(2.0)*_t530;
+    const train5_real_t J_x_tractor = p->J_x_tractor;
+    const train5_real_t _t532 = J_x_tractor + _t0 + _t1 + _t2 + _t3 + _t4;
+    const train5_real_t _t533 = J_theta_right*_t523;
+    const train5_real_t _t534 = J_theta_left*_t524;
+    const train5_real_t _t535 = _ms224*_t10 + _ms228*_t12 + _ms232*_t14 + _ms236*_t16 + _ms240*_t18
+            + _ms248*_t20 + _ms252*_t22 + _ms256*_t24 + _ms260*_t26 + _ms264*_t28 + _ms268*_t30
+            + _ms272*_t32 + _ms276*_t34 + _ms280*_t36 + _ms284*_t38 + _t523*_t533 + _t524*_t534
+            + _t532;
+    const train5_real_t J_theta_tractor = p->J_theta_tractor;
+    const train5_real_t _t536 = J_theta_tractor + _ms225*_ms315 + _ms229*_ms316 + _ms233*_ms317
+            + _ms237*_ms318 + _ms241*_ms319;
+    const train5_real_t _t537 = _ms225*_t11 + _ms229*_t13 + _ms233*_t15 + _ms237*_t17 + _ms241*_t19
+            + _ms249*_t21 + _ms253*_t23 + _ms257*_t25 + _ms261*_t27 + _ms265*_t29 + _ms269*_t31
+            + _ms273*_t33 + _ms277*_t35 + _ms281*_t37 + _ms285*_t39 + _t526*_t527 + _t528*_t529
+            + _t536;
+    const train5_real_t _t538 = -_t530*_t530 + _t535*_t537;
+    const train5_real_t _t539 = TRAIN5_LIT(1.0)/_t538;
+    const train5_real_t _t540 = _t539*_t539;
+    const train5_real_t _t541 = _t539;
+    const train5_real_t _t542 = _t530*_t541;
     const train5_real_t tau_right = tau[0];
     const train5_real_t tau_left = tau[1];
-    const train5_real_t _t1198 = _t1088*tau_right + _t1089*tau_left - _t1197;
-    const train5_real_t _t1199 = _t1106*_t1198;
-    const train5_real_t _t1200 = _t1102*_t1106;
-    const train5_real_t _t1201 = -_t210*_t228 - _t210*_t229 - _t213*_t230 - _t213*_t231
-            - _t216*_t232 - _t216*_t233 - _t219*_t234 - _t219*_t235 - _t222*_t236 - _t222*_t237;
-    const train5_real_t _t1202 = -K_theta_tractor_x_tractor*_t527 + _t1019*_t583 + _t1024*_t576
-            + _t1113*_t590 + _t1118*_t597 + _t1127*_t604 + _t1136*_t611 + _t1149*_t618
-            + _t1162*_t625 + _t1179*_t632 + _t1196*_t639 + _t1201 + _t124*_t669 + _t37*_t657
-            + _t47*_t660 + _t550*_t644 + _t556*_t647 + _t561*_t650 + _t565*_t653 + _t568*_t656
-            + _t60*_t663 + _t666*_t76;
-    const train5_real_t _t1203 = _t1091*tau_right + _t1093*tau_left - _t1202;
-    const train5_real_t _t1204 = _t1106*_t1203;
-    const train5_real_t _t1205 = -_t1095*_t1203 + _t1102*_t1198;
-    const train5_real_t _t1206 = _t1100*_t1106;
-    const train5_real_t _t1207 = -_t1095*_t1198 + _t1100*_t1203;
-    const train5_real_t _t1208 = _t10*_t133 + _t10*_t134 + _t159*_t9 - _t246;
-    const train5_real_t _t1209 = _t1208*_t47;
-    const train5_real_t _t1210 = -_t247 + _t248 + _t251 + _t252;
-    const train5_real_t _t1211 = _t1210*_t60;
-    const train5_real_t _t1212 = -_t255 + _t256 + _t261 + _t262;
-    const train5_real_t _t1213 = _t1212*_t76;
-    const train5_real_t _t1214 = -_t267 + _t268 + _t275 + _t276;
-    const train5_real_t _t1215 = _t1214*_t124;
-    const train5_real_t _t1216 = _t1208*_t37;
-    const train5_real_t _t1217 = _t1210*_t37;
-    const train5_real_t _t1218 = _t1212*_t37;
-    const train5_real_t _t1219 = _t1214*_t37;
-    const train5_real_t _t1220 = J_theta_cart2_right*_t841;
-    const train5_real_t _t1221 = J_theta_cart2_left*_t852;
-    const train5_real_t _t1222 = J_theta_cart3_right*_t885;
-    const train5_real_t _t1223 = J_theta_cart3_left*_t891;
-    const train5_real_t _t1224 = J_theta_cart4_right*_t927;
-    const train5_real_t _t1225 = J_theta_cart4_left*_t933;
-    const train5_real_t _t1226 = J_theta_cart5_right*_t979;
-    const train5_real_t _t1227 = J_theta_cart5_left*_t985;
-    const train5_real_t _t1228 = _t10*_t223;
-    const train5_real_t _t1229 = _t10*_t224;
-    const train5_real_t _t1230 = _t10*_t211;
-    const train5_real_t _t1231 = _t238*_t9;
-    const train5_real_t _t1232 = _t239*_t9;
-    const train5_real_t _t1233 = _t10*_t214;
-    const train5_real_t _t1234 = _t240*_t9;
-    const train5_real_t _t1235 = _t241*_t9;
-    const train5_real_t _t1236 = _t10*_t220 - _t10*_t226 + _t244*_t9 + _t245*_t9;
-    const train5_real_t _t1237 = _t10*_t217 - _t10*_t225 + _t242*_t9 + _t243*_t9;
-    const train5_real_t _t1238 = _t156*_t222 + _t157*_t222 + _t158*_t222 - _t160*_t222;
-    const train5_real_t _t1239 = _t161*_t222 + _t162*_t222 + _t163*_t222 - _t165*_t222;
-    const train5_real_t _t1240 = _t166*_t222 + _t167*_t222 + _t168*_t222 - _t170*_t222;
-    const train5_real_t _t1241 = _t171*_t222 + _t172*_t222 + _t173*_t222 - _t175*_t222;
-    const train5_real_t _t1242 = TRAIN5_LIT(2.0)*_t35 - TRAIN5_LIT(2.0)*_t396;
-    const train5_real_t _t1243 = -TRAIN5_LIT(1.6666666666666667)*_t1242;
-    const train5_real_t _t1244 = TRAIN5_LIT(0.2)*_t1243;
-    const train5_real_t _t1245 = TRAIN5_LIT(2.0)*_t284 + TRAIN5_LIT(2.0)*_t83;
-    const train5_real_t _t1246 = TRAIN5_LIT(2.0)*_t38 - TRAIN5_LIT(2.0)*_t399;
-    const train5_real_t _t1247 = -TRAIN5_LIT(1.6666666666666667)*_t1246;
-    const train5_real_t _t1248 = TRAIN5_LIT(0.2)*_t1247;
-    const train5_real_t _t1249 = TRAIN5_LIT(2.0)*_t287 + TRAIN5_LIT(2.0)*_t86;
-    const train5_real_t _t1250 = -_t1243*_t42 + TRAIN5_LIT(2.0)*_t34*_t40 - TRAIN5_LIT(2.0)*_t408;
-    const train5_real_t _t1251 = -TRAIN5_LIT(1.6666666666666667)*_t1250;
-    const train5_real_t _t1252 = TRAIN5_LIT(0.2)*_t1251;
-    const train5_real_t _t1253 = _t1243*_t92;
-    const train5_real_t _t1254 = -_t1247*_t42 + TRAIN5_LIT(2.0)*_t37*_t40 - TRAIN5_LIT(2.0)*_t412;
-    const train5_real_t _t1255 = -TRAIN5_LIT(1.6666666666666667)*_t1254;
-    const train5_real_t _t1256 = TRAIN5_LIT(0.2)*_t1255;
-    const train5_real_t _t1257 = _t1247*_t92;
-    const train5_real_t _t1258 = _t416 - _t819;
-    const train5_real_t _t1259 = -TRAIN5_LIT(1.6666666666666667)*_t1258;
-    const train5_real_t _t1260 = TRAIN5_LIT(0.2)*_t1259;
-    const train5_real_t _t1261 = _t300 + _t862;
-    const train5_real_t _t1262 = _t420 - _t820;
-    const train5_real_t _t1263 = -TRAIN5_LIT(1.6666666666666667)*_t1262;
-    const train5_real_t _t1264 = TRAIN5_LIT(0.2)*_t1263;
-    const train5_real_t _t1265 = _t304 + _t867;
-    const train5_real_t _t1266 = TRAIN5_LIT(1.6666666666666667)*_t418;
-    const train5_real_t _t1267 = TRAIN5_LIT(0.2)*_t1266;
-    const train5_real_t _t1268 = TRAIN5_LIT(1.6666666666666667)*_t422;
-    const train5_real_t _t1269 = TRAIN5_LIT(0.2)*_t1268;
-    const train5_real_t _t1270 = -_t1243*_t52 - _t1251*_t54 + TRAIN5_LIT(2.0)*_t34*_t50
-            - TRAIN5_LIT(2.0)*_t432;
-    const train5_real_t _t1271 = -TRAIN5_LIT(1.6666666666666667)*_t1270;
-    const train5_real_t _t1272 = TRAIN5_LIT(0.2)*_t1271;
-    const train5_real_t _t1273 = _t103*_t1243;
-    const train5_real_t _t1274 = _t105*_t1251;
-    const train5_real_t _t1275 = -_t1247*_t52 - _t1255*_t54 + TRAIN5_LIT(2.0)*_t37*_t50
-            - TRAIN5_LIT(2.0)*_t437;
-    const train5_real_t _t1276 = -TRAIN5_LIT(1.6666666666666667)*_t1275;
-    const train5_real_t _t1277 = TRAIN5_LIT(0.2)*_t1276;
-    const train5_real_t _t1278 = _t103*_t1247;
-    const train5_real_t _t1279 = _t105*_t1255;
-    const train5_real_t _t1280 = -_t1259*_t54 + _t442 - _t823;
-    const train5_real_t _t1281 = -TRAIN5_LIT(1.6666666666666667)*_t1280;
-    const train5_real_t _t1282 = TRAIN5_LIT(0.2)*_t1281;
-    const train5_real_t _t1283 = _t105*_t1259 + _t323 + _t896;
-    const train5_real_t _t1284 = -_t1263*_t54 + _t447 - _t824;
-    const train5_real_t _t1285 = -TRAIN5_LIT(1.6666666666666667)*_t1284;
-    const train5_real_t _t1286 = TRAIN5_LIT(0.2)*_t1285;
-    const train5_real_t _t1287 = _t105*_t1263 + _t328 + _t901;
-    const train5_real_t _t1288 = -_t1266*_t54 + _t443;
-    const train5_real_t _t1289 = -TRAIN5_LIT(1.6666666666666667)*_t1288;
-    const train5_real_t _t1290 = TRAIN5_LIT(0.2)*_t1289;
-    const train5_real_t _t1291 = _t105*_t1266 + _t325;
-    const train5_real_t _t1292 = -_t1268*_t54 + _t448;
-    const train5_real_t _t1293 = -TRAIN5_LIT(1.6666666666666667)*_t1292;
-    const train5_real_t _t1294 = TRAIN5_LIT(0.2)*_t1293;
-    const train5_real_t _t1295 = _t105*_t1268 + _t330;
-    const train5_real_t _t1296 = TRAIN5_LIT(1.6666666666666667)*_t445;
-    const train5_real_t _t1297 = TRAIN5_LIT(0.2)*_t1296;
-    const train5_real_t _t1298 = TRAIN5_LIT(1.6666666666666667)*_t450;
-    const train5_real_t _t1299 = TRAIN5_LIT(0.2)*_t1298;
-    const train5_real_t _t1300 = -_t1243*_t65 - _t1251*_t67 - _t1271*_t69
-            + TRAIN5_LIT(2.0)*_t34*_t63 - TRAIN5_LIT(2.0)*_t469;
-    const train5_real_t _t1301 = -TRAIN5_LIT(1.6666666666666667)*_t1300;
-    const train5_real_t _t1302 = TRAIN5_LIT(0.2)*_t1301;
-    const train5_real_t _t1303 = -TRAIN5_LIT(2.0)*_t115*_t34 + _t117*_t1243 + _t119*_t1251
-            + _t121*_t1271 - TRAIN5_LIT(2.0)*_t283*_t63;
-    const train5_real_t _t1304 = -_t1247*_t65 - _t1255*_t67 - _t1276*_t69
-            + TRAIN5_LIT(2.0)*_t37*_t63 - TRAIN5_LIT(2.0)*_t476;
-    const train5_real_t _t1305 = -TRAIN5_LIT(1.6666666666666667)*_t1304;
-    const train5_real_t _t1306 = TRAIN5_LIT(0.2)*_t1305;
-    const train5_real_t _t1307 = -TRAIN5_LIT(2.0)*_t115*_t37 + _t117*_t1247 + _t119*_t1255
-            + _t121*_t1276 - TRAIN5_LIT(2.0)*_t286*_t63;
-    const train5_real_t _t1308 = -_t1259*_t67 - _t1281*_t69 + _t483 - _t827;
-    const train5_real_t _t1309 = -TRAIN5_LIT(1.6666666666666667)*_t1308;
-    const train5_real_t _t1310 = TRAIN5_LIT(0.2)*_t1309;
-    const train5_real_t _t1311 = _t119*_t1259 + _t121*_t1281 + _t359 + _t938;
-    const train5_real_t _t1312 = -_t1263*_t67 - _t1285*_t69 + _t490 - _t828;
-    const train5_real_t _t1313 = -TRAIN5_LIT(1.6666666666666667)*_t1312;
-    const train5_real_t _t1314 = TRAIN5_LIT(0.2)*_t1313;
-    const train5_real_t _t1315 = _t119*_t1263 + _t121*_t1285 + _t364 + _t944;
-    const train5_real_t _t1316 = -_t1266*_t67 - _t1289*_t69 + _t484;
-    const train5_real_t _t1317 = -TRAIN5_LIT(1.6666666666666667)*_t1316;
-    const train5_real_t _t1318 = TRAIN5_LIT(0.2)*_t1317;
-    const train5_real_t _t1319 = _t119*_t1266 + _t121*_t1289 + _t360;
-    const train5_real_t _t1320 = -_t1268*_t67 - _t1293*_t69 + _t491;
-    const train5_real_t _t1321 = -TRAIN5_LIT(1.6666666666666667)*_t1320;
-    const train5_real_t _t1322 = TRAIN5_LIT(0.2)*_t1321;
-    const train5_real_t _t1323 = _t119*_t1268 + _t121*_t1293 + _t365;
-    const train5_real_t _t1324 = -_t1296*_t69 + _t485;
-    const train5_real_t _t1325 = -TRAIN5_LIT(1.6666666666666667)*_t1324;
-    const train5_real_t _t1326 = TRAIN5_LIT(0.2)*_t1325;
-    const train5_real_t _t1327 = _t121*_t1296 + _t362;
-    const train5_real_t _t1328 = -_t1298*_t69 + _t492;
-    const train5_real_t _t1329 = -TRAIN5_LIT(1.6666666666666667)*_t1328;
-    const train5_real_t _t1330 = TRAIN5_LIT(0.2)*_t1329;
-    const train5_real_t _t1331 = _t121*_t1298 + _t367;
-    const train5_real_t _t1332 = TRAIN5_LIT(1.6666666666666667)*_t487;
-    const train5_real_t _t1333 = TRAIN5_LIT(0.2)*_t1332;
-    const train5_real_t _t1334 = TRAIN5_LIT(1.6666666666666667)*_t494;
-    const train5_real_t _t1335 = TRAIN5_LIT(0.2)*_t1334;
-    const train5_real_t _t1336 = J_theta_cart2_left*_t849;
-    const train5_real_t _t1337 = J_theta_cart2_right*_t838;
-    const train5_real_t _t1338 = J_theta_cart3_left*_t888;
-    const train5_real_t _t1339 = J_theta_cart3_right*_t882;
-    const train5_real_t _t1340 = J_theta_cart4_left*_t930;
-    const train5_real_t _t1341 = J_theta_cart4_right*_t924;
-    const train5_real_t _t1342 = J_theta_cart5_left*_t982;
-    const train5_real_t _t1343 = J_theta_cart5_right*_t976;
-    const train5_real_t _t1344 = _t1208*(_t34*_t647 + _t43*_t644);
-    const train5_real_t _t1345 = _t1210*(_t34*_t650 + _t55*_t644);
-    const train5_real_t _t1346 = _t1212*(_t34*_t653 + _t644*_t70);
-    const train5_real_t _t1347 = _t1214*(_t113*_t644 + _t34*_t656);
-    const train5_real_t _t1348 = _t1208*(_t37*_t647 + _t47*_t644);
-    const train5_real_t _t1349 = _t1210*(_t37*_t650 + _t60*_t644);
-    const train5_real_t _t1350 = _t1212*(_t37*_t653 + _t644*_t76);
-    const train5_real_t _t1351 = _t1214*(_t124*_t644 + _t37*_t656);
-    const train5_real_t _t1352 = _t1208*_t43;
-    const train5_real_t _t1353 = _t1210*_t55;
-    const train5_real_t _t1354 = _t1212*_t70;
-    const train5_real_t _t1355 = _t113*_t1214;
-    const train5_real_t _t1356 = _t1208*_t34;
-    const train5_real_t _t1357 = _t1210*_t34;
-    const train5_real_t _t1358 = _t1212*_t34;
-    const train5_real_t _t1359 = _t1214*_t34;
-    const train5_real_t _t1360 = -_t249 + _t250 + _t253 + _t254;
-    const train5_real_t _t1361 = _t1360*_t60;
-    const train5_real_t _t1362 = -_t257 + _t258 + _t263 + _t264;
-    const train5_real_t _t1363 = _t1362*_t76;
-    const train5_real_t _t1364 = -_t269 + _t270 + _t277 + _t278;
-    const train5_real_t _t1365 = _t124*_t1364;
-    const train5_real_t _t1366 = _t1360*_t47;
-    const train5_real_t _t1367 = _t1362*_t47;
-    const train5_real_t _t1368 = _t1364*_t47;
-    const train5_real_t _t1369 = J_theta_cart2_right*_t1112;
-    const train5_real_t _t1370 = J_theta_cart2_left*_t1117;
-    const train5_real_t _t1371 = J_theta_cart3_right*_t1122;
-    const train5_real_t _t1372 = J_theta_cart3_left*_t1131;
-    const train5_real_t _t1373 = J_theta_cart4_right*_t1140;
-    const train5_real_t _t1374 = J_theta_cart4_left*_t1153;
-    const train5_real_t _t1375 = J_theta_cart5_right*_t1166;
-    const train5_real_t _t1376 = J_theta_cart5_left*_t1183;
-    const train5_real_t _t1377 = _t16*_t224;
-    const train5_real_t _t1378 = _t16*_t214;
-    const train5_real_t _t1379 = _t15*_t240;
-    const train5_real_t _t1380 = _t15*_t241;
-    const train5_real_t _t1381 = _t15*_t244 + _t15*_t245 + _t16*_t220 - _t16*_t226;
-    const train5_real_t _t1382 = _t15*_t242 + _t15*_t243 + _t16*_t217 - _t16*_t225;
-    const train5_real_t _t1383 = _t176*_t210;
-    const train5_real_t _t1384 = _t177*_t210;
-    const train5_real_t _t1385 = _t178*_t210;
-    const train5_real_t _t1386 = _t179*_t210;
-    const train5_real_t _t1387 = _t180*_t210;
-    const train5_real_t _t1388 = _t181*_t210;
-    const train5_real_t _t1389 = _t182*_t210;
-    const train5_real_t _t1390 = _t183*_t210;
-    const train5_real_t _t1391 = _t184*_t210;
-    const train5_real_t _t1392 = _t185*_t210;
-    const train5_real_t _t1393 = _t186*_t210;
-    const train5_real_t _t1394 = _t187*_t210;
-    const train5_real_t _t1395 = TRAIN5_LIT(2.0)*_t424 + TRAIN5_LIT(2.0)*_t44;
-    const train5_real_t _t1396 = -TRAIN5_LIT(1.6666666666666667)*_t1395;
-    const train5_real_t _t1397 = TRAIN5_LIT(0.2)*_t1396;
-    const train5_real_t _t1398 = TRAIN5_LIT(2.0)*_t308;
-    const train5_real_t _t1399 = TRAIN5_LIT(2.0)*_t427 + TRAIN5_LIT(2.0)*_t48;
-    const train5_real_t _t1400 = -TRAIN5_LIT(1.6666666666666667)*_t1399;
-    const train5_real_t _t1401 = TRAIN5_LIT(0.2)*_t1400;
-    const train5_real_t _t1402 = TRAIN5_LIT(2.0)*_t311;
-    const train5_real_t _t1403 = TRAIN5_LIT(1.6666666666666667)*_t425;
-    const train5_real_t _t1404 = TRAIN5_LIT(0.2)*_t1403;
-    const train5_real_t _t1405 = TRAIN5_LIT(1.6666666666666667)*_t428;
-    const train5_real_t _t1406 = TRAIN5_LIT(0.2)*_t1405;
-    const train5_real_t _t1407 = -_t1396*_t54 + TRAIN5_LIT(2.0)*_t452 + TRAIN5_LIT(2.0)*_t53;
-    const train5_real_t _t1408 = -TRAIN5_LIT(1.6666666666666667)*_t1407;
-    const train5_real_t _t1409 = TRAIN5_LIT(0.2)*_t1408;
-    const train5_real_t _t1410 = -TRAIN5_LIT(2.0)*_t103*_t43 + _t105*_t1396 + TRAIN5_LIT(2.0)*_t333;
-    const train5_real_t _t1411 = -_t1400*_t54 + TRAIN5_LIT(2.0)*_t456 + TRAIN5_LIT(2.0)*_t59;
-    const train5_real_t _t1412 = -TRAIN5_LIT(1.6666666666666667)*_t1411;
-    const train5_real_t _t1413 = TRAIN5_LIT(0.2)*_t1412;
-    const train5_real_t _t1414 = -TRAIN5_LIT(2.0)*_t103*_t47 + _t105*_t1400 + TRAIN5_LIT(2.0)*_t337;
-    const train5_real_t _t1415 = -_t1403*_t54 + _t453;
-    const train5_real_t _t1416 = -TRAIN5_LIT(1.6666666666666667)*_t1415;
-    const train5_real_t _t1417 = TRAIN5_LIT(0.2)*_t1416;
-    const train5_real_t _t1418 = _t105*_t1403 + _t335;
-    const train5_real_t _t1419 = -_t1405*_t54 + _t457;
-    const train5_real_t _t1420 = -TRAIN5_LIT(1.6666666666666667)*_t1419;
-    const train5_real_t _t1421 = TRAIN5_LIT(0.2)*_t1420;
-    const train5_real_t _t1422 = _t105*_t1405 + _t339;
-    const train5_real_t _t1423 = TRAIN5_LIT(1.6666666666666667)*_t454;
-    const train5_real_t _t1424 = TRAIN5_LIT(0.2)*_t1423;
-    const train5_real_t _t1425 = TRAIN5_LIT(1.6666666666666667)*_t458;
-    const train5_real_t _t1426 = TRAIN5_LIT(0.2)*_t1425;
-    const train5_real_t _t1427 = TRAIN5_LIT(2.0)*_t117*_t307 - _t1396*_t67 - _t1408*_t69
-            + TRAIN5_LIT(2.0)*_t43*_t65;
-    const train5_real_t _t1428 = -TRAIN5_LIT(1.6666666666666667)*_t1427;
-    const train5_real_t _t1429 = TRAIN5_LIT(0.2)*_t1428;
-    const train5_real_t _t1430 = -TRAIN5_LIT(2.0)*_t117*_t43 + _t119*_t1396 + _t121*_t1408
-            + TRAIN5_LIT(2.0)*_t369;
-    const train5_real_t _t1431 = TRAIN5_LIT(2.0)*_t117*_t310 - _t1400*_t67 - _t1412*_t69
-            + TRAIN5_LIT(2.0)*_t47*_t65;
-    const train5_real_t _t1432 = -TRAIN5_LIT(1.6666666666666667)*_t1431;
-    const train5_real_t _t1433 = TRAIN5_LIT(0.2)*_t1432;
-    const train5_real_t _t1434 = -TRAIN5_LIT(2.0)*_t117*_t47 + _t119*_t1400 + _t121*_t1412
-            + TRAIN5_LIT(2.0)*_t374;
-    const train5_real_t _t1435 = -_t1403*_t67 - _t1416*_t69 + _t497;
-    const train5_real_t _t1436 = -TRAIN5_LIT(1.6666666666666667)*_t1435;
-    const train5_real_t _t1437 = TRAIN5_LIT(0.2)*_t1436;
-    const train5_real_t _t1438 = _t119*_t1403 + _t121*_t1416 + _t370;
-    const train5_real_t _t1439 = -_t1405*_t67 - _t1420*_t69 + _t502;
-    const train5_real_t _t1440 = -TRAIN5_LIT(1.6666666666666667)*_t1439;
-    const train5_real_t _t1441 = TRAIN5_LIT(0.2)*_t1440;
-    const train5_real_t _t1442 = _t119*_t1405 + _t121*_t1420 + _t375;
-    const train5_real_t _t1443 = -_t1423*_t69 + _t498;
-    const train5_real_t _t1444 = -TRAIN5_LIT(1.6666666666666667)*_t1443;
-    const train5_real_t _t1445 = TRAIN5_LIT(0.2)*_t1444;
-    const train5_real_t _t1446 = _t121*_t1423 + _t372;
-    const train5_real_t _t1447 = -_t1425*_t69 + _t503;
-    const train5_real_t _t1448 = -TRAIN5_LIT(1.6666666666666667)*_t1447;
-    const train5_real_t _t1449 = TRAIN5_LIT(0.2)*_t1448;
-    const train5_real_t _t1450 = _t121*_t1425 + _t377;
-    const train5_real_t _t1451 = TRAIN5_LIT(1.6666666666666667)*_t499;
-    const train5_real_t _t1452 = TRAIN5_LIT(0.2)*_t1451;
-    const train5_real_t _t1453 = TRAIN5_LIT(1.6666666666666667)*_t504;
-    const train5_real_t _t1454 = TRAIN5_LIT(0.2)*_t1453;
-    const train5_real_t _t1455 = J_theta_cart2_left*_t1115;
-    const train5_real_t _t1456 = J_theta_cart2_right*_t1110;
-    const train5_real_t _t1457 = J_theta_cart3_left*_t1129;
-    const train5_real_t _t1458 = J_theta_cart3_right*_t1120;
-    const train5_real_t _t1459 = J_theta_cart4_left*_t1151;
-    const train5_real_t _t1460 = J_theta_cart4_right*_t1138;
-    const train5_real_t _t1461 = J_theta_cart5_left*_t1181;
-    const train5_real_t _t1462 = J_theta_cart5_right*_t1164;
-    const train5_real_t _t1463 = _t1360*(_t43*_t650 + _t55*_t647);
-    const train5_real_t _t1464 = _t1362*(_t43*_t653 + _t647*_t70);
-    const train5_real_t _t1465 = _t1364*(_t113*_t647 + _t43*_t656);
-    const train5_real_t _t1466 = _t1360*(_t47*_t650 + _t60*_t647);
-    const train5_real_t _t1467 = _t1362*(_t47*_t653 + _t647*_t76);
-    const train5_real_t _t1468 = _t1364*(_t124*_t647 + _t47*_t656);
-    const train5_real_t _t1469 = _t1360*_t55;
-    const train5_real_t _t1470 = _t1362*_t70;
-    const train5_real_t _t1471 = _t113*_t1364;
-    const train5_real_t _t1472 = _t1360*_t43;
-    const train5_real_t _t1473 = _t1362*_t43;
-    const train5_real_t _t1474 = _t1364*_t43;
-    const train5_real_t _t1475 = -_t259 + _t260 + _t265 + _t266;
-    const train5_real_t _t1476 = _t1475*_t76;
-    const train5_real_t _t1477 = -_t271 + _t272 + _t279 + _t280;
-    const train5_real_t _t1478 = _t124*_t1477;
-    const train5_real_t _t1479 = _t1475*_t60;
-    const train5_real_t _t1480 = _t1477*_t60;
-    const train5_real_t _t1481 = J_theta_cart3_right*_t1126;
-    const train5_real_t _t1482 = J_theta_cart3_left*_t1135;
-    const train5_real_t _t1483 = J_theta_cart4_right*_t1144;
-    const train5_real_t _t1484 = J_theta_cart4_left*_t1157;
-    const train5_real_t _t1485 = J_theta_cart5_right*_t1170;
-    const train5_real_t _t1486 = J_theta_cart5_left*_t1187;
-    const train5_real_t _t1487 = _t21*_t244 + _t21*_t245 + _t22*_t220 - _t22*_t226;
-    const train5_real_t _t1488 = _t21*_t242 + _t21*_t243 + _t217*_t22 - _t22*_t225;
-    const train5_real_t _t1489 = _t188*_t213 + _t189*_t213 + _t190*_t213 - _t191*_t213;
-    const train5_real_t _t1490 = _t192*_t213 + _t193*_t213 + _t194*_t213 - _t195*_t213;
-    const train5_real_t _t1491 = TRAIN5_LIT(2.0)*_t460 + TRAIN5_LIT(2.0)*_t56;
-    const train5_real_t _t1492 = -TRAIN5_LIT(1.6666666666666667)*_t1491;
-    const train5_real_t _t1493 = TRAIN5_LIT(0.2)*_t1492;
-    const train5_real_t _t1494 = TRAIN5_LIT(2.0)*_t342;
-    const train5_real_t _t1495 = TRAIN5_LIT(2.0)*_t463 + TRAIN5_LIT(2.0)*_t61;
-    const train5_real_t _t1496 = -TRAIN5_LIT(1.6666666666666667)*_t1495;
-    const train5_real_t _t1497 = TRAIN5_LIT(0.2)*_t1496;
-    const train5_real_t _t1498 = TRAIN5_LIT(2.0)*_t345;
-    const train5_real_t _t1499 = TRAIN5_LIT(1.6666666666666667)*_t461;
-    const train5_real_t _t1500 = TRAIN5_LIT(0.2)*_t1499;
-    const train5_real_t _t1501 = TRAIN5_LIT(1.6666666666666667)*_t464;
-    const train5_real_t _t1502 = TRAIN5_LIT(0.2)*_t1501;
-    const train5_real_t _t1503 = -_t1492*_t69 + TRAIN5_LIT(2.0)*_t507 + TRAIN5_LIT(2.0)*_t68;
-    const train5_real_t _t1504 = -TRAIN5_LIT(1.6666666666666667)*_t1503;
-    const train5_real_t _t1505 = TRAIN5_LIT(0.2)*_t1504;
-    const train5_real_t _t1506 = -TRAIN5_LIT(2.0)*_t119*_t55 + _t121*_t1492 + TRAIN5_LIT(2.0)*_t379;
-    const train5_real_t _t1507 = -_t1496*_t69 + TRAIN5_LIT(2.0)*_t512 + TRAIN5_LIT(2.0)*_t75;
-    const train5_real_t _t1508 = -TRAIN5_LIT(1.6666666666666667)*_t1507;
-    const train5_real_t _t1509 = TRAIN5_LIT(0.2)*_t1508;
-    const train5_real_t _t1510 = -TRAIN5_LIT(2.0)*_t119*_t60 + _t121*_t1496 + TRAIN5_LIT(2.0)*_t383;
-    const train5_real_t _t1511 = -_t1499*_t69 + _t508;
-    const train5_real_t _t1512 = -TRAIN5_LIT(1.6666666666666667)*_t1511;
-    const train5_real_t _t1513 = TRAIN5_LIT(0.2)*_t1512;
-    const train5_real_t _t1514 = _t121*_t1499 + _t381;
-    const train5_real_t _t1515 = -_t1501*_t69 + _t513;
-    const train5_real_t _t1516 = -TRAIN5_LIT(1.6666666666666667)*_t1515;
-    const train5_real_t _t1517 = TRAIN5_LIT(0.2)*_t1516;
-    const train5_real_t _t1518 = _t121*_t1501 + _t385;
-    const train5_real_t _t1519 = TRAIN5_LIT(1.6666666666666667)*_t509;
-    const train5_real_t _t1520 = TRAIN5_LIT(0.2)*_t1519;
-    const train5_real_t _t1521 = TRAIN5_LIT(1.6666666666666667)*_t514;
-    const train5_real_t _t1522 = TRAIN5_LIT(0.2)*_t1521;
-    const train5_real_t _t1523 = J_theta_cart3_left*_t1133;
-    const train5_real_t _t1524 = J_theta_cart3_right*_t1124;
-    const train5_real_t _t1525 = J_theta_cart4_left*_t1155;
-    const train5_real_t _t1526 = J_theta_cart4_right*_t1142;
-    const train5_real_t _t1527 = J_theta_cart5_left*_t1185;
-    const train5_real_t _t1528 = J_theta_cart5_right*_t1168;
-    const train5_real_t _t1529 = _t1475*(_t55*_t653 + _t650*_t70);
-    const train5_real_t _t1530 = _t1477*(_t113*_t650 + _t55*_t656);
-    const train5_real_t _t1531 = _t1475*(_t60*_t653 + _t650*_t76);
-    const train5_real_t _t1532 = _t1477*(_t124*_t650 + _t60*_t656);
-    const train5_real_t _t1533 = _t1475*_t70;
-    const train5_real_t _t1534 = _t113*_t1477;
-    const train5_real_t _t1535 = _t1475*_t55;
-    const train5_real_t _t1536 = _t1477*_t55;
-    const train5_real_t _t1537 = -_t273 + _t274 + _t281 + _t282;
-    const train5_real_t _t1538 = _t124*_t1537;
-    const train5_real_t _t1539 = _t1537*_t76;
-    const train5_real_t _t1540 = J_theta_cart4_right*_t1148;
-    const train5_real_t _t1541 = J_theta_cart4_left*_t1161;
-    const train5_real_t _t1542 = J_theta_cart5_right*_t1174;
-    const train5_real_t _t1543 = J_theta_cart5_left*_t1191;
-    const train5_real_t _t1544 = _t196*_t244 + _t196*_t245 + _t198*_t220 - _t198*_t226;
-    const train5_real_t _t1545 = _t197*_t216 + _t199*_t216 + _t200*_t216 - _t201*_t216;
-    const train5_real_t _t1546 = TRAIN5_LIT(2.0)*_t517 + TRAIN5_LIT(2.0)*_t71;
-    const train5_real_t _t1547 = -TRAIN5_LIT(1.6666666666666667)*_t1546;
-    const train5_real_t _t1548 = TRAIN5_LIT(0.2)*_t1547;
-    const train5_real_t _t1549 = TRAIN5_LIT(2.0)*_t388;
-    const train5_real_t _t1550 = TRAIN5_LIT(2.0)*_t521 + TRAIN5_LIT(2.0)*_t77;
-    const train5_real_t _t1551 = -TRAIN5_LIT(1.6666666666666667)*_t1550;
-    const train5_real_t _t1552 = TRAIN5_LIT(0.2)*_t1551;
-    const train5_real_t _t1553 = TRAIN5_LIT(2.0)*_t391;
-    const train5_real_t _t1554 = TRAIN5_LIT(1.6666666666666667)*_t518;
-    const train5_real_t _t1555 = TRAIN5_LIT(0.2)*_t1554;
-    const train5_real_t _t1556 = TRAIN5_LIT(1.6666666666666667)*_t522;
-    const train5_real_t _t1557 = TRAIN5_LIT(0.2)*_t1556;
-    const train5_real_t _t1558 = J_theta_cart4_left*_t1159;
-    const train5_real_t _t1559 = J_theta_cart4_right*_t1146;
-    const train5_real_t _t1560 = J_theta_cart5_left*_t1189;
-    const train5_real_t _t1561 = J_theta_cart5_right*_t1172;
-    const train5_real_t _t1562 = _t1537*(_t113*_t653 + _t656*_t70);
-    const train5_real_t _t1563 = _t1537*(_t124*_t653 + _t656*_t76);
-    const train5_real_t _t1564 = _t113*_t1537;
-    const train5_real_t _t1565 = _t1537*_t70;
-    const train5_real_t _t1566 = J_theta_cart5_right*_t1178;
-    const train5_real_t _t1567 = J_theta_cart5_left*_t1195;
-    const train5_real_t _t1568 = J_theta_cart5_left*_t1193;
-    const train5_real_t _t1569 = J_theta_cart5_right*_t1176;
-    const train5_real_t _t1570 = TRAIN5_LIT(2.0)*_t204;
-    const train5_real_t _t1571 = _t1570*_t202;
-    const train5_real_t _t1572 = TRAIN5_LIT(0.6)*_t204;
-    const train5_real_t _t1573 = _t131*_t1572 + _t132*_t1572;
-    const train5_real_t _t1574 = _t133*_t1572 + _t134*_t1572;
-    const train5_real_t _t1575 = _t135*_t1572 + _t136*_t1572;
-    const train5_real_t _t1576 = _t137*_t1572 + _t138*_t1572;
-    const train5_real_t _t1577 = _t139*_t1572 + _t140*_t1572;
-    const train5_real_t _t1578 = _t202*_t208;
-    const train5_real_t _t1579 = _t202*_t37 + _t206*_t34;
-    const train5_real_t _t1580 = _t1579*_t208;
-    const train5_real_t _t1581 = -_t221;
-    const train5_real_t _t1582 = _t1581 + _t204;
-    const train5_real_t _t1583 = _t1579*_t204;
-    const train5_real_t _t1584 = _t1570 + _t1581;
-    const train5_real_t _t1585 = -K_theta_tractor_x_tractor + _t678;
-    const train5_real_t _t1586 = _t1570*_t203;
-    const train5_real_t _t1587 = _t203*_t208;
-    const train5_real_t _t1588 = _t203*_t37 + _t207*_t34;
-    const train5_real_t _t1589 = _t1588*_t208;
-    const train5_real_t _t1590 = _t1588*_t204;
-    const train5_real_t _t1591 = _t1088*_t206 + _t1091*_t202;
-    const train5_real_t _t1592 = _t1089*_t206 + _t1093*_t202;
-    const train5_real_t _t1593 = _t1088*_t207 + _t1091*_t203;
-    const train5_real_t _t1594 = _t1089*_t207 + _t1093*_t203;
-    const train5_real_t _t1595 = _t208*_t670;
-    const train5_real_t _t1596 = _t208*_t671;
-    const train5_real_t _t1597 = _t206*_t670;
-    const train5_real_t _t1598 = _t207*_t670;
-    const train5_real_t _t1599 = _t206*_t671;
-    const train5_real_t _t1600 = _t207*_t671;
-    const train5_real_t _t1601 = _t204*_t296 + _t208*_t292;
-    const train5_real_t _t1602 = _t204*_t303 + _t208*_t299;
-    const train5_real_t _t1603 = _t204*_t310 + _t208*_t307;
-    const train5_real_t _t1604 = _t202*_t47 + _t206*_t43;
-    const train5_real_t _t1605 = _t203*_t47 + _t207*_t43;
-    const train5_real_t _t1606 = _t204*_t320 + _t208*_t315;
-    const train5_real_t _t1607 = _t204*_t329 + _t208*_t324;
-    const train5_real_t _t1608 = _t204*_t338 + _t208*_t334;
-    const train5_real_t _t1609 = _t204*_t344 + _t208*_t341;
-    const train5_real_t _t1610 = _t202*_t60 + _t206*_t55;
-    const train5_real_t _t1611 = _t203*_t60 + _t207*_t55;
-    const train5_real_t _t1612 = _t204*_t356 + _t208*_t350;
-    const train5_real_t _t1613 = _t204*_t366 + _t208*_t361;
-    const train5_real_t _t1614 = _t204*_t376 + _t208*_t371;
-    const train5_real_t _t1615 = _t204*_t384 + _t208*_t380;
-    const train5_real_t _t1616 = _t204*_t390 + _t208*_t387;
-    const train5_real_t _t1617 = _t202*_t76 + _t206*_t70;
-    const train5_real_t _t1618 = _t203*_t76 + _t207*_t70;
-    const train5_real_t _t1619 = _t204*_t474 + _t208*_t467;
-    const train5_real_t _t1620 = _t204*_t488 + _t208*_t481;
-    const train5_real_t _t1621 = _t204*_t500 + _t208*_t495;
-    const train5_real_t _t1622 = _t204*_t510 + _t208*_t505;
-    const train5_real_t _t1623 = _t204*_t519 + _t208*_t515;
-    const train5_real_t _t1624 = _t204*_t525 + _t208*_t523;
-    const train5_real_t _t1625 = _t113*_t206 + _t124*_t202;
-    const train5_real_t _t1626 = _t113*_t207 + _t124*_t203;
-    const train5_real_t _t1627 = _t204*_t685 + _t208*_t718;
-    const train5_real_t _t1628 = _t202*_t575 + _t206*_t572;
-    const train5_real_t _t1629 = _t203*_t575 + _t207*_t572;
-    const train5_real_t _t1630 = _t204*_t688 + _t208*_t721;
-    const train5_real_t _t1631 = _t202*_t582 + _t206*_t579;
-    const train5_real_t _t1632 = _t203*_t582 + _t207*_t579;
-    const train5_real_t _t1633 = _t204*_t691 + _t208*_t996;
-    const train5_real_t _t1634 = _t204*_t841 + _t208*_t838;
-    const train5_real_t _t1635 = _t1110*_t208 + _t1112*_t204;
-    const train5_real_t _t1636 = _t202*_t589 + _t206*_t586;
-    const train5_real_t _t1637 = _t203*_t589 + _t207*_t586;
-    const train5_real_t _t1638 = _t204*_t694 + _t208*_t993;
-    const train5_real_t _t1639 = _t204*_t852 + _t208*_t849;
-    const train5_real_t _t1640 = _t1115*_t208 + _t1117*_t204;
-    const train5_real_t _t1641 = _t202*_t596 + _t206*_t593;
-    const train5_real_t _t1642 = _t203*_t596 + _t207*_t593;
-    const train5_real_t _t1643 = _t1002*_t208 + _t204*_t697;
-    const train5_real_t _t1644 = _t204*_t885 + _t208*_t882;
-    const train5_real_t _t1645 = _t1120*_t208 + _t1122*_t204;
-    const train5_real_t _t1646 = _t1124*_t208 + _t1126*_t204;
-    const train5_real_t _t1647 = _t202*_t603 + _t206*_t600;
-    const train5_real_t _t1648 = _t203*_t603 + _t207*_t600;
-    const train5_real_t _t1649 = _t204*_t700 + _t208*_t999;
-    const train5_real_t _t1650 = _t204*_t891 + _t208*_t888;
-    const train5_real_t _t1651 = _t1129*_t208 + _t1131*_t204;
-    const train5_real_t _t1652 = _t1133*_t208 + _t1135*_t204;
-    const train5_real_t _t1653 = _t202*_t610 + _t206*_t607;
-    const train5_real_t _t1654 = _t203*_t610 + _t207*_t607;
-    const train5_real_t _t1655 = _t1008*_t208 + _t204*_t703;
-    const train5_real_t _t1656 = _t204*_t927 + _t208*_t924;
-    const train5_real_t _t1657 = _t1138*_t208 + _t1140*_t204;
-    const train5_real_t _t1658 = _t1142*_t208 + _t1144*_t204;
-    const train5_real_t _t1659 = _t1146*_t208 + _t1148*_t204;
-    const train5_real_t _t1660 = _t202*_t617 + _t206*_t614;
-    const train5_real_t _t1661 = _t203*_t617 + _t207*_t614;
-    const train5_real_t _t1662 = _t1005*_t208 + _t204*_t706;
-    const train5_real_t _t1663 = _t204*_t933 + _t208*_t930;
-    const train5_real_t _t1664 = _t1151*_t208 + _t1153*_t204;
-    const train5_real_t _t1665 = _t1155*_t208 + _t1157*_t204;
-    const train5_real_t _t1666 = _t1159*_t208 + _t1161*_t204;
-    const train5_real_t _t1667 = _t202*_t624 + _t206*_t621;
-    const train5_real_t _t1668 = _t203*_t624 + _t207*_t621;
-    const train5_real_t _t1669 = _t1014*_t208 + _t204*_t709;
-    const train5_real_t _t1670 = _t204*_t979 + _t208*_t976;
-    const train5_real_t _t1671 = _t1164*_t208 + _t1166*_t204;
-    const train5_real_t _t1672 = _t1168*_t208 + _t1170*_t204;
-    const train5_real_t _t1673 = _t1172*_t208 + _t1174*_t204;
-    const train5_real_t _t1674 = _t1176*_t208 + _t1178*_t204;
-    const train5_real_t _t1675 = _t202*_t631 + _t206*_t628;
-    const train5_real_t _t1676 = _t203*_t631 + _t207*_t628;
-    const train5_real_t _t1677 = _t1011*_t208 + _t204*_t712;
-    const train5_real_t _t1678 = _t204*_t985 + _t208*_t982;
-    const train5_real_t _t1679 = _t1181*_t208 + _t1183*_t204;
-    const train5_real_t _t1680 = _t1185*_t208 + _t1187*_t204;
-    const train5_real_t _t1681 = _t1189*_t208 + _t1191*_t204;
-    const train5_real_t _t1682 = _t1193*_t208 + _t1195*_t204;
-    const train5_real_t _t1683 = _t202*_t638 + _t206*_t635;
-    const train5_real_t _t1684 = _t203*_t638 + _t207*_t635;
-    const train5_real_t _t1685 = _t296*_t532 + _t320*_t534 + _t356*_t536 + _t474*_t538 + _t672
-            + _t678;
-    const train5_real_t _t1686 = _t296*_t545 + _t320*_t546 + _t356*_t547 + _t474*_t548 + _t679
-            + _t723;
-    const train5_real_t _t1687 = J_theta_cart2*_t296 + _t320*_t552 + _t356*_t553 + _t474*_t554
-            + _t680 + _t725;
-    const train5_real_t _t1688 = J_theta_cart3*_t320 + _t296*_t552 + _t356*_t558 + _t474*_t559
-            + _t681 + _t727;
-    const train5_real_t _t1689 = J_theta_cart4*_t356 + _t296*_t553 + _t320*_t558 + _t474*_t563
-            + _t682 + _t729;
-    const train5_real_t _t1690 = J_theta_cart5*_t474 + _t296*_t554 + _t320*_t559 + _t356*_t563
-            + _t683 + _t731;
-    const train5_real_t _t1691 = _t1002*_t604 + _t1005*_t625 + _t1008*_t618 + _t1011*_t639
-            + _t1014*_t632 + _t113*_t1690 + _t1685 + _t1686*_t34 + _t1687*_t43 + _t1688*_t55
-            + _t1689*_t70 + _t292*_t557 + _t315*_t562 + _t350*_t566 + _t467*_t569 + _t586*_t692
-            + _t590*_t996 + _t593*_t695 + _t597*_t993 + _t600*_t698 + _t607*_t701 + _t611*_t999
-            + _t614*_t704 + _t621*_t707 + _t628*_t710 + _t635*_t713 + _t714 + _t715 + _t716 + _t719
-            + _t722;
-    const train5_real_t _t1692 = _t296*_t556 + _t320*_t561 + _t356*_t565 + _t474*_t568 + _t724
-            + _t726 + _t728 + _t730 + _t732 + _t733;
-    const train5_real_t _t1693 = _t124*_t1690 + _t1686*_t37 + _t1687*_t47 + _t1688*_t60
-            + _t1689*_t76 + _t1692 + _t296*_t557 + _t320*_t562 + _t356*_t566 + _t474*_t569
-            + _t589*_t692 + _t590*_t691 + _t596*_t695 + _t597*_t694 + _t603*_t698 + _t604*_t697
-            + _t610*_t701 + _t611*_t700 + _t617*_t704 + _t618*_t703 + _t624*_t707 + _t625*_t706
-            + _t631*_t710 + _t632*_t709 + _t638*_t713 + _t639*_t712 + _t734 + _t735 + _t736 + _t737
-            + _t738;
-    const train5_real_t _t1694 = _t1601*_t744 + _t1606*_t746 + _t1612*_t748 + _t1619*_t750 + _t238
-            + _t239 + _t240 + _t241 + _t742 + _t751 + _t752 + _t753 + _t754;
-    const train5_real_t _t1695 = _t1601*_t759 + _t1606*_t762 + _t1612*_t765 + _t1619*_t768 - _t755
-            + _t756;
-    const train5_real_t _t1696 = _t1606*_t777 + _t1612*_t779 + _t1619*_t781 - _t769 + _t770 + _t775;
-    const train5_real_t _t1697 = _t1601*_t788 + _t1612*_t790 + _t1619*_t792 - _t782 + _t783 + _t785;
-    const train5_real_t _t1698 = _t1601*_t797 + _t1606*_t800 + _t1619*_t802 - _t793 + _t794 + _t796;
-    const train5_real_t _t1699 = _t1601*_t807 + _t1606*_t808 + _t1612*_t811 - _t803 + _t804 + _t806;
-    const train5_real_t _t1700 = _t1601*_t208;
-    const train5_real_t _t1701 = _t1601*_t204;
-    const train5_real_t _t1702 = _t1700*_t307 + _t1701*_t310 - _t205*_t47 - _t43*_t527 + _t645*_t833
-            + _t646*_t835 - _t813 - _t815 + _t818;
-    const train5_real_t _t1703 = _t1606*_t208;
-    const train5_real_t _t1704 = _t1606*_t204;
-    const train5_real_t _t1705 = _t1700*_t334 + _t1701*_t338 + _t1703*_t341 + _t1704*_t344
-            - _t205*_t60 - _t527*_t55 + _t528*_t860 + _t529*_t865 + _t645*_t870 + _t646*_t874
-            + _t648*_t877 + _t649*_t879 - _t821 - _t822;
-    const train5_real_t _t1706 = _t1612*_t208;
-    const train5_real_t _t1707 = _t1612*_t204;
-    const train5_real_t _t1708 = _t1700*_t371 + _t1701*_t376 + _t1703*_t380 + _t1704*_t384
-            + _t1706*_t387 + _t1707*_t390 - _t205*_t76 - _t527*_t70 + _t528*_t894 + _t529*_t899
-            + _t645*_t904 + _t646*_t908 + _t648*_t912 + _t649*_t916 + _t651*_t919 + _t652*_t921
-            - _t825 - _t826;
-    const train5_real_t _t1709 = _t1619*_t208;
-    const train5_real_t _t1710 = _t1619*_t204;
-    const train5_real_t _t1711 = -_t113*_t527 - _t124*_t205 + _t1700*_t495 + _t1701*_t500
-            + _t1703*_t505 + _t1704*_t510 + _t1706*_t515 + _t1707*_t519 + _t1709*_t523
-            + _t1710*_t525 + _t528*_t936 + _t529*_t942 + _t645*_t948 + _t646*_t952 + _t648*_t956
-            + _t649*_t960 + _t651*_t964 + _t652*_t968 + _t654*_t971 + _t655*_t973 - _t829 - _t830;
-    const train5_real_t _t1712 = _t285 + _t834;
-    const train5_real_t _t1713 = _t1712*_t584;
-    const train5_real_t _t1714 = _t288 + _t836;
-    const train5_real_t _t1715 = _t1714*_t584;
-    const train5_real_t _t1716 = _t1110*_t1700 + _t1112*_t1701 + _t1713*_t645 + _t1715*_t646
-            - _t205*_t589 - _t527*_t586 - _t839 - _t842 + _t847;
-    const train5_real_t _t1717 = _t285 - _t834;
-    const train5_real_t _t1718 = _t1717*_t591;
-    const train5_real_t _t1719 = _t287 - _t29 - _t836;
-    const train5_real_t _t1720 = _t1719*_t591;
-    const train5_real_t _t1721 = _t1115*_t1700 + _t1117*_t1701 + _t1718*_t645 + _t1720*_t646
-            - _t205*_t596 - _t527*_t593 - _t850 - _t853 + _t858;
-    const train5_real_t _t1722 = _t861 - _t863;
-    const train5_real_t _t1723 = _t1722*_t598;
-    const train5_real_t _t1724 = _t866 - _t868;
-    const train5_real_t _t1725 = _t1724*_t598;
-    const train5_real_t _t1726 = _t871 - _t872;
-    const train5_real_t _t1727 = _t1726*_t598;
-    const train5_real_t _t1728 = _t875 - _t876;
-    const train5_real_t _t1729 = _t1728*_t598;
-    const train5_real_t _t1730 = _t294 + _t878;
-    const train5_real_t _t1731 = _t1730*_t598;
-    const train5_real_t _t1732 = _t298 + _t880;
-    const train5_real_t _t1733 = _t1732*_t598;
-    const train5_real_t _t1734 = _t1120*_t1700 + _t1122*_t1701 + _t1124*_t1703 + _t1126*_t1704
-            + _t1723*_t528 + _t1725*_t529 + _t1727*_t645 + _t1729*_t646 + _t1731*_t648
-            + _t1733*_t649 - _t205*_t603 - _t527*_t600 - _t883 - _t886;
-    const train5_real_t _t1735 = -_t861 - _t863;
-    const train5_real_t _t1736 = _t1735*_t605;
-    const train5_real_t _t1737 = -_t866 - _t868;
-    const train5_real_t _t1738 = _t1737*_t605;
-    const train5_real_t _t1739 = -_t871 - _t872;
-    const train5_real_t _t1740 = _t1739*_t605;
-    const train5_real_t _t1741 = -_t875 - _t876;
-    const train5_real_t _t1742 = _t1741*_t605;
-    const train5_real_t _t1743 = _t294 - _t878;
-    const train5_real_t _t1744 = _t1743*_t605;
-    const train5_real_t _t1745 = _t298 - _t880;
-    const train5_real_t _t1746 = _t1745*_t605;
-    const train5_real_t _t1747 = _t1129*_t1700 + _t1131*_t1701 + _t1133*_t1703 + _t1135*_t1704
-            + _t1736*_t528 + _t1738*_t529 + _t1740*_t645 + _t1742*_t646 + _t1744*_t648
-            + _t1746*_t649 - _t205*_t610 - _t527*_t607 - _t889 - _t892;
-    const train5_real_t _t1748 = _t895 - _t897;
-    const train5_real_t _t1749 = _t1748*_t612;
-    const train5_real_t _t1750 = _t900 - _t902;
-    const train5_real_t _t1751 = _t1750*_t612;
-    const train5_real_t _t1752 = _t905 - _t906;
-    const train5_real_t _t1753 = _t1752*_t612;
-    const train5_real_t _t1754 = _t909 - _t910;
-    const train5_real_t _t1755 = _t1754*_t612;
-    const train5_real_t _t1756 = _t913 - _t914;
-    const train5_real_t _t1757 = _t1756*_t612;
-    const train5_real_t _t1758 = _t917 - _t918;
-    const train5_real_t _t1759 = _t1758*_t612;
-    const train5_real_t _t1760 = _t317 + _t920;
-    const train5_real_t _t1761 = _t1760*_t612;
-    const train5_real_t _t1762 = _t322 + _t922;
-    const train5_real_t _t1763 = _t1762*_t612;
-    const train5_real_t _t1764 = _t1138*_t1700 + _t1140*_t1701 + _t1142*_t1703 + _t1144*_t1704
-            + _t1146*_t1706 + _t1148*_t1707 + _t1749*_t528 + _t1751*_t529 + _t1753*_t645
-            + _t1755*_t646 + _t1757*_t648 + _t1759*_t649 + _t1761*_t651 + _t1763*_t652 - _t205*_t617
-            - _t527*_t614 - _t925 - _t928;
-    const train5_real_t _t1765 = -_t895 - _t897;
-    const train5_real_t _t1766 = _t1765*_t619;
-    const train5_real_t _t1767 = -_t900 - _t902;
-    const train5_real_t _t1768 = _t1767*_t619;
-    const train5_real_t _t1769 = -_t905 - _t906;
-    const train5_real_t _t1770 = _t1769*_t619;
-    const train5_real_t _t1771 = -_t909 - _t910;
-    const train5_real_t _t1772 = _t1771*_t619;
-    const train5_real_t _t1773 = -_t913 - _t914;
-    const train5_real_t _t1774 = _t1773*_t619;
-    const train5_real_t _t1775 = -_t917 - _t918;
-    const train5_real_t _t1776 = _t1775*_t619;
-    const train5_real_t _t1777 = _t317 - _t920;
-    const train5_real_t _t1778 = _t1777*_t619;
-    const train5_real_t _t1779 = _t322 - _t922;
-    const train5_real_t _t1780 = _t1779*_t619;
-    const train5_real_t _t1781 = _t1151*_t1700 + _t1153*_t1701 + _t1155*_t1703 + _t1157*_t1704
-            + _t1159*_t1706 + _t1161*_t1707 + _t1766*_t528 + _t1768*_t529 + _t1770*_t645
-            + _t1772*_t646 + _t1774*_t648 + _t1776*_t649 + _t1778*_t651 + _t1780*_t652 - _t205*_t624
-            - _t527*_t621 - _t931 - _t934;
-    const train5_real_t _t1782 = _t937 - _t940;
-    const train5_real_t _t1783 = _t1782*_t626;
-    const train5_real_t _t1784 = _t943 - _t946;
-    const train5_real_t _t1785 = _t1784*_t626;
-    const train5_real_t _t1786 = _t949 - _t950;
-    const train5_real_t _t1787 = _t1786*_t626;
-    const train5_real_t _t1788 = _t953 - _t954;
-    const train5_real_t _t1789 = _t1788*_t626;
-    const train5_real_t _t1790 = _t957 - _t958;
-    const train5_real_t _t1791 = _t1790*_t626;
-    const train5_real_t _t1792 = _t961 - _t962;
-    const train5_real_t _t1793 = _t1792*_t626;
-    const train5_real_t _t1794 = _t965 - _t966;
-    const train5_real_t _t1795 = _t1794*_t626;
-    const train5_real_t _t1796 = _t969 - _t970;
-    const train5_real_t _t1797 = _t1796*_t626;
-    const train5_real_t _t1798 = _t352 + _t972;
-    const train5_real_t _t1799 = _t1798*_t626;
-    const train5_real_t _t1800 = _t358 + _t974;
-    const train5_real_t _t1801 = _t1800*_t626;
-    const train5_real_t _t1802 = _t1164*_t1700 + _t1166*_t1701 + _t1168*_t1703 + _t1170*_t1704
-            + _t1172*_t1706 + _t1174*_t1707 + _t1176*_t1709 + _t1178*_t1710 + _t1783*_t528
-            + _t1785*_t529 + _t1787*_t645 + _t1789*_t646 + _t1791*_t648 + _t1793*_t649
-            + _t1795*_t651 + _t1797*_t652 + _t1799*_t654 + _t1801*_t655 - _t205*_t631 - _t527*_t628
-            - _t977 - _t980;
-    const train5_real_t _t1803 = -_t937 - _t940;
-    const train5_real_t _t1804 = _t1803*_t633;
-    const train5_real_t _t1805 = -_t943 - _t946;
-    const train5_real_t _t1806 = _t1805*_t633;
-    const train5_real_t _t1807 = -_t949 - _t950;
-    const train5_real_t _t1808 = _t1807*_t633;
-    const train5_real_t _t1809 = -_t953 - _t954;
-    const train5_real_t _t1810 = _t1809*_t633;
-    const train5_real_t _t1811 = -_t957 - _t958;
-    const train5_real_t _t1812 = _t1811*_t633;
-    const train5_real_t _t1813 = -_t961 - _t962;
-    const train5_real_t _t1814 = _t1813*_t633;
-    const train5_real_t _t1815 = -_t965 - _t966;
-    const train5_real_t _t1816 = _t1815*_t633;
-    const train5_real_t _t1817 = -_t969 - _t970;
-    const train5_real_t _t1818 = _t1817*_t633;
-    const train5_real_t _t1819 = _t352 - _t972;
-    const train5_real_t _t1820 = _t1819*_t633;
-    const train5_real_t _t1821 = _t358 - _t974;
-    const train5_real_t _t1822 = _t1821*_t633;
-    const train5_real_t _t1823 = _t1181*_t1700 + _t1183*_t1701 + _t1185*_t1703 + _t1187*_t1704
-            + _t1189*_t1706 + _t1191*_t1707 + _t1193*_t1709 + _t1195*_t1710 + _t1804*_t528
-            + _t1806*_t529 + _t1808*_t645 + _t1810*_t646 + _t1812*_t648 + _t1814*_t649
-            + _t1816*_t651 + _t1818*_t652 + _t1820*_t654 + _t1822*_t655 - _t205*_t638 - _t527*_t635
-            - _t983 - _t986;
-    const train5_real_t _t1824 = _t1000*_t1136 + _t1003*_t1127 + _t1006*_t1162 + _t1009*_t1149
-            + _t1012*_t1196 + _t1015*_t1179 + _t1017 + _t1020 + _t1022 + _t1025 - _t1026 - _t1027
-            - _t1028 - _t1029 - _t1030 + _t1032 + _t1033 + _t1113*_t997 + _t1118*_t994
-            + _t113*_t1699 + _t1694 + _t1695*_t34 + _t1696*_t43 + _t1697*_t55 + _t1698*_t70
-            + _t1702*_t555 + _t1705*_t560 + _t1708*_t564 + _t1711*_t567 + _t1716*_t587
-            + _t1721*_t594 + _t1734*_t601 + _t1747*_t608 + _t1764*_t615 + _t1781*_t622
-            + _t1802*_t629 + _t1823*_t636 + _t292*_t660 + _t315*_t663 + _t350*_t666 + _t467*_t669
-            + _t987 + _t988 + _t989 + _t990 + _t991;
-    const train5_real_t _t1825 = _t1034 - _t1035 + _t1036 - _t1037 + _t1038 - _t1039 + _t1040
-            - _t1041 + _t1042 - _t1043 + _t1046 + _t1048*_t1601 + _t1050*_t1606 + _t1052*_t1612
-            + _t1054*_t1619;
-    const train5_real_t _t1826 = _t1055 + _t1056 + _t1057 + _t1058 + _t1059 + _t1060 + _t1061
-            + _t1062 + _t1063 - _t1064 - _t1065 - _t1066 - _t1067 - _t1068 + _t1069 + _t1070
-            + _t1113*_t692 + _t1118*_t695 + _t1127*_t698 + _t1136*_t701 + _t1149*_t704
-            + _t1162*_t707 + _t1179*_t710 + _t1196*_t713 + _t124*_t1699 + _t1695*_t37 + _t1696*_t47
-            + _t1697*_t60 + _t1698*_t76 + _t1702*_t557 + _t1705*_t562 + _t1708*_t566 + _t1711*_t569
-            + _t1716*_t590 + _t1721*_t597 + _t1734*_t604 + _t1747*_t611 + _t1764*_t618
-            + _t1781*_t625 + _t1802*_t632 + _t1823*_t639 + _t1825 + _t296*_t660 + _t320*_t663
-            + _t356*_t666 + _t474*_t669;
-    const train5_real_t _t1827 = _t1071 + _t1077 + _t292*_t532 + _t315*_t534 + _t350*_t536
-            + _t467*_t538;
-    const train5_real_t _t1828 = _t1078 + _t292*_t545 + _t315*_t546 + _t350*_t547 + _t467*_t548
-            + _t640;
-    const train5_real_t _t1829 = J_theta_cart2*_t292 + _t1079 + _t315*_t552 + _t350*_t553
-            + _t467*_t554 + _t658;
-    const train5_real_t _t1830 = J_theta_cart3*_t315 + _t1080 + _t292*_t552 + _t350*_t558
-            + _t467*_t559 + _t661;
-    const train5_real_t _t1831 = J_theta_cart4*_t350 + _t1081 + _t292*_t553 + _t315*_t558
-            + _t467*_t563 + _t664;
-    const train5_real_t _t1832 = J_theta_cart5*_t467 + _t1082 + _t292*_t554 + _t315*_t559
-            + _t350*_t563 + _t667;
-    const train5_real_t _t1833 = _t1000*_t607 + _t1002*_t601 + _t1003*_t600 + _t1005*_t622
-            + _t1006*_t621 + _t1008*_t615 + _t1009*_t614 + _t1011*_t636 + _t1012*_t635
-            + _t1014*_t629 + _t1015*_t628 + _t1083 + _t1084 + _t1085 + _t1086 + _t1087
-            + _t113*_t1832 + _t1827 + _t1828*_t34 + _t1829*_t43 + _t1830*_t55 + _t1831*_t70
-            + _t292*_t555 + _t315*_t560 + _t350*_t564 + _t467*_t567 + _t586*_t997 + _t587*_t996
-            + _t593*_t994 + _t594*_t993 + _t608*_t999;
-    const train5_real_t _t1834 = -_t1096*_t1691 + _t1100*_t1693 + _t1102*_t1833;
-    const train5_real_t _t1835 = -_t1105*_t1834;
-    const train5_real_t _t1836 = _t1107*_t1826 + _t1199*_t1693 - _t1200*_t1824 - _t1204*_t1691
-            + _t1205*_t1835;
-    const train5_real_t _t1837 = _t1107*_t1824 - _t1199*_t1691 + _t1204*_t1833 - _t1206*_t1826
-            + _t1207*_t1835;
-    const train5_real_t _t1838 = _t1088*_t1836 + _t1091*_t1837;
-    const train5_real_t _t1839 = _t303*_t532 + _t329*_t534 + _t366*_t536 + _t488*_t538 - _t672
-            - _t674;
-    const train5_real_t _t1840 = _t1209 + _t1211 + _t1213 + _t1215 + _t303*_t545 + _t329*_t546
-            + _t366*_t547 + _t488*_t548 - _t679 - _t723;
-    const train5_real_t _t1841 = J_theta_cart2*_t303 + _t1216 + _t329*_t552 + _t366*_t553
-            + _t488*_t554 - _t680;
-    const train5_real_t _t1842 = J_theta_cart3*_t329 + _t1217 + _t303*_t552 + _t366*_t558
-            + _t488*_t559 - _t681;
-    const train5_real_t _t1843 = J_theta_cart4*_t366 + _t1218 + _t303*_t553 + _t329*_t558
-            + _t488*_t563 - _t682;
-    const train5_real_t _t1844 = J_theta_cart5*_t488 + _t1219 + _t303*_t554 + _t329*_t559
-            + _t366*_t563 - _t683;
-    const train5_real_t _t1845 = _t113*_t1844 + _t1220*_t586 + _t1221*_t593 + _t1222*_t600
-            + _t1223*_t607 + _t1224*_t614 + _t1225*_t621 + _t1226*_t628 + _t1227*_t635 + _t1839
-            + _t1840*_t34 + _t1841*_t43 + _t1842*_t55 + _t1843*_t70 + _t299*_t557 + _t324*_t562
-            + _t361*_t566 + _t481*_t569 + _t590*_t838 + _t597*_t849 + _t604*_t882 + _t611*_t888
-            + _t618*_t924 + _t625*_t930 + _t632*_t976 + _t639*_t982 - _t714 - _t715 - _t716 - _t719
-            - _t722;
-    const train5_real_t _t1846 = _t303*_t556 + _t329*_t561 + _t366*_t565 + _t488*_t568 - _t724
+    const train5_real_t _t543 = -_ms636 + _t523*tau_right + _t524*tau_left;
+    const train5_real_t _t544 = _t541*_t543;
+    const train5_real_t _t545 = _t537*_t541;
+    const train5_real_t _t546 = -_ms637 + _t526*tau_right + _t528*tau_left;
+    const train5_real_t _t547 = _t541*_t546;
+    const train5_real_t _t548 = -_t530*_t546 + _t537*_t543;
+    const train5_real_t _t549 = _t535*_t541;
+    const train5_real_t _t550 = -_t530*_t543 + _t535*_t546;
+    const train5_real_t _t551 = TRAIN5_LIT(0.85)*_t51;
+    const train5_real_t _t552 = TRAIN5_LIT(0.85)*_t53;
+    const train5_real_t _t553 = -_t118*_t551 + _t119*_t551 + _t552*_t58 + _t552*_t60;
+    const train5_real_t _t554 = _ms229*_t553;
+    const train5_real_t _t555 = -_t122*_t551 + _t123*_t551 + _t552*_t64 + _t552*_t66;
+    const train5_real_t _t556 = _ms233*_t555;
+    const train5_real_t _t557 = -_t126*_t551 + _t127*_t551 + _t552*_t70 + _t552*_t72;
+    const train5_real_t _t558 = _ms237*_t557;
+    const train5_real_t _t559 = -_t130*_t551 + _t131*_t551 + _t552*_t76 + _t552*_t78;
+    const train5_real_t _t560 = _ms241*_t559;
+    const train5_real_t _t561 = _ms225*_t553;
+    const train5_real_t _t562 = _ms225*_t555;
+    const train5_real_t _t563 = _ms225*_t557;
+    const train5_real_t _t564 = _ms225*_t559;
+    const train5_real_t _t565 = J_theta_cart2_right*_ms427;
+    const train5_real_t _t566 = J_theta_cart2_left*_ms439;
+    const train5_real_t _t567 = J_theta_cart3_right*_ms451;
+    const train5_real_t _t568 = J_theta_cart3_left*_ms467;
+    const train5_real_t _t569 = J_theta_cart4_right*_ms483;
+    const train5_real_t _t570 = J_theta_cart4_left*_ms503;
+    const train5_real_t _t571 = J_theta_cart5_right*_ms523;
+    const train5_real_t _t572 = J_theta_cart5_left*_ms547;
+    const train5_real_t _t573 = _t133*_t552;
+    const train5_real_t _t574 = _t119*_t573;
+    const train5_real_t _t575 = _t136*_t552;
+    const train5_real_t _t576 = _t123*_t575;
+    const train5_real_t _t577 = _t118*_t573;
+    const train5_real_t _t578 = _t134*_t551;
+    const train5_real_t _t579 = _t135*_t551;
+    const train5_real_t _t580 = _t122*_t575;
+    const train5_real_t _t581 = _t137*_t551;
+    const train5_real_t _t582 = _t138*_t551;
+    const train5_real_t _t583 = _t142*_t552;
+    const train5_real_t _t584 = _t130*_t583 - _t131*_t583 + _t143*_t551 + _t144*_t551;
+    const train5_real_t _t585 = _t146*_t552;
+    const train5_real_t _t586 = _t126*_t585 - _t127*_t585 + _t147*_t551 + _t148*_t551;
+    const train5_real_t _t587 = _t139*_t552;
+    const train5_real_t _t588 = _t139*_t551;
+    const train5_real_t _t589 = _t118*_t587 - _t119*_t587 + _t58*_t588 + _t588*_t60;
+    const train5_real_t _t590 = _t122*_t587 - _t123*_t587 + _t588*_t64 + _t588*_t66;
+    const train5_real_t _t591 = _t126*_t587 - _t127*_t587 + _t588*_t70 + _t588*_t72;
+    const train5_real_t _t592 = _t130*_t587 - _t131*_t587 + _t588*_t76 + _t588*_t78;
+    const train5_real_t _t593 = _ms152*_ms345;
+    const train5_real_t _t594 = _ms152*_ms347;
+    const train5_real_t _t595 = _ms155*_ms345;
+    const train5_real_t _t596 = _ms155*_ms347;
+    const train5_real_t _t597 = _ms156*_ms357;
+    const train5_real_t _t598 = _ms156*_ms359;
+    const train5_real_t _t599 = _ms159*_ms345;
+    const train5_real_t _t600 = _ms159*_ms347;
+    const train5_real_t _t601 = _ms160*_ms357;
+    const train5_real_t _t602 = _ms160*_ms359;
+    const train5_real_t _t603 = _ms161*_ms373;
+    const train5_real_t _t604 = _ms161*_ms375;
+    const train5_real_t _t605 = TRAIN5_LIT(2.0)*_t208 - TRAIN5_LIT(2.0)*_t209;
+    const train5_real_t _t606 = -TRAIN5_LIT(1.6666666666666667)*_t605;
+    const train5_real_t _t607 = TRAIN5_LIT(0.2)*_t606;
+    const train5_real_t _t608 = TRAIN5_LIT(2.0)*_t258 + TRAIN5_LIT(2.0)*_t259;
+    const train5_real_t _t609 = TRAIN5_LIT(2.0)*_t210 - TRAIN5_LIT(2.0)*_t211;
+    const train5_real_t _t610 = -TRAIN5_LIT(1.6666666666666667)*_t609;
+    const train5_real_t _t611 = TRAIN5_LIT(0.2)*_t610;
+    const train5_real_t _t612 = TRAIN5_LIT(2.0)*_t262 + TRAIN5_LIT(2.0)*_t263;
+    const train5_real_t _t613 = TRAIN5_LIT(2.0)*_ms132*_ms224 - _ms133*_t606
+            - TRAIN5_LIT(2.0)*_t222;
+    const train5_real_t _t614 = -TRAIN5_LIT(1.6666666666666667)*_t613;
+    const train5_real_t _t615 = TRAIN5_LIT(0.2)*_t614;
+    const train5_real_t _t616 = _ms152*_t606;
+    const train5_real_t _t617 = TRAIN5_LIT(2.0)*_ms132*_ms225 - _ms133*_t610
+            - TRAIN5_LIT(2.0)*_t225;
+    const train5_real_t _t618 = -TRAIN5_LIT(1.6666666666666667)*_t617;
+    const train5_real_t _t619 = TRAIN5_LIT(0.2)*_t618;
+    const train5_real_t _t620 = _ms152*_t610;
+    const train5_real_t _t621 = -_t221 + _t593;
+    const train5_real_t _t622 = -TRAIN5_LIT(1.6666666666666667)*_t621;
+    const train5_real_t _t623 = TRAIN5_LIT(0.2)*_t622;
+    const train5_real_t _t624 = _ms133*_ms345;
+    const train5_real_t _t625 = _t289 + _t624;
+    const train5_real_t _t626 = -_t224 + _t594;
+    const train5_real_t _t627 = -TRAIN5_LIT(1.6666666666666667)*_t626;
+    const train5_real_t _t628 = TRAIN5_LIT(0.2)*_t627;
+    const train5_real_t _t629 = _ms133*_ms347;
+    const train5_real_t _t630 = _t297 + _t629;
+    const train5_real_t _t631 = -_t223 - _t593;
+    const train5_real_t _t632 = -TRAIN5_LIT(1.6666666666666667)*_t631;
+    const train5_real_t _t633 = TRAIN5_LIT(0.2)*_t632;
+    const train5_real_t _t634 = -_t226 - _t594;
+    const train5_real_t _t635 = -TRAIN5_LIT(1.6666666666666667)*_t634;
+    const train5_real_t _t636 = TRAIN5_LIT(0.2)*_t635;
+    const train5_real_t _t637 = TRAIN5_LIT(2.0)*_ms137*_ms224 - _ms138*_t606 - _ms139*_t614
+            - TRAIN5_LIT(2.0)*_t232;
+    const train5_real_t _t638 = -TRAIN5_LIT(1.6666666666666667)*_t637;
+    const train5_real_t _t639 = TRAIN5_LIT(0.2)*_t638;
+    const train5_real_t _t640 = _ms155*_t606;
+    const train5_real_t _t641 = _ms156*_t614;
+    const train5_real_t _t642 = TRAIN5_LIT(2.0)*_ms137*_ms225 - _ms138*_t610 - _ms139*_t618
+            - TRAIN5_LIT(2.0)*_t235;
+    const train5_real_t _t643 = -TRAIN5_LIT(1.6666666666666667)*_t642;
+    const train5_real_t _t644 = TRAIN5_LIT(0.2)*_t643;
+    const train5_real_t _t645 = _ms155*_t610;
+    const train5_real_t _t646 = _ms156*_t618;
+    const train5_real_t _t647 = -_ms139*_t622 - _t231 + _t595;
+    const train5_real_t _t648 = -TRAIN5_LIT(1.6666666666666667)*_t647;
+    const train5_real_t _t649 = TRAIN5_LIT(0.2)*_t648;
+    const train5_real_t _t650 = _ms138*_ms345;
+    const train5_real_t _t651 = _ms156*_t622 + _t327 + _t650;
+    const train5_real_t _t652 = -_ms139*_t627 - _t234 + _t596;
+    const train5_real_t _t653 = -TRAIN5_LIT(1.6666666666666667)*_t652;
+    const train5_real_t _t654 = TRAIN5_LIT(0.2)*_t653;
+    const train5_real_t _t655 = _ms138*_ms347;
+    const train5_real_t _t656 = _ms156*_t627 + _t335 + _t655;
+    const train5_real_t _t657 = -_ms139*_t632 + _t597;
+    const train5_real_t _t658 = -TRAIN5_LIT(1.6666666666666667)*_t657;
+    const train5_real_t _t659 = TRAIN5_LIT(0.2)*_t658;
+    const train5_real_t _t660 = _ms139*_ms357;
+    const train5_real_t _t661 = _ms156*_t632 + _t660;
+    const train5_real_t _t662 = -_ms139*_t635 + _t598;
+    const train5_real_t _t663 = -TRAIN5_LIT(1.6666666666666667)*_t662;
+    const train5_real_t _t664 = TRAIN5_LIT(0.2)*_t663;
+    const train5_real_t _t665 = _ms139*_ms359;
+    const train5_real_t _t666 = _ms156*_t635 + _t665;
+    const train5_real_t _t667 = -_t233 - _t595 - _t597;
+    const train5_real_t _t668 = -TRAIN5_LIT(1.6666666666666667)*_t667;
+    const train5_real_t _t669 = TRAIN5_LIT(0.2)*_t668;
+    const train5_real_t _t670 = -_t236 - _t596 - _t598;
+    const train5_real_t _t671 = -TRAIN5_LIT(1.6666666666666667)*_t670;
+    const train5_real_t _t672 = TRAIN5_LIT(0.2)*_t671;
+    const train5_real_t _t673 = TRAIN5_LIT(2.0)*_ms143*_ms224 - _ms144*_t606 - _ms145*_t614
+            - _ms146*_t638 - TRAIN5_LIT(2.0)*_t244;
+    const train5_real_t _t674 = -TRAIN5_LIT(1.6666666666666667)*_t673;
+    const train5_real_t _t675 = TRAIN5_LIT(0.2)*_t674;
+    const train5_real_t _t676 = -TRAIN5_LIT(2.0)*_ms143*_ms338 - TRAIN5_LIT(2.0)*_ms158*_ms224
+            + _ms159*_t606 + _ms160*_t614 + _ms161*_t638;
+    const train5_real_t _t677 = TRAIN5_LIT(2.0)*_ms143*_ms225 - _ms144*_t610 - _ms145*_t618
+            - _ms146*_t643 - TRAIN5_LIT(2.0)*_t247;
+    const train5_real_t _t678 = -TRAIN5_LIT(1.6666666666666667)*_t677;
+    const train5_real_t _t679 = TRAIN5_LIT(0.2)*_t678;
+    const train5_real_t _t680 = -TRAIN5_LIT(2.0)*_ms143*_ms339 - TRAIN5_LIT(2.0)*_ms158*_ms225
+            + _ms159*_t610 + _ms160*_t618 + _ms161*_t643;
+    const train5_real_t _t681 = -_ms145*_t622 - _ms146*_t648 - _t243 + _t599;
+    const train5_real_t _t682 = -TRAIN5_LIT(1.6666666666666667)*_t681;
+    const train5_real_t _t683 = TRAIN5_LIT(0.2)*_t682;
+    const train5_real_t _t684 = _ms144*_ms345;
+    const train5_real_t _t685 = _ms160*_t622 + _ms161*_t648 + _t375 + _t684;
+    const train5_real_t _t686 = -_ms145*_t627 - _ms146*_t653 - _t246 + _t600;
+    const train5_real_t _t687 = -TRAIN5_LIT(1.6666666666666667)*_t686;
+    const train5_real_t _t688 = TRAIN5_LIT(0.2)*_t687;
+    const train5_real_t _t689 = _ms144*_ms347;
+    const train5_real_t _t690 = _ms160*_t627 + _ms161*_t653 + _t383 + _t689;
+    const train5_real_t _t691 = -_ms145*_t632 - _ms146*_t658 + _t601;
+    const train5_real_t _t692 = -TRAIN5_LIT(1.6666666666666667)*_t691;
+    const train5_real_t _t693 = TRAIN5_LIT(0.2)*_t692;
+    const train5_real_t _t694 = _ms145*_ms357;
+    const train5_real_t _t695 = _ms160*_t632 + _ms161*_t658 + _t694;
+    const train5_real_t _t696 = -_ms145*_t635 - _ms146*_t663 + _t602;
+    const train5_real_t _t697 = -TRAIN5_LIT(1.6666666666666667)*_t696;
+    const train5_real_t _t698 = TRAIN5_LIT(0.2)*_t697;
+    const train5_real_t _t699 = _ms145*_ms359;
+    const train5_real_t _t700 = _ms160*_t635 + _ms161*_t663 + _t699;
+    const train5_real_t _t701 = -_ms146*_t668 + _t603;
+    const train5_real_t _t702 = -TRAIN5_LIT(1.6666666666666667)*_t701;
+    const train5_real_t _t703 = TRAIN5_LIT(0.2)*_t702;
+    const train5_real_t _t704 = _ms146*_ms373;
+    const train5_real_t _t705 = _ms161*_t668 + _t704;
+    const train5_real_t _t706 = -_ms146*_t671 + _t604;
+    const train5_real_t _t707 = -TRAIN5_LIT(1.6666666666666667)*_t706;
+    const train5_real_t _t708 = TRAIN5_LIT(0.2)*_t707;
+    const train5_real_t _t709 = _ms146*_ms375;
+    const train5_real_t _t710 = _ms161*_t671 + _t709;
+    const train5_real_t _t711 = -_t245 - _t599 - _t601 - _t603;
+    const train5_real_t _t712 = -TRAIN5_LIT(1.6666666666666667)*_t711;
+    const train5_real_t _t713 = TRAIN5_LIT(0.2)*_t712;
+    const train5_real_t _t714 = -_t248 - _t600 - _t602 - _t604;
+    const train5_real_t _t715 = -TRAIN5_LIT(1.6666666666666667)*_t714;
+    const train5_real_t _t716 = TRAIN5_LIT(0.2)*_t715;
+    const train5_real_t _t717 = J_theta_cart2_left*_ms437;
+    const train5_real_t _t718 = J_theta_cart2_right*_ms425;
+    const train5_real_t _t719 = J_theta_cart3_left*_ms465;
+    const train5_real_t _t720 = J_theta_cart3_right*_ms449;
+    const train5_real_t _t721 = J_theta_cart4_left*_ms501;
+    const train5_real_t _t722 = J_theta_cart4_right*_ms481;
+    const train5_real_t _t723 = J_theta_cart5_left*_ms545;
+    const train5_real_t _t724 = J_theta_cart5_right*_ms521;
+    const train5_real_t _t725 = _t553*(_ms224*_ms573 + _ms228*_ms566);
+    const train5_real_t _t726 = _t555*(_ms224*_ms576 + _ms232*_ms566);
+    const train5_real_t _t727 = _t557*(_ms224*_ms579 + _ms236*_ms566);
+    const train5_real_t _t728 = _t559*(_ms224*_ms582 + _ms240*_ms566);
+    const train5_real_t _t729 = _t553*(_ms225*_ms573 + _ms229*_ms566);
+    const train5_real_t _t730 = _t555*(_ms225*_ms576 + _ms233*_ms566);
+    const train5_real_t _t731 = _t557*(_ms225*_ms579 + _ms237*_ms566);
+    const train5_real_t _t732 = _t559*(_ms225*_ms582 + _ms241*_ms566);
+    const train5_real_t _t733 = _ms228*_t553;
+    const train5_real_t _t734 = _ms232*_t555;
+    const train5_real_t _t735 = _ms236*_t557;
+    const train5_real_t _t736 = _ms240*_t559;
+    const train5_real_t _t737 = _ms224*_t553;
+    const train5_real_t _t738 = _ms224*_t555;
+    const train5_real_t _t739 = _ms224*_t557;
+    const train5_real_t _t740 = _ms224*_t559;
+    const train5_real_t _t741 = TRAIN5_LIT(0.85)*_t57;
+    const train5_real_t _t742 = TRAIN5_LIT(0.85)*_t59;
+    const train5_real_t _t743 = -_t122*_t741 + _t123*_t741 + _t64*_t742 + _t66*_t742;
+    const train5_real_t _t744 = _ms233*_t743;
+    const train5_real_t _t745 = -_t126*_t741 + _t127*_t741 + _t70*_t742 + _t72*_t742;
+    const train5_real_t _t746 = _ms237*_t745;
+    const train5_real_t _t747 = -_t130*_t741 + _t131*_t741 + _t742*_t76 + _t742*_t78;
+    const train5_real_t _t748 = _ms241*_t747;
+    const train5_real_t _t749 = _ms229*_t743;
+    const train5_real_t _t750 = _ms229*_t745;
+    const train5_real_t _t751 = _ms229*_t747;
+    const train5_real_t _t752 = J_theta_cart2_right*_ms431;
+    const train5_real_t _t753 = J_theta_cart2_left*_ms443;
+    const train5_real_t _t754 = J_theta_cart3_right*_ms455;
+    const train5_real_t _t755 = J_theta_cart3_left*_ms471;
+    const train5_real_t _t756 = J_theta_cart4_right*_ms487;
+    const train5_real_t _t757 = J_theta_cart4_left*_ms507;
+    const train5_real_t _t758 = J_theta_cart5_right*_ms527;
+    const train5_real_t _t759 = J_theta_cart5_left*_ms551;
+    const train5_real_t _t760 = _t136*_t742;
+    const train5_real_t _t761 = _t123*_t760;
+    const train5_real_t _t762 = _t122*_t760;
+    const train5_real_t _t763 = _t137*_t741;
+    const train5_real_t _t764 = _t138*_t741;
+    const train5_real_t _t765 = _t142*_t742;
+    const train5_real_t _t766 = _t130*_t765 - _t131*_t765 + _t143*_t741 + _t144*_t741;
+    const train5_real_t _t767 = _t146*_t742;
+    const train5_real_t _t768 = _t126*_t767 - _t127*_t767 + _t147*_t741 + _t148*_t741;
+    const train5_real_t _t769 = _t133*_t741;
+    const train5_real_t _t770 = _t64*_t769;
+    const train5_real_t _t771 = _t133*_t742;
+    const train5_real_t _t772 = _t122*_t771;
+    const train5_real_t _t773 = _t66*_t769;
+    const train5_real_t _t774 = _t123*_t771;
+    const train5_real_t _t775 = _t70*_t769;
+    const train5_real_t _t776 = _t126*_t771;
+    const train5_real_t _t777 = _t72*_t769;
+    const train5_real_t _t778 = _t127*_t771;
+    const train5_real_t _t779 = _t76*_t769;
+    const train5_real_t _t780 = _t130*_t771;
+    const train5_real_t _t781 = _t769*_t78;
+    const train5_real_t _t782 = _t131*_t771;
+    const train5_real_t _t783 = _ms133*_ms228;
+    const train5_real_t _t784 = _ms152*_ms349;
+    const train5_real_t _t785 = _ms133*_ms229;
+    const train5_real_t _t786 = _ms152*_ms351;
+    const train5_real_t _t787 = _ms138*_ms228;
+    const train5_real_t _t788 = _ms155*_ms349;
+    const train5_real_t _t789 = _ms138*_ms229;
+    const train5_real_t _t790 = _ms155*_ms351;
+    const train5_real_t _t791 = _ms156*_ms361;
+    const train5_real_t _t792 = _ms156*_ms363;
+    const train5_real_t _t793 = _ms160*_ms361;
+    const train5_real_t _t794 = _ms160*_ms363;
+    const train5_real_t _t795 = _ms161*_ms377;
+    const train5_real_t _t796 = _ms161*_ms379;
+    const train5_real_t _t797 = TRAIN5_LIT(2.0)*_t783 + TRAIN5_LIT(2.0)*_t784;
+    const train5_real_t _t798 = -TRAIN5_LIT(1.6666666666666667)*_t797;
+    const train5_real_t _t799 = TRAIN5_LIT(0.2)*_t798;
+    const train5_real_t _t800 = _ms133*_ms349;
+    const train5_real_t _t801 = TRAIN5_LIT(2.0)*_t800;
+    const train5_real_t _t802 = _ms152*_ms228;
+    const train5_real_t _t803 = TRAIN5_LIT(2.0)*_t785 + TRAIN5_LIT(2.0)*_t786;
+    const train5_real_t _t804 = -TRAIN5_LIT(1.6666666666666667)*_t803;
+    const train5_real_t _t805 = TRAIN5_LIT(0.2)*_t804;
+    const train5_real_t _t806 = _ms133*_ms351;
+    const train5_real_t _t807 = TRAIN5_LIT(2.0)*_t806;
+    const train5_real_t _t808 = _ms152*_ms229;
+    const train5_real_t _t809 = -_t783 - _t784;
+    const train5_real_t _t810 = -TRAIN5_LIT(1.6666666666666667)*_t809;
+    const train5_real_t _t811 = TRAIN5_LIT(0.2)*_t810;
+    const train5_real_t _t812 = -_t785 - _t786;
+    const train5_real_t _t813 = -TRAIN5_LIT(1.6666666666666667)*_t812;
+    const train5_real_t _t814 = TRAIN5_LIT(0.2)*_t813;
+    const train5_real_t _t815 = -_ms139*_t798 + TRAIN5_LIT(2.0)*_t787 + TRAIN5_LIT(2.0)*_t788;
+    const train5_real_t _t816 = -TRAIN5_LIT(1.6666666666666667)*_t815;
+    const train5_real_t _t817 = TRAIN5_LIT(0.2)*_t816;
+    const train5_real_t _t818 = _ms138*_ms349;
+    const train5_real_t _t819 = -TRAIN5_LIT(2.0)*_ms155*_ms228 + _ms156*_t798
+            + TRAIN5_LIT(2.0)*_t818;
+    const train5_real_t _t820 = -_ms139*_t804 + TRAIN5_LIT(2.0)*_t789 + TRAIN5_LIT(2.0)*_t790;
+    const train5_real_t _t821 = -TRAIN5_LIT(1.6666666666666667)*_t820;
+    const train5_real_t _t822 = TRAIN5_LIT(0.2)*_t821;
+    const train5_real_t _t823 = _ms138*_ms351;
+    const train5_real_t _t824 = -TRAIN5_LIT(2.0)*_ms155*_ms229 + _ms156*_t804
+            + TRAIN5_LIT(2.0)*_t823;
+    const train5_real_t _t825 = -_ms139*_t810 + _t791;
+    const train5_real_t _t826 = -TRAIN5_LIT(1.6666666666666667)*_t825;
+    const train5_real_t _t827 = TRAIN5_LIT(0.2)*_t826;
+    const train5_real_t _t828 = _ms139*_ms361;
+    const train5_real_t _t829 = _ms156*_t810 + _t828;
+    const train5_real_t _t830 = -_ms139*_t813 + _t792;
+    const train5_real_t _t831 = -TRAIN5_LIT(1.6666666666666667)*_t830;
+    const train5_real_t _t832 = TRAIN5_LIT(0.2)*_t831;
+    const train5_real_t _t833 = _ms139*_ms363;
+    const train5_real_t _t834 = _ms156*_t813 + _t833;
+    const train5_real_t _t835 = -_t787 - _t788 - _t791;
+    const train5_real_t _t836 = -TRAIN5_LIT(1.6666666666666667)*_t835;
+    const train5_real_t _t837 = TRAIN5_LIT(0.2)*_t836;
+    const train5_real_t _t838 = _ms155*_ms228;
+    const train5_real_t _t839 = -_t789 - _t790 - _t792;
+    const train5_real_t _t840 = -TRAIN5_LIT(1.6666666666666667)*_t839;
+    const train5_real_t _t841 = TRAIN5_LIT(0.2)*_t840;
+    const train5_real_t _t842 = _ms155*_ms229;
+    const train5_real_t _t843 = TRAIN5_LIT(2.0)*_ms144*_ms228 - _ms145*_t798 - _ms146*_t816
+            + TRAIN5_LIT(2.0)*_ms159*_ms349;
+    const train5_real_t _t844 = -TRAIN5_LIT(1.6666666666666667)*_t843;
+    const train5_real_t _t845 = TRAIN5_LIT(0.2)*_t844;
+    const train5_real_t _t846 = _ms144*_ms349;
+    const train5_real_t _t847 = -TRAIN5_LIT(2.0)*_ms159*_ms228 + _ms160*_t798 + _ms161*_t816
+            + TRAIN5_LIT(2.0)*_t846;
+    const train5_real_t _t848 = TRAIN5_LIT(2.0)*_ms144*_ms229 - _ms145*_t804 - _ms146*_t821
+            + TRAIN5_LIT(2.0)*_ms159*_ms351;
+    const train5_real_t _t849 = -TRAIN5_LIT(1.6666666666666667)*_t848;
+    const train5_real_t _t850 = TRAIN5_LIT(0.2)*_t849;
+    const train5_real_t _t851 = _ms144*_ms351;
+    const train5_real_t _t852 = -TRAIN5_LIT(2.0)*_ms159*_ms229 + _ms160*_t804 + _ms161*_t821
+            + TRAIN5_LIT(2.0)*_t851;
+    const train5_real_t _t853 = -_ms145*_t810 - _ms146*_t826 + _t793;
+    const train5_real_t _t854 = -TRAIN5_LIT(1.6666666666666667)*_t853;
+    const train5_real_t _t855 = TRAIN5_LIT(0.2)*_t854;
+    const train5_real_t _t856 = _ms145*_ms361;
+    const train5_real_t _t857 = _ms160*_t810 + _ms161*_t826 + _t856;
+    const train5_real_t _t858 = -_ms145*_t813 - _ms146*_t831 + _t794;
+    const train5_real_t _t859 = -TRAIN5_LIT(1.6666666666666667)*_t858;
+    const train5_real_t _t860 = TRAIN5_LIT(0.2)*_t859;
+    const train5_real_t _t861 = _ms145*_ms363;
+    const train5_real_t _t862 = _ms160*_t813 + _ms161*_t831 + _t861;
+    const train5_real_t _t863 = -_ms146*_t836 + _t795;
+    const train5_real_t _t864 = -TRAIN5_LIT(1.6666666666666667)*_t863;
+    const train5_real_t _t865 = TRAIN5_LIT(0.2)*_t864;
+    const train5_real_t _t866 = _ms146*_ms377;
+    const train5_real_t _t867 = _ms161*_t836 + _t866;
+    const train5_real_t _t868 = -_ms146*_t840 + _t796;
+    const train5_real_t _t869 = -TRAIN5_LIT(1.6666666666666667)*_t868;
+    const train5_real_t _t870 = TRAIN5_LIT(0.2)*_t869;
+    const train5_real_t _t871 = _ms146*_ms379;
+    const train5_real_t _t872 = _ms161*_t840 + _t871;
+    const train5_real_t _t873 = -_ms144*_ms228 - _ms159*_ms349 - _t793 - _t795;
+    const train5_real_t _t874 = -TRAIN5_LIT(1.6666666666666667)*_t873;
+    const train5_real_t _t875 = TRAIN5_LIT(0.2)*_t874;
+    const train5_real_t _t876 = -_ms159*_ms228 + _t846 + _t856 + _t866;
+    const train5_real_t _t877 = -_ms144*_ms229 - _ms159*_ms351 - _t794 - _t796;
+    const train5_real_t _t878 = -TRAIN5_LIT(1.6666666666666667)*_t877;
+    const train5_real_t _t879 = TRAIN5_LIT(0.2)*_t878;
+    const train5_real_t _t880 = -_ms159*_ms229 + _t851 + _t861 + _t871;
+    const train5_real_t _t881 = J_theta_cart2_left*_ms441;
+    const train5_real_t _t882 = J_theta_cart2_right*_ms429;
+    const train5_real_t _t883 = J_theta_cart3_left*_ms469;
+    const train5_real_t _t884 = J_theta_cart3_right*_ms453;
+    const train5_real_t _t885 = J_theta_cart4_left*_ms505;
+    const train5_real_t _t886 = J_theta_cart4_right*_ms485;
+    const train5_real_t _t887 = J_theta_cart5_left*_ms549;
+    const train5_real_t _t888 = J_theta_cart5_right*_ms525;
+    const train5_real_t _t889 = _t743*(_ms228*_ms576 + _ms232*_ms573);
+    const train5_real_t _t890 = _t745*(_ms228*_ms579 + _ms236*_ms573);
+    const train5_real_t _t891 = _t747*(_ms228*_ms582 + _ms240*_ms573);
+    const train5_real_t _t892 = _t743*(_ms229*_ms576 + _ms233*_ms573);
+    const train5_real_t _t893 = _t745*(_ms229*_ms579 + _ms237*_ms573);
+    const train5_real_t _t894 = _t747*(_ms229*_ms582 + _ms241*_ms573);
+    const train5_real_t _t895 = _ms232*_t743;
+    const train5_real_t _t896 = _ms236*_t745;
+    const train5_real_t _t897 = _ms240*_t747;
+    const train5_real_t _t898 = _ms228*_t743;
+    const train5_real_t _t899 = _ms228*_t745;
+    const train5_real_t _t900 = _ms228*_t747;
+    const train5_real_t _t901 = TRAIN5_LIT(0.85)*_t63;
+    const train5_real_t _t902 = TRAIN5_LIT(0.85)*_t65;
+    const train5_real_t _t903 = -_t126*_t901 + _t127*_t901 + _t70*_t902 + _t72*_t902;
+    const train5_real_t _t904 = _ms237*_t903;
+    const train5_real_t _t905 = -_t130*_t901 + _t131*_t901 + _t76*_t902 + _t78*_t902;
+    const train5_real_t _t906 = _ms241*_t905;
+    const train5_real_t _t907 = _ms233*_t903;
+    const train5_real_t _t908 = _ms233*_t905;
+    const train5_real_t _t909 = J_theta_cart3_right*_ms459;
+    const train5_real_t _t910 = J_theta_cart3_left*_ms475;
+    const train5_real_t _t911 = J_theta_cart4_right*_ms491;
+    const train5_real_t _t912 = J_theta_cart4_left*_ms511;
+    const train5_real_t _t913 = J_theta_cart5_right*_ms531;
+    const train5_real_t _t914 = J_theta_cart5_left*_ms555;
+    const train5_real_t _t915 = _t142*_t902;
+    const train5_real_t _t916 = _t130*_t915 - _t131*_t915 + _t143*_t901 + _t144*_t901;
+    const train5_real_t _t917 = _t146*_t902;
+    const train5_real_t _t918 = _t126*_t917 - _t127*_t917 + _t147*_t901 + _t148*_t901;
+    const train5_real_t _t919 = _t136*_t902;
+    const train5_real_t _t920 = _t136*_t901;
+    const train5_real_t _t921 = _t126*_t919 - _t127*_t919 + _t70*_t920 + _t72*_t920;
+    const train5_real_t _t922 = _t130*_t919 - _t131*_t919 + _t76*_t920 + _t78*_t920;
+    const train5_real_t _t923 = _ms139*_ms232;
+    const train5_real_t _t924 = _ms156*_ms365;
+    const train5_real_t _t925 = _ms139*_ms233;
+    const train5_real_t _t926 = _ms156*_ms367;
+    const train5_real_t _t927 = _ms145*_ms232;
+    const train5_real_t _t928 = _ms160*_ms365;
+    const train5_real_t _t929 = _ms145*_ms233;
+    const train5_real_t _t930 = _ms160*_ms367;
+    const train5_real_t _t931 = _ms161*_ms381;
+    const train5_real_t _t932 = _ms161*_ms383;
+    const train5_real_t _t933 = TRAIN5_LIT(2.0)*_t923 + TRAIN5_LIT(2.0)*_t924;
+    const train5_real_t _t934 = -TRAIN5_LIT(1.6666666666666667)*_t933;
+    const train5_real_t _t935 = TRAIN5_LIT(0.2)*_t934;
+    const train5_real_t _t936 = _ms139*_ms365;
+    const train5_real_t _t937 = TRAIN5_LIT(2.0)*_t936;
+    const train5_real_t _t938 = _ms156*_ms232;
+    const train5_real_t _t939 = TRAIN5_LIT(2.0)*_t925 + TRAIN5_LIT(2.0)*_t926;
+    const train5_real_t _t940 = -TRAIN5_LIT(1.6666666666666667)*_t939;
+    const train5_real_t _t941 = TRAIN5_LIT(0.2)*_t940;
+    const train5_real_t _t942 = _ms139*_ms367;
+    const train5_real_t _t943 = TRAIN5_LIT(2.0)*_t942;
+    const train5_real_t _t944 = _ms156*_ms233;
+    const train5_real_t _t945 = -_t923 - _t924;
+    const train5_real_t _t946 = -TRAIN5_LIT(1.6666666666666667)*_t945;
+    const train5_real_t _t947 = TRAIN5_LIT(0.2)*_t946;
+    const train5_real_t _t948 = -_t925 - _t926;
+    const train5_real_t _t949 = -TRAIN5_LIT(1.6666666666666667)*_t948;
+    const train5_real_t _t950 = TRAIN5_LIT(0.2)*_t949;
+    const train5_real_t _t951 = -_ms146*_t934 + TRAIN5_LIT(2.0)*_t927 + TRAIN5_LIT(2.0)*_t928;
+    const train5_real_t _t952 = -TRAIN5_LIT(1.6666666666666667)*_t951;
+    const train5_real_t _t953 = TRAIN5_LIT(0.2)*_t952;
+    const train5_real_t _t954 = _ms145*_ms365;
+    const train5_real_t _t955 = -TRAIN5_LIT(2.0)*_ms160*_ms232 + _ms161*_t934
+            + TRAIN5_LIT(2.0)*_t954;
+    const train5_real_t _t956 = -_ms146*_t940 + TRAIN5_LIT(2.0)*_t929 + TRAIN5_LIT(2.0)*_t930;
+    const train5_real_t _t957 = -TRAIN5_LIT(1.6666666666666667)*_t956;
+    const train5_real_t _t958 = TRAIN5_LIT(0.2)*_t957;
+    const train5_real_t _t959 = _ms145*_ms367;
+    const train5_real_t _t960 = -TRAIN5_LIT(2.0)*_ms160*_ms233 + _ms161*_t940
+            + TRAIN5_LIT(2.0)*_t959;
+    const train5_real_t _t961 = -_ms146*_t946 + _t931;
+    const train5_real_t _t962 = -TRAIN5_LIT(1.6666666666666667)*_t961;
+    const train5_real_t _t963 = TRAIN5_LIT(0.2)*_t962;
+    const train5_real_t _t964 = _ms146*_ms381;
+    const train5_real_t _t965 = _ms161*_t946 + _t964;
+    const train5_real_t _t966 = -_ms146*_t949 + _t932;
+    const train5_real_t _t967 = -TRAIN5_LIT(1.6666666666666667)*_t966;
+    const train5_real_t _t968 = TRAIN5_LIT(0.2)*_t967;
+    const train5_real_t _t969 = _ms146*_ms383;
+    const train5_real_t _t970 = _ms161*_t949 + _t969;
+    const train5_real_t _t971 = -_t927 - _t928 - _t931;
+    const train5_real_t _t972 = -TRAIN5_LIT(1.6666666666666667)*_t971;
+    const train5_real_t _t973 = TRAIN5_LIT(0.2)*_t972;
+    const train5_real_t _t974 = -_ms160*_ms232 + _t954 + _t964;
+    const train5_real_t _t975 = -_t929 - _t930 - _t932;
+    const train5_real_t _t976 = -TRAIN5_LIT(1.6666666666666667)*_t975;
+    const train5_real_t _t977 = TRAIN5_LIT(0.2)*_t976;
+    const train5_real_t _t978 = -_ms160*_ms233 + _t959 + _t969;
+    const train5_real_t _t979 = J_theta_cart3_left*_ms473;
+    const train5_real_t _t980 = J_theta_cart3_right*_ms457;
+    const train5_real_t _t981 = J_theta_cart4_left*_ms509;
+    const train5_real_t _t982 = J_theta_cart4_right*_ms489;
+    const train5_real_t _t983 = J_theta_cart5_left*_ms553;
+    const train5_real_t _t984 = J_theta_cart5_right*_ms529;
+    const train5_real_t _t985 = _t903*(_ms232*_ms579 + _ms236*_ms576);
+    const train5_real_t _t986 = _t905*(_ms232*_ms582 + _ms240*_ms576);
+    const train5_real_t _t987 = _t903*(_ms233*_ms579 + _ms237*_ms576);
+    const train5_real_t _t988 = _t905*(_ms233*_ms582 + _ms241*_ms576);
+    const train5_real_t _t989 = _ms236*_t903;
+    const train5_real_t _t990 = _ms240*_t905;
+    const train5_real_t _t991 = _ms232*_t903;
+    const train5_real_t _t992 = _ms232*_t905;
+    const train5_real_t _t993 = TRAIN5_LIT(0.85)*_t69;
+    const train5_real_t _t994 = TRAIN5_LIT(0.85)*_t71;
+    const train5_real_t _t995 = -_t130*_t993 + _t131*_t993 + _t76*_t994 + _t78*_t994;
+    const train5_real_t _t996 = _ms241*_t995;
+    const train5_real_t _t997 = _ms237*_t995;
+    const train5_real_t _t998 = J_theta_cart4_right*_ms495;
+    const train5_real_t _t999 = J_theta_cart4_left*_ms515;
+    const train5_real_t _t1000 = J_theta_cart5_right*_ms535;
+    const train5_real_t _t1001 = J_theta_cart5_left*_ms559;
+    const train5_real_t _t1002 = _t142*_t994;
+    const train5_real_t _t1003 = _t1002*_t130 - _t1002*_t131 + _t143*_t993 + _t144*_t993;
+    const train5_real_t _t1004 = _t146*_t994;
+    const train5_real_t _t1005 = _t146*_t993;
+    const train5_real_t _t1006 = _t1004*_t130 - _t1004*_t131 + _t1005*_t76 + _t1005*_t78;
+    const train5_real_t _t1007 = _ms146*_ms236;
+    const train5_real_t _t1008 = _ms161*_ms385;
+    const train5_real_t _t1009 = _ms146*_ms237;
+    const train5_real_t _t1010 = _ms161*_ms387;
+    const train5_real_t _t1011 = TRAIN5_LIT(2.0)*_t1007 + TRAIN5_LIT(2.0)*_t1008;
+    const train5_real_t _t1012 = -TRAIN5_LIT(1.6666666666666667)*_t1011;
+    const train5_real_t _t1013 = TRAIN5_LIT(0.2)*_t1012;
+    const train5_real_t _t1014 = _ms146*_ms385;
+    const train5_real_t _t1015 = TRAIN5_LIT(2.0)*_t1014;
+    const train5_real_t _t1016 = _ms161*_ms236;
+    const train5_real_t _t1017 = TRAIN5_LIT(2.0)*_t1009 + TRAIN5_LIT(2.0)*_t1010;
+    const train5_real_t _t1018 = -TRAIN5_LIT(1.6666666666666667)*_t1017;
+    const train5_real_t _t1019 = TRAIN5_LIT(0.2)*_t1018;
+    const train5_real_t _t1020 = _ms146*_ms387;
+    const train5_real_t _t1021 = TRAIN5_LIT(2.0)*_t1020;
+    const train5_real_t _t1022 = _ms161*_ms237;
+    const train5_real_t _t1023 = -_t1007 - _t1008;
+    const train5_real_t _t1024 = -TRAIN5_LIT(1.6666666666666667)*_t1023;
+    const train5_real_t _t1025 = TRAIN5_LIT(0.2)*_t1024;
+    const train5_real_t _t1026 = -_t1009 - _t1010;
+    const train5_real_t _t1027 = -TRAIN5_LIT(1.6666666666666667)*_t1026;
+    const train5_real_t _t1028 = TRAIN5_LIT(0.2)*_t1027;
+    const train5_real_t _t1029 = J_theta_cart4_left*_ms513;
+    const train5_real_t _t1030 = J_theta_cart4_right*_ms493;
+    const train5_real_t _t1031 = J_theta_cart5_left*_ms557;
+    const train5_real_t _t1032 = J_theta_cart5_right*_ms533;
+    const train5_real_t _t1033 = _t995*(_ms236*_ms582 + _ms240*_ms579);
+    const train5_real_t _t1034 = _t995*(_ms237*_ms582 + _ms241*_ms579);
+    const train5_real_t _t1035 = _ms240*_t995;
+    const train5_real_t _t1036 = _ms236*_t995;
+    const train5_real_t _t1037 = J_theta_cart5_right*_ms539;
+    const train5_real_t _t1038 = J_theta_cart5_left*_ms563;
+    const train5_real_t _t1039 = J_theta_cart5_left*_ms561;
+    const train5_real_t _t1040 = J_theta_cart5_right*_ms537;
+    const train5_real_t _t1041 = TRAIN5_LIT(2.0)*_ms287;
+    const train5_real_t _t1042 = _ms48*_t1041;
+    const train5_real_t _t1043 = TRAIN5_LIT(0.6)*_ms287;
+    const train5_real_t _t1044 = _t1043*_t52 + _t1043*_t54;
+    const train5_real_t _t1045 = _t1043*_t58 + _t1043*_t60;
+    const train5_real_t _t1046 = _t1043*_t64 + _t1043*_t66;
+    const train5_real_t _t1047 = _t1043*_t70 + _t1043*_t72;
+    const train5_real_t _t1048 = _t1043*_t76 + _t1043*_t78;
+    const train5_real_t _t1049 = _ms286*_ms48;
+    const train5_real_t _t1050 = _ms162*_ms224 + _ms225*_ms48;
+    const train5_real_t _t1051 = _ms286*_t1050;
+    const train5_real_t _t1052 = -_ms288;
+    const train5_real_t _t1053 = _ms287 + _t1052;
+    const train5_real_t _t1054 = _ms287*_t1050;
+    const train5_real_t _t1055 = _t1041 + _t1052;
+    const train5_real_t _t1056 = -K_theta_tractor_x_tractor + _t48;
+    const train5_real_t _t1057 = _ms49*_t1041;
+    const train5_real_t _t1058 = _ms286*_ms49;
+    const train5_real_t _t1059 = _ms163*_ms224 + _ms225*_ms49;
+    const train5_real_t _t1060 = _ms286*_t1059;
+    const train5_real_t _t1061 = _ms287*_t1059;
+    const train5_real_t _t1062 = _ms162*_t523 + _ms48*_t526;
+    const train5_real_t _t1063 = _ms162*_t524 + _ms48*_t528;
+    const train5_real_t _t1064 = _ms163*_t523 + _ms49*_t526;
+    const train5_real_t _t1065 = _ms163*_t524 + _ms49*_t528;
+    const train5_real_t _t1066 = _ms286*_t40;
+    const train5_real_t _t1067 = _ms286*_t41;
+    const train5_real_t _t1068 = _ms162*_t40;
+    const train5_real_t _t1069 = _ms163*_t40;
+    const train5_real_t _t1070 = _ms162*_t41;
+    const train5_real_t _t1071 = _ms163*_t41;
+    const train5_real_t _t1072 = _ms286*_ms341 + _ms287*_ms343;
+    const train5_real_t _t1073 = _ms286*_ms345 + _ms287*_ms347;
+    const train5_real_t _t1074 = _ms286*_ms349 + _ms287*_ms351;
+    const train5_real_t _t1075 = _ms162*_ms228 + _ms229*_ms48;
+    const train5_real_t _t1076 = _ms163*_ms228 + _ms229*_ms49;
+    const train5_real_t _t1077 = _ms286*_ms353 + _ms287*_ms355;
+    const train5_real_t _t1078 = _ms286*_ms357 + _ms287*_ms359;
+    const train5_real_t _t1079 = _ms286*_ms361 + _ms287*_ms363;
+    const train5_real_t _t1080 = _ms286*_ms365 + _ms287*_ms367;
+    const train5_real_t _t1081 = _ms162*_ms232 + _ms233*_ms48;
+    const train5_real_t _t1082 = _ms163*_ms232 + _ms233*_ms49;
+    const train5_real_t _t1083 = _ms286*_ms369 + _ms287*_ms371;
+    const train5_real_t _t1084 = _ms286*_ms373 + _ms287*_ms375;
+    const train5_real_t _t1085 = _ms286*_ms377 + _ms287*_ms379;
+    const train5_real_t _t1086 = _ms286*_ms381 + _ms287*_ms383;
+    const train5_real_t _t1087 = _ms286*_ms385 + _ms287*_ms387;
+    const train5_real_t _t1088 = _ms162*_ms236 + _ms237*_ms48;
+    const train5_real_t _t1089 = _ms163*_ms236 + _ms237*_ms49;
+    const train5_real_t _t1090 = _ms286*_ms389 + _ms287*_ms391;
+    const train5_real_t _t1091 = _ms286*_ms393 + _ms287*_ms395;
+    const train5_real_t _t1092 = _ms286*_ms397 + _ms287*_ms399;
+    const train5_real_t _t1093 = _ms286*_ms401 + _ms287*_ms403;
+    const train5_real_t _t1094 = _ms286*_ms405 + _ms287*_ms407;
+    const train5_real_t _t1095 = _ms286*_ms409 + _ms287*_ms411;
+    const train5_real_t _t1096 = _ms162*_ms240 + _ms241*_ms48;
+    const train5_real_t _t1097 = _ms163*_ms240 + _ms241*_ms49;
+    const train5_real_t _t1098 = _ms286*_ms413 + _ms287*_ms415;
+    const train5_real_t _t1099 = _ms162*_ms248 + _ms249*_ms48;
+    const train5_real_t _t1100 = _ms163*_ms248 + _ms249*_ms49;
+    const train5_real_t _t1101 = _ms286*_ms417 + _ms287*_ms419;
+    const train5_real_t _t1102 = _ms162*_ms252 + _ms253*_ms48;
+    const train5_real_t _t1103 = _ms163*_ms252 + _ms253*_ms49;
+    const train5_real_t _t1104 = _ms286*_ms421 + _ms287*_ms423;
+    const train5_real_t _t1105 = _ms286*_ms425 + _ms287*_ms427;
+    const train5_real_t _t1106 = _ms286*_ms429 + _ms287*_ms431;
+    const train5_real_t _t1107 = _ms162*_ms256 + _ms257*_ms48;
+    const train5_real_t _t1108 = _ms163*_ms256 + _ms257*_ms49;
+    const train5_real_t _t1109 = _ms286*_ms433 + _ms287*_ms435;
+    const train5_real_t _t1110 = _ms286*_ms437 + _ms287*_ms439;
+    const train5_real_t _t1111 = _ms286*_ms441 + _ms287*_ms443;
+    const train5_real_t _t1112 = _ms162*_ms260 + _ms261*_ms48;
+    const train5_real_t _t1113 = _ms163*_ms260 + _ms261*_ms49;
+    const train5_real_t _t1114 = _ms286*_ms445 + _ms287*_ms447;
+    const train5_real_t _t1115 = _ms286*_ms449 + _ms287*_ms451;
+    const train5_real_t _t1116 = _ms286*_ms453 + _ms287*_ms455;
+    const train5_real_t _t1117 = _ms286*_ms457 + _ms287*_ms459;
+    const train5_real_t _t1118 = _ms162*_ms264 + _ms265*_ms48;
+    const train5_real_t _t1119 = _ms163*_ms264 + _ms265*_ms49;
+    const train5_real_t _t1120 = _ms286*_ms461 + _ms287*_ms463;
+    const train5_real_t _t1121 = _ms286*_ms465 + _ms287*_ms467;
+    const train5_real_t _t1122 = _ms286*_ms469 + _ms287*_ms471;
+    const train5_real_t _t1123 = _ms286*_ms473 + _ms287*_ms475;
+    const train5_real_t _t1124 = _ms162*_ms268 + _ms269*_ms48;
+    const train5_real_t _t1125 = _ms163*_ms268 + _ms269*_ms49;
+    const train5_real_t _t1126 = _ms286*_ms477 + _ms287*_ms479;
+    const train5_real_t _t1127 = _ms286*_ms481 + _ms287*_ms483;
+    const train5_real_t _t1128 = _ms286*_ms485 + _ms287*_ms487;
+    const train5_real_t _t1129 = _ms286*_ms489 + _ms287*_ms491;
+    const train5_real_t _t1130 = _ms286*_ms493 + _ms287*_ms495;
+    const train5_real_t _t1131 = _ms162*_ms272 + _ms273*_ms48;
+    const train5_real_t _t1132 = _ms163*_ms272 + _ms273*_ms49;
+    const train5_real_t _t1133 = _ms286*_ms497 + _ms287*_ms499;
+    const train5_real_t _t1134 = _ms286*_ms501 + _ms287*_ms503;
+    const train5_real_t _t1135 = _ms286*_ms505 + _ms287*_ms507;
+    const train5_real_t _t1136 = _ms286*_ms509 + _ms287*_ms511;
+    const train5_real_t _t1137 = _ms286*_ms513 + _ms287*_ms515;
+    const train5_real_t _t1138 = _ms162*_ms276 + _ms277*_ms48;
+    const train5_real_t _t1139 = _ms163*_ms276 + _ms277*_ms49;
+    const train5_real_t _t1140 = _ms286*_ms517 + _ms287*_ms519;
+    const train5_real_t _t1141 = _ms286*_ms521 + _ms287*_ms523;
+    const train5_real_t _t1142 = _ms286*_ms525 + _ms287*_ms527;
+    const train5_real_t _t1143 = _ms286*_ms529 + _ms287*_ms531;
+    const train5_real_t _t1144 = _ms286*_ms533 + _ms287*_ms535;
+    const train5_real_t _t1145 = _ms286*_ms537 + _ms287*_ms539;
+    const train5_real_t _t1146 = _ms162*_ms280 + _ms281*_ms48;
+    const train5_real_t _t1147 = _ms163*_ms280 + _ms281*_ms49;
+    const train5_real_t _t1148 = _ms286*_ms541 + _ms287*_ms543;
+    const train5_real_t _t1149 = _ms286*_ms545 + _ms287*_ms547;
+    const train5_real_t _t1150 = _ms286*_ms549 + _ms287*_ms551;
+    const train5_real_t _t1151 = _ms286*_ms553 + _ms287*_ms555;
+    const train5_real_t _t1152 = _ms286*_ms557 + _ms287*_ms559;
+    const train5_real_t _t1153 = _ms286*_ms561 + _ms287*_ms563;
+    const train5_real_t _t1154 = _ms162*_ms284 + _ms285*_ms48;
+    const train5_real_t _t1155 = _ms163*_ms284 + _ms285*_ms49;
+    const train5_real_t _t1156 = _ms306*_ms343 + _ms307*_ms355 + _ms308*_ms371 + _ms309*_ms391
+            + _t42 + _t48;
+    const train5_real_t _t1157 = _ms320*_ms343 + _ms321*_ms355 + _ms322*_ms371 + _ms323*_ms391
+            + _t55 + _t95;
+    const train5_real_t _t1158 = J_theta_cart2*_ms343 + _ms324*_ms355 + _ms325*_ms371
+            + _ms326*_ms391 + _t61 + _t97;
+    const train5_real_t _t1159 = J_theta_cart3*_ms355 + _ms324*_ms343 + _ms327*_ms371
+            + _ms328*_ms391 + _t67 + _t99;
+    const train5_real_t _t1160 = J_theta_cart4*_ms371 + _ms325*_ms343 + _ms327*_ms355
+            + _ms329*_ms391 + _t101 + _t73;
+    const train5_real_t _t1161 = J_theta_cart5*_ms391 + _ms326*_ms343 + _ms328*_ms355
+            + _ms329*_ms371 + _t103 + _t79;
+    const train5_real_t _t1162 = _ms224*_t1157 + _ms228*_t1158 + _ms232*_t1159 + _ms236*_t1160
+            + _ms240*_t1161 + _ms256*_t82 + _ms260*_t83 + _ms264*_t84 + _ms268*_t85 + _ms272*_t86
+            + _ms276*_t87 + _ms280*_t88 + _ms284*_t89 + _ms341*_t13 + _ms353*_t15 + _ms369*_t17
+            + _ms389*_t19 + _ms421*_t25 + _ms433*_t27 + _ms445*_t29 + _ms461*_t31 + _ms477*_t33
+            + _ms497*_t35 + _ms517*_t37 + _ms541*_t39 + _t1156 + _t90 + _t91 + _t92 + _t93 + _t94;
+    const train5_real_t _t1163 = _ms316*_ms343 + _ms317*_ms355 + _ms318*_ms371 + _ms319*_ms391
+            + _t100 + _t102 + _t104 + _t105 + _t96 + _t98;
+    const train5_real_t _t1164 = _ms225*_t1157 + _ms229*_t1158 + _ms233*_t1159 + _ms237*_t1160
+            + _ms241*_t1161 + _ms257*_t82 + _ms261*_t83 + _ms265*_t84 + _ms269*_t85 + _ms273*_t86
+            + _ms277*_t87 + _ms281*_t88 + _ms285*_t89 + _ms343*_t13 + _ms355*_t15 + _ms371*_t17
+            + _ms391*_t19 + _ms423*_t25 + _ms435*_t27 + _ms447*_t29 + _ms463*_t31 + _ms479*_t33
+            + _ms499*_t35 + _ms519*_t37 + _ms543*_t39 + _t106 + _t107 + _t108 + _t109 + _t110
+            + _t1163;
+    const train5_real_t _t1165 = _t1072*_t120 + _t1077*_t124 + _t1083*_t128 + _t1090*_t132 + _t116
+            + _t134 + _t135 + _t137 + _t138 + _t140 + _t141 + _t145 + _t149;
+    const train5_real_t _t1166 = _t1072*_t155 + _t1077*_t158 + _t1083*_t161 + _t1090*_t164 - _t151
+            + _t152;
+    const train5_real_t _t1167 = _t1077*_t173 + _t1083*_t175 + _t1090*_t177 - _t165 + _t166 + _t171;
+    const train5_real_t _t1168 = _t1072*_t184 + _t1083*_t186 + _t1090*_t188 - _t178 + _t179 + _t181;
+    const train5_real_t _t1169 = _t1072*_t193 + _t1077*_t196 + _t1090*_t198 - _t189 + _t190 + _t192;
+    const train5_real_t _t1170 = _t1072*_t203 + _t1077*_t204 + _t1083*_t207 - _t199 + _t200 + _t202;
+    const train5_real_t _t1171 = _ms286*_t1072;
+    const train5_real_t _t1172 = _ms287*_t1072;
+    const train5_real_t _t1173 = -_ms228*_ms567 - _ms229*_ms568 + _ms349*_t1171 + _ms351*_t1172
+            + _ms571*_t266 + _ms572*_t270 - _t213 - _t215 + _t220;
+    const train5_real_t _t1174 = _ms286*_t1077;
+    const train5_real_t _t1175 = _ms287*_t1077;
+    const train5_real_t _t1176 = -_ms232*_ms567 - _ms233*_ms568 + _ms361*_t1171 + _ms363*_t1172
+            + _ms365*_t1174 + _ms367*_t1175 + _ms569*_t287 + _ms570*_t295 + _ms571*_t303
+            + _ms572*_t308 + _ms574*_t313 + _ms575*_t317 - _t229 - _t230;
+    const train5_real_t _t1177 = _ms286*_t1083;
+    const train5_real_t _t1178 = _ms287*_t1083;
+    const train5_real_t _t1179 = -_ms236*_ms567 - _ms237*_ms568 + _ms377*_t1171 + _ms379*_t1172
+            + _ms381*_t1174 + _ms383*_t1175 + _ms385*_t1177 + _ms387*_t1178 + _ms569*_t325
+            + _ms570*_t333 + _ms571*_t341 + _ms572*_t346 + _ms574*_t351 + _ms575*_t356
+            + _ms577*_t361 + _ms578*_t365 - _t241 - _t242;
+    const train5_real_t _t1180 = _ms286*_t1090;
+    const train5_real_t _t1181 = _ms287*_t1090;
+    const train5_real_t _t1182 = -_ms240*_ms567 - _ms241*_ms568 + _ms397*_t1171 + _ms399*_t1172
+            + _ms401*_t1174 + _ms403*_t1175 + _ms405*_t1177 + _ms407*_t1178 + _ms409*_t1180
+            + _ms411*_t1181 + _ms569*_t373 + _ms570*_t381 + _ms571*_t389 + _ms572*_t394
+            + _ms574*_t399 + _ms575*_t404 + _ms577*_t409 + _ms578*_t414 + _ms580*_t419
+            + _ms581*_t423 - _t255 - _t256;
+    const train5_real_t _t1183 = _t267 + _t268;
+    const train5_real_t _t1184 = _ms84*_t1183;
+    const train5_real_t _t1185 = -_ms148 + _t262 + _t271;
+    const train5_real_t _t1186 = _ms84*_t1185;
+    const train5_real_t _t1187 = -_ms256*_ms567 - _ms257*_ms568 + _ms429*_t1171 + _ms431*_t1172
+            + _ms571*_t1184 + _ms572*_t1186 - _t272 - _t273 + _t278;
+    const train5_real_t _t1188 = -_t267 + _t268;
+    const train5_real_t _t1189 = _ms89*_t1188;
+    const train5_real_t _t1190 = -_ms148 + _t262 - _t271;
+    const train5_real_t _t1191 = _ms89*_t1190;
+    const train5_real_t _t1192 = -_ms260*_ms567 - _ms261*_ms568 + _ms441*_t1171 + _ms443*_t1172
+            + _ms571*_t1189 + _ms572*_t1191 - _t279 - _t280 + _t285;
+    const train5_real_t _t1193 = _t288 - _t293;
+    const train5_real_t _t1194 = _ms94*_t1193;
+    const train5_real_t _t1195 = _t296 - _t301;
+    const train5_real_t _t1196 = _ms94*_t1195;
+    const train5_real_t _t1197 = _t304 - _t306;
+    const train5_real_t _t1198 = _ms94*_t1197;
+    const train5_real_t _t1199 = _t309 - _t311;
+    const train5_real_t _t1200 = _ms94*_t1199;
+    const train5_real_t _t1201 = _t314 + _t315;
+    const train5_real_t _t1202 = _ms94*_t1201;
+    const train5_real_t _t1203 = _t318 + _t319;
+    const train5_real_t _t1204 = _ms94*_t1203;
+    const train5_real_t _t1205 = -_ms264*_ms567 - _ms265*_ms568 + _ms453*_t1171 + _ms455*_t1172
+            + _ms457*_t1174 + _ms459*_t1175 + _ms569*_t1194 + _ms570*_t1196 + _ms571*_t1198
+            + _ms572*_t1200 + _ms574*_t1202 + _ms575*_t1204 - _t320 - _t321;
+    const train5_real_t _t1206 = -_t288 - _t293;
+    const train5_real_t _t1207 = _ms99*_t1206;
+    const train5_real_t _t1208 = -_t296 - _t301;
+    const train5_real_t _t1209 = _ms99*_t1208;
+    const train5_real_t _t1210 = -_t304 - _t306;
+    const train5_real_t _t1211 = _ms99*_t1210;
+    const train5_real_t _t1212 = -_t309 - _t311;
+    const train5_real_t _t1213 = _ms99*_t1212;
+    const train5_real_t _t1214 = -_t314 + _t315;
+    const train5_real_t _t1215 = _ms99*_t1214;
+    const train5_real_t _t1216 = -_t318 + _t319;
+    const train5_real_t _t1217 = _ms99*_t1216;
+    const train5_real_t _t1218 = -_ms268*_ms567 - _ms269*_ms568 + _ms469*_t1171 + _ms471*_t1172
+            + _ms473*_t1174 + _ms475*_t1175 + _ms569*_t1207 + _ms570*_t1209 + _ms571*_t1211
+            + _ms572*_t1213 + _ms574*_t1215 + _ms575*_t1217 - _t322 - _t323;
+    const train5_real_t _t1219 = _t326 - _t331;
+    const train5_real_t _t1220 = _ms104*_t1219;
+    const train5_real_t _t1221 = _t334 - _t339;
+    const train5_real_t _t1222 = _ms104*_t1221;
+    const train5_real_t _t1223 = _t342 - _t344;
+    const train5_real_t _t1224 = _ms104*_t1223;
+    const train5_real_t _t1225 = _t347 - _t349;
+    const train5_real_t _t1226 = _ms104*_t1225;
+    const train5_real_t _t1227 = _t352 - _t354;
+    const train5_real_t _t1228 = _ms104*_t1227;
+    const train5_real_t _t1229 = _t357 - _t359;
+    const train5_real_t _t1230 = _ms104*_t1229;
+    const train5_real_t _t1231 = _t362 + _t363;
+    const train5_real_t _t1232 = _ms104*_t1231;
+    const train5_real_t _t1233 = _t366 + _t367;
+    const train5_real_t _t1234 = _ms104*_t1233;
+    const train5_real_t _t1235 = -_ms272*_ms567 - _ms273*_ms568 + _ms485*_t1171 + _ms487*_t1172
+            + _ms489*_t1174 + _ms491*_t1175 + _ms493*_t1177 + _ms495*_t1178 + _ms569*_t1220
+            + _ms570*_t1222 + _ms571*_t1224 + _ms572*_t1226 + _ms574*_t1228 + _ms575*_t1230
+            + _ms577*_t1232 + _ms578*_t1234 - _t368 - _t369;
+    const train5_real_t _t1236 = -_t326 - _t331;
+    const train5_real_t _t1237 = _ms109*_t1236;
+    const train5_real_t _t1238 = -_t334 - _t339;
+    const train5_real_t _t1239 = _ms109*_t1238;
+    const train5_real_t _t1240 = -_t342 - _t344;
+    const train5_real_t _t1241 = _ms109*_t1240;
+    const train5_real_t _t1242 = -_t347 - _t349;
+    const train5_real_t _t1243 = _ms109*_t1242;
+    const train5_real_t _t1244 = -_t352 - _t354;
+    const train5_real_t _t1245 = _ms109*_t1244;
+    const train5_real_t _t1246 = -_t357 - _t359;
+    const train5_real_t _t1247 = _ms109*_t1246;
+    const train5_real_t _t1248 = -_t362 + _t363;
+    const train5_real_t _t1249 = _ms109*_t1248;
+    const train5_real_t _t1250 = -_t366 + _t367;
+    const train5_real_t _t1251 = _ms109*_t1250;
+    const train5_real_t _t1252 = -_ms276*_ms567 - _ms277*_ms568 + _ms505*_t1171 + _ms507*_t1172
+            + _ms509*_t1174 + _ms511*_t1175 + _ms513*_t1177 + _ms515*_t1178 + _ms569*_t1237
+            + _ms570*_t1239 + _ms571*_t1241 + _ms572*_t1243 + _ms574*_t1245 + _ms575*_t1247
+            + _ms577*_t1249 + _ms578*_t1251 - _t370 - _t371;
+    const train5_real_t _t1253 = _t374 - _t379;
+    const train5_real_t _t1254 = _ms114*_t1253;
+    const train5_real_t _t1255 = _t382 - _t387;
+    const train5_real_t _t1256 = _ms114*_t1255;
+    const train5_real_t _t1257 = _t390 - _t392;
+    const train5_real_t _t1258 = _ms114*_t1257;
+    const train5_real_t _t1259 = _t395 - _t397;
+    const train5_real_t _t1260 = _ms114*_t1259;
+    const train5_real_t _t1261 = _t400 - _t402;
+    const train5_real_t _t1262 = _ms114*_t1261;
+    const train5_real_t _t1263 = _t405 - _t407;
+    const train5_real_t _t1264 = _ms114*_t1263;
+    const train5_real_t _t1265 = _t410 - _t412;
+    const train5_real_t _t1266 = _ms114*_t1265;
+    const train5_real_t _t1267 = _t415 - _t417;
+    const train5_real_t _t1268 = _ms114*_t1267;
+    const train5_real_t _t1269 = _t420 + _t421;
+    const train5_real_t _t1270 = _ms114*_t1269;
+    const train5_real_t _t1271 = _t424 + _t425;
+    const train5_real_t _t1272 = _ms114*_t1271;
+    const train5_real_t _t1273 = -_ms280*_ms567 - _ms281*_ms568 + _ms525*_t1171 + _ms527*_t1172
+            + _ms529*_t1174 + _ms531*_t1175 + _ms533*_t1177 + _ms535*_t1178 + _ms537*_t1180
+            + _ms539*_t1181 + _ms569*_t1254 + _ms570*_t1256 + _ms571*_t1258 + _ms572*_t1260
+            + _ms574*_t1262 + _ms575*_t1264 + _ms577*_t1266 + _ms578*_t1268 + _ms580*_t1270
+            + _ms581*_t1272 - _t426 - _t427;
+    const train5_real_t _t1274 = -_t374 - _t379;
+    const train5_real_t _t1275 = _ms119*_t1274;
+    const train5_real_t _t1276 = -_t382 - _t387;
+    const train5_real_t _t1277 = _ms119*_t1276;
+    const train5_real_t _t1278 = -_t390 - _t392;
+    const train5_real_t _t1279 = _ms119*_t1278;
+    const train5_real_t _t1280 = -_t395 - _t397;
+    const train5_real_t _t1281 = _ms119*_t1280;
+    const train5_real_t _t1282 = -_t400 - _t402;
+    const train5_real_t _t1283 = _ms119*_t1282;
+    const train5_real_t _t1284 = -_t405 - _t407;
+    const train5_real_t _t1285 = _ms119*_t1284;
+    const train5_real_t _t1286 = -_t410 - _t412;
+    const train5_real_t _t1287 = _ms119*_t1286;
+    const train5_real_t _t1288 = -_t415 - _t417;
+    const train5_real_t _t1289 = _ms119*_t1288;
+    const train5_real_t _t1290 = -_t420 + _t421;
+    const train5_real_t _t1291 = _ms119*_t1290;
+    const train5_real_t _t1292 = -_t424 + _t425;
+    const train5_real_t _t1293 = _ms119*_t1292;
+    const train5_real_t _t1294 = -_ms284*_ms567 - _ms285*_ms568 + _ms549*_t1171 + _ms551*_t1172
+            + _ms553*_t1174 + _ms555*_t1175 + _ms557*_t1177 + _ms559*_t1178 + _ms561*_t1180
+            + _ms563*_t1181 + _ms569*_t1275 + _ms570*_t1277 + _ms571*_t1279 + _ms572*_t1281
+            + _ms574*_t1283 + _ms575*_t1285 + _ms577*_t1287 + _ms578*_t1289 + _ms580*_t1291
+            + _ms581*_t1293 - _t428 - _t429;
+    const train5_real_t _t1295 = _ms224*_t1166 + _ms228*_t1167 + _ms232*_t1168 + _ms236*_t1169
+            + _ms240*_t1170 + _ms341*_t460 + _ms353*_t461 + _ms369*_t462 + _ms389*_t463
+            + _ms585*_t436 + _ms586*_t435 + _ms587*_t438 + _ms588*_t437 + _ms589*_t440
+            + _ms590*_t439 + _ms591*_t442 + _ms592*_t441 + _t1165 + _t1173*_t12 + _t1176*_t14
+            + _t1179*_t16 + _t1182*_t18 + _t1187*_t24 + _t1192*_t26 + _t1205*_t28 + _t1218*_t30
+            + _t1235*_t32 + _t1252*_t34 + _t1273*_t36 + _t1294*_t38 + _t430 + _t431 + _t432 + _t433
+            + _t434 + _t444 + _t446 + _t448 + _t450 - _t451 - _t452 - _t453 - _t454 - _t455 + _t457
+            + _t459;
+    const train5_real_t _t1296 = _t1072*_t483 + _t1077*_t485 + _t1083*_t487 + _t1090*_t489 + _t465
+            - _t466 + _t468 - _t469 + _t471 - _t472 + _t474 - _t475 + _t477 - _t478 + _t481;
+    const train5_real_t _t1297 = _ms225*_t1166 + _ms229*_t1167 + _ms233*_t1168 + _ms237*_t1169
+            + _ms241*_t1170 + _ms343*_t460 + _ms355*_t461 + _ms371*_t462 + _ms391*_t463
+            + _ms585*_t82 + _ms586*_t83 + _ms587*_t84 + _ms588*_t85 + _ms589*_t86 + _ms590*_t87
+            + _ms591*_t88 + _ms592*_t89 + _t1173*_t13 + _t1176*_t15 + _t1179*_t17 + _t1182*_t19
+            + _t1187*_t25 + _t1192*_t27 + _t1205*_t29 + _t1218*_t31 + _t1235*_t33 + _t1252*_t35
+            + _t1273*_t37 + _t1294*_t39 + _t1296 + _t490 + _t491 + _t492 + _t493 + _t494 + _t495
+            + _t496 + _t497 + _t498 - _t499 - _t500 - _t501 - _t502 - _t503 + _t504 + _t505;
+    const train5_real_t _t1298 = _ms306*_ms341 + _ms307*_ms353 + _ms308*_ms369 + _ms309*_ms389
+            + _t506 + _t512;
+    const train5_real_t _t1299 = _ms310 + _ms320*_ms341 + _ms321*_ms353 + _ms322*_ms369
+            + _ms323*_ms389 + _t513;
+    const train5_real_t _t1300 = J_theta_cart2*_ms341 + _ms311 + _ms324*_ms353 + _ms325*_ms369
+            + _ms326*_ms389 + _t514;
+    const train5_real_t _t1301 = J_theta_cart3*_ms353 + _ms312 + _ms324*_ms341 + _ms327*_ms369
+            + _ms328*_ms389 + _t515;
+    const train5_real_t _t1302 = J_theta_cart4*_ms369 + _ms313 + _ms325*_ms341 + _ms327*_ms353
+            + _ms329*_ms389 + _t516;
+    const train5_real_t _t1303 = J_theta_cart5*_ms389 + _ms314 + _ms326*_ms341 + _ms328*_ms353
+            + _ms329*_ms369 + _t517;
+    const train5_real_t _t1304 = _ms224*_t1299 + _ms228*_t1300 + _ms232*_t1301 + _ms236*_t1302
+            + _ms240*_t1303 + _ms256*_t436 + _ms260*_t435 + _ms264*_t438 + _ms268*_t437
+            + _ms272*_t440 + _ms276*_t439 + _ms280*_t442 + _ms284*_t441 + _ms341*_t12 + _ms353*_t14
+            + _ms369*_t16 + _ms389*_t18 + _ms421*_t24 + _ms433*_t26 + _ms445*_t28 + _ms461*_t30
+            + _ms477*_t32 + _ms497*_t34 + _ms517*_t36 + _ms541*_t38 + _t1298 + _t518 + _t519 + _t520
+            + _t521 + _t522;
+    const train5_real_t _t1305 = -_t1162*_t531 + _t1164*_t535 + _t1304*_t537;
+    const train5_real_t _t1306 = -_t1305*_t540;
+    const train5_real_t _t1307 = -_t1162*_t547 + _t1164*_t544 - _t1295*_t545 + _t1297*_t542
+            + _t1306*_t548;
+    const train5_real_t _t1308 = -_t1162*_t544 + _t1295*_t542 - _t1297*_t549 + _t1304*_t547
+            + _t1306*_t550;
+    const train5_real_t _t1309 = _t1307*_t523 + _t1308*_t526;
+    const train5_real_t _t1310 = _ms306*_ms347 + _ms307*_ms359 + _ms308*_ms375 + _ms309*_ms395
+            - _t42 - _t44;
+    const train5_real_t _t1311 = _ms320*_ms347 + _ms321*_ms359 + _ms322*_ms375 + _ms323*_ms395
+            - _t55 + _t554 + _t556 + _t558 + _t560 - _t95;
+    const train5_real_t _t1312 = J_theta_cart2*_ms347 + _ms324*_ms359 + _ms325*_ms375
+            + _ms326*_ms395 + _t561 - _t61;
+    const train5_real_t _t1313 = J_theta_cart3*_ms359 + _ms324*_ms347 + _ms327*_ms375
+            + _ms328*_ms395 + _t562 - _t67;
+    const train5_real_t _t1314 = J_theta_cart4*_ms375 + _ms325*_ms347 + _ms327*_ms359
+            + _ms329*_ms395 + _t563 - _t73;
+    const train5_real_t _t1315 = J_theta_cart5*_ms395 + _ms326*_ms347 + _ms328*_ms359
+            + _ms329*_ms375 + _t564 - _t79;
+    const train5_real_t _t1316 = _ms224*_t1311 + _ms228*_t1312 + _ms232*_t1313 + _ms236*_t1314
+            + _ms240*_t1315 + _ms256*_t565 + _ms260*_t566 + _ms264*_t567 + _ms268*_t568
+            + _ms272*_t569 + _ms276*_t570 + _ms280*_t571 + _ms284*_t572 + _ms345*_t13 + _ms357*_t15
+            + _ms373*_t17 + _ms393*_t19 + _ms425*_t25 + _ms437*_t27 + _ms449*_t29 + _ms465*_t31
+            + _ms481*_t33 + _ms501*_t35 + _ms521*_t37 + _ms545*_t39 + _t1310 - _t90 - _t91 - _t92
+            - _t93 - _t94;
+    const train5_real_t _t1317 = _ms316*_ms347 + _ms317*_ms359 + _ms318*_ms375 + _ms319*_ms395
+            - _t105 - _t96;
+    const train5_real_t _t1318 = _ms225*_t1311 + _ms229*_t1312 + _ms233*_t1313 + _ms237*_t1314
+            + _ms241*_t1315 + _ms257*_t565 + _ms261*_t566 + _ms265*_t567 + _ms269*_t568
+            + _ms273*_t569 + _ms277*_t570 + _ms281*_t571 + _ms285*_t572 + _ms347*_t13 + _ms359*_t15
+            + _ms375*_t17 + _ms395*_t19 + _ms427*_t25 + _ms439*_t27 + _ms451*_t29 + _ms467*_t31
+            + _ms483*_t33 + _ms503*_t35 + _ms523*_t37 + _ms547*_t39 - _t106 - _t107 - _t108 - _t109
+            - _t110 + _t1317;
+    const train5_real_t _t1319 = _t1073*_t120 + _t1078*_t124 + _t1084*_t128 + _t1091*_t132 - _t116
+            - _t140 - _t141;
+    const train5_real_t _t1320 = _t1073*_t155 + _t1078*_t158 + _t1084*_t161 + _t1091*_t164 + _t151
+            - _t152 - _t574 - _t576 + _t577 + _t578 + _t579 + _t580 + _t581 + _t582 + _t584 + _t586;
+    const train5_real_t _t1321 = _t1078*_t173 + _t1084*_t175 + _t1091*_t177 - _t171 - _t589;
+    const train5_real_t _t1322 = _t1073*_t184 + _t1084*_t186 + _t1091*_t188 - _t181 - _t590;
+    const train5_real_t _t1323 = _t1073*_t193 + _t1078*_t196 + _t1091*_t198 - _t192 - _t591;
+    const train5_real_t _t1324 = _t1073*_t203 + _t1078*_t204 + _t1084*_t207 - _t202 - _t592;
+    const train5_real_t _t1325 = _ms286*_t1073;
+    const train5_real_t _t1326 = _ms287*_t1073;
+    const train5_real_t _t1327 = _ms349*_t1325 + _ms351*_t1326 + _ms567*_t217 + _ms568*_t219
+            + _ms569*_t606 + _ms570*_t610 + _ms571*_t217 + _ms572*_t219 + _t213 + _t215;
+    const train5_real_t _t1328 = _ms286*_t1078;
+    const train5_real_t _t1329 = _ms287*_t1078;
+    const train5_real_t _t1330 = _ms361*_t1325 + _ms363*_t1326 + _ms365*_t1328 + _ms367*_t1329
+            + _ms567*_t287 + _ms568*_t295 + _ms569*_t614 + _ms570*_t618 + _ms571*_t622
+            + _ms572*_t627 + _ms574*_t632 + _ms575*_t635 + _t229 + _t230;
+    const train5_real_t _t1331 = _ms286*_t1084;
+    const train5_real_t _t1332 = _ms287*_t1084;
+    const train5_real_t _t1333 = _ms377*_t1325 + _ms379*_t1326 + _ms381*_t1328 + _ms383*_t1329
+            + _ms385*_t1331 + _ms387*_t1332 + _ms567*_t325 + _ms568*_t333 + _ms569*_t638
+            + _ms570*_t643 + _ms571*_t648 + _ms572*_t653 + _ms574*_t658 + _ms575*_t663
+            + _ms577*_t668 + _ms578*_t671 + _t241 + _t242;
+    const train5_real_t _t1334 = _ms286*_t1091;
+    const train5_real_t _t1335 = _ms287*_t1091;
+    const train5_real_t _t1336 = _ms397*_t1325 + _ms399*_t1326 + _ms401*_t1328 + _ms403*_t1329
+            + _ms405*_t1331 + _ms407*_t1332 + _ms409*_t1334 + _ms411*_t1335 + _ms567*_t373
+            + _ms568*_t381 + _ms569*_t674 + _ms570*_t678 + _ms571*_t682 + _ms572*_t687
+            + _ms574*_t692 + _ms575*_t697 + _ms577*_t702 + _ms578*_t707 + _ms580*_t712
+            + _ms581*_t715 + _t255 + _t256;
+    const train5_real_t _t1337 = _t607 + _t608;
+    const train5_real_t _t1338 = _ms84*_t1337;
+    const train5_real_t _t1339 = _t611 + _t612;
+    const train5_real_t _t1340 = _ms84*_t1339;
+    const train5_real_t _t1341 = _ms429*_t1325 + _ms431*_t1326 + _ms567*_t275 + _ms568*_t277
+            + _ms569*_t1338 + _ms570*_t1340 + _ms571*_t275 + _ms572*_t277 + _t272 + _t273;
+    const train5_real_t _t1342 = -_t607 + _t608;
+    const train5_real_t _t1343 = _ms89*_t1342;
+    const train5_real_t _t1344 = -_t611 + _t612;
+    const train5_real_t _t1345 = _ms89*_t1344;
+    const train5_real_t _t1346 = _ms441*_t1325 + _ms443*_t1326 + _ms567*_t282 + _ms568*_t284
+            + _ms569*_t1343 + _ms570*_t1345 + _ms571*_t282 + _ms572*_t284 + _t279 + _t280;
+    const train5_real_t _t1347 = TRAIN5_LIT(2.0)*_t290 + TRAIN5_LIT(2.0)*_t291 + _t615 - _t616;
+    const train5_real_t _t1348 = _ms94*_t1347;
+    const train5_real_t _t1349 = TRAIN5_LIT(2.0)*_t298 + TRAIN5_LIT(2.0)*_t299 + _t619 - _t620;
+    const train5_real_t _t1350 = _ms94*_t1349;
+    const train5_real_t _t1351 = _t623 - _t625;
+    const train5_real_t _t1352 = _ms94*_t1351;
+    const train5_real_t _t1353 = _t628 - _t630;
+    const train5_real_t _t1354 = _ms94*_t1353;
+    const train5_real_t _t1355 = -_t290 - _t291 + _t624 + _t633;
+    const train5_real_t _t1356 = _ms94*_t1355;
+    const train5_real_t _t1357 = -_t298 - _t299 + _t629 + _t636;
+    const train5_real_t _t1358 = _ms94*_t1357;
+    const train5_real_t _t1359 = _ms453*_t1325 + _ms455*_t1326 + _ms457*_t1328 + _ms459*_t1329
+            + _ms567*_t1194 + _ms568*_t1196 + _ms569*_t1348 + _ms570*_t1350 + _ms571*_t1352
+            + _ms572*_t1354 + _ms574*_t1356 + _ms575*_t1358 + _t320 + _t321;
+    const train5_real_t _t1360 = TRAIN5_LIT(2.0)*_ms132*_ms338 + TRAIN5_LIT(2.0)*_ms151*_ms224
+            - _t615 - _t616;
+    const train5_real_t _t1361 = _ms99*_t1360;
+    const train5_real_t _t1362 = TRAIN5_LIT(2.0)*_ms132*_ms339 + TRAIN5_LIT(2.0)*_ms151*_ms225
+            - _t619 - _t620;
+    const train5_real_t _t1363 = _ms99*_t1362;
+    const train5_real_t _t1364 = -_t623 - _t625;
+    const train5_real_t _t1365 = _ms99*_t1364;
+    const train5_real_t _t1366 = -_t628 - _t630;
+    const train5_real_t _t1367 = _ms99*_t1366;
+    const train5_real_t _t1368 = -_t292 + _t624 - _t633;
+    const train5_real_t _t1369 = _ms99*_t1368;
+    const train5_real_t _t1370 = -_t300 + _t629 - _t636;
+    const train5_real_t _t1371 = _ms99*_t1370;
+    const train5_real_t _t1372 = _ms469*_t1325 + _ms471*_t1326 + _ms473*_t1328 + _ms475*_t1329
+            + _ms567*_t1207 + _ms568*_t1209 + _ms569*_t1361 + _ms570*_t1363 + _ms571*_t1365
+            + _ms572*_t1367 + _ms574*_t1369 + _ms575*_t1371 + _t322 + _t323;
+    const train5_real_t _t1373 = TRAIN5_LIT(2.0)*_t328 + TRAIN5_LIT(2.0)*_t329 + _t639 - _t640
+            - _t641;
+    const train5_real_t _t1374 = _ms104*_t1373;
+    const train5_real_t _t1375 = TRAIN5_LIT(2.0)*_t336 + TRAIN5_LIT(2.0)*_t337 + _t644 - _t645
+            - _t646;
+    const train5_real_t _t1376 = _ms104*_t1375;
+    const train5_real_t _t1377 = _t649 - _t651;
+    const train5_real_t _t1378 = _ms104*_t1377;
+    const train5_real_t _t1379 = _t654 - _t656;
+    const train5_real_t _t1380 = _ms104*_t1379;
+    const train5_real_t _t1381 = _t659 - _t661;
+    const train5_real_t _t1382 = _ms104*_t1381;
+    const train5_real_t _t1383 = _t664 - _t666;
+    const train5_real_t _t1384 = _ms104*_t1383;
+    const train5_real_t _t1385 = -_t328 - _t329 + _t650 + _t660 + _t669;
+    const train5_real_t _t1386 = _ms104*_t1385;
+    const train5_real_t _t1387 = -_t336 - _t337 + _t655 + _t665 + _t672;
+    const train5_real_t _t1388 = _ms104*_t1387;
+    const train5_real_t _t1389 = _ms485*_t1325 + _ms487*_t1326 + _ms489*_t1328 + _ms491*_t1329
+            + _ms493*_t1331 + _ms495*_t1332 + _ms567*_t1220 + _ms568*_t1222 + _ms569*_t1374
+            + _ms570*_t1376 + _ms571*_t1378 + _ms572*_t1380 + _ms574*_t1382 + _ms575*_t1384
+            + _ms577*_t1386 + _ms578*_t1388 + _t368 + _t369;
+    const train5_real_t _t1390 = TRAIN5_LIT(2.0)*_ms137*_ms338 + TRAIN5_LIT(2.0)*_ms154*_ms224
+            - _t639 - _t640 - _t641;
+    const train5_real_t _t1391 = _ms109*_t1390;
+    const train5_real_t _t1392 = TRAIN5_LIT(2.0)*_ms137*_ms339 + TRAIN5_LIT(2.0)*_ms154*_ms225
+            - _t644 - _t645 - _t646;
+    const train5_real_t _t1393 = _ms109*_t1392;
+    const train5_real_t _t1394 = -_t649 - _t651;
+    const train5_real_t _t1395 = _ms109*_t1394;
+    const train5_real_t _t1396 = -_t654 - _t656;
+    const train5_real_t _t1397 = _ms109*_t1396;
+    const train5_real_t _t1398 = -_t659 - _t661;
+    const train5_real_t _t1399 = _ms109*_t1398;
+    const train5_real_t _t1400 = -_t664 - _t666;
+    const train5_real_t _t1401 = _ms109*_t1400;
+    const train5_real_t _t1402 = -_t330 + _t650 + _t660 - _t669;
+    const train5_real_t _t1403 = _ms109*_t1402;
+    const train5_real_t _t1404 = -_t338 + _t655 + _t665 - _t672;
+    const train5_real_t _t1405 = _ms109*_t1404;
+    const train5_real_t _t1406 = _ms505*_t1325 + _ms507*_t1326 + _ms509*_t1328 + _ms511*_t1329
+            + _ms513*_t1331 + _ms515*_t1332 + _ms567*_t1237 + _ms568*_t1239 + _ms569*_t1391
+            + _ms570*_t1393 + _ms571*_t1395 + _ms572*_t1397 + _ms574*_t1399 + _ms575*_t1401
+            + _ms577*_t1403 + _ms578*_t1405 + _t370 + _t371;
+    const train5_real_t _t1407 = _t675 - _t676;
+    const train5_real_t _t1408 = _ms114*_t1407;
+    const train5_real_t _t1409 = _t679 - _t680;
+    const train5_real_t _t1410 = _ms114*_t1409;
+    const train5_real_t _t1411 = _t683 - _t685;
+    const train5_real_t _t1412 = _ms114*_t1411;
+    const train5_real_t _t1413 = _t688 - _t690;
+    const train5_real_t _t1414 = _ms114*_t1413;
+    const train5_real_t _t1415 = _t693 - _t695;
+    const train5_real_t _t1416 = _ms114*_t1415;
+    const train5_real_t _t1417 = _t698 - _t700;
+    const train5_real_t _t1418 = _ms114*_t1417;
+    const train5_real_t _t1419 = _t703 - _t705;
+    const train5_real_t _t1420 = _ms114*_t1419;
+    const train5_real_t _t1421 = _t708 - _t710;
+    const train5_real_t _t1422 = _ms114*_t1421;
+    const train5_real_t _t1423 = -_t376 - _t377 + _t684 + _t694 + _t704 + _t713;
+    const train5_real_t _t1424 = _ms114*_t1423;
+    const train5_real_t _t1425 = -_t384 - _t385 + _t689 + _t699 + _t709 + _t716;
+    const train5_real_t _t1426 = _ms114*_t1425;
+    const train5_real_t _t1427 = _ms525*_t1325 + _ms527*_t1326 + _ms529*_t1328 + _ms531*_t1329
+            + _ms533*_t1331 + _ms535*_t1332 + _ms537*_t1334 + _ms539*_t1335 + _ms567*_t1254
+            + _ms568*_t1256 + _ms569*_t1408 + _ms570*_t1410 + _ms571*_t1412 + _ms572*_t1414
+            + _ms574*_t1416 + _ms575*_t1418 + _ms577*_t1420 + _ms578*_t1422 + _ms580*_t1424
+            + _ms581*_t1426 + _t426 + _t427;
+    const train5_real_t _t1428 = -_t675 - _t676;
+    const train5_real_t _t1429 = _ms119*_t1428;
+    const train5_real_t _t1430 = -_t679 - _t680;
+    const train5_real_t _t1431 = _ms119*_t1430;
+    const train5_real_t _t1432 = -_t683 - _t685;
+    const train5_real_t _t1433 = _ms119*_t1432;
+    const train5_real_t _t1434 = -_t688 - _t690;
+    const train5_real_t _t1435 = _ms119*_t1434;
+    const train5_real_t _t1436 = -_t693 - _t695;
+    const train5_real_t _t1437 = _ms119*_t1436;
+    const train5_real_t _t1438 = -_t698 - _t700;
+    const train5_real_t _t1439 = _ms119*_t1438;
+    const train5_real_t _t1440 = -_t703 - _t705;
+    const train5_real_t _t1441 = _ms119*_t1440;
+    const train5_real_t _t1442 = -_t708 - _t710;
+    const train5_real_t _t1443 = _ms119*_t1442;
+    const train5_real_t _t1444 = -_t378 + _t684 + _t694 + _t704 - _t713;
+    const train5_real_t _t1445 = _ms119*_t1444;
+    const train5_real_t _t1446 = -_t386 + _t689 + _t699 + _t709 - _t716;
+    const train5_real_t _t1447 = _ms119*_t1446;
+    const train5_real_t _t1448 = _ms549*_t1325 + _ms551*_t1326 + _ms553*_t1328 + _ms555*_t1329
+            + _ms557*_t1331 + _ms559*_t1332 + _ms561*_t1334 + _ms563*_t1335 + _ms567*_t1275
+            + _ms568*_t1277 + _ms569*_t1429 + _ms570*_t1431 + _ms571*_t1433 + _ms572*_t1435
+            + _ms574*_t1437 + _ms575*_t1439 + _ms577*_t1441 + _ms578*_t1443 + _ms580*_t1445
+            + _ms581*_t1447 + _t428 + _t429;
+    const train5_real_t _t1449 = _ms224*_t1320 + _ms228*_t1321 + _ms232*_t1322 + _ms236*_t1323
+            + _ms240*_t1324 + _ms345*_t460 + _ms357*_t461 + _ms373*_t462 + _ms393*_t463
+            + _ms585*_t718 + _ms586*_t717 + _ms587*_t720 + _ms588*_t719 + _ms589*_t722
+            + _ms590*_t721 + _ms591*_t724 + _ms592*_t723 + _t12*_t1327 + _t1319 + _t1330*_t14
+            + _t1333*_t16 + _t1336*_t18 + _t1341*_t24 + _t1346*_t26 + _t1359*_t28 + _t1372*_t30
+            + _t1389*_t32 + _t1406*_t34 + _t1427*_t36 + _t1448*_t38 - _t430 - _t444 - _t446 - _t448
+            - _t450 + _t451 - _t457 - _t459 + _t725 + _t726 + _t727 + _t728;
+    const train5_real_t _t1450 = _t1073*_t483 + _t1078*_t485 + _t1084*_t487 + _t1091*_t489 - _t477
+            + _t478 - _t481;
+    const train5_real_t _t1451 = _ms225*_t1320 + _ms229*_t1321 + _ms233*_t1322 + _ms237*_t1323
+            + _ms241*_t1324 + _ms347*_t460 + _ms359*_t461 + _ms375*_t462 + _ms395*_t463
+            + _ms585*_t565 + _ms586*_t566 + _ms587*_t567 + _ms588*_t568 + _ms589*_t569
+            + _ms590*_t570 + _ms591*_t571 + _ms592*_t572 + _t13*_t1327 + _t1330*_t15 + _t1333*_t17
+            + _t1336*_t19 + _t1341*_t25 + _t1346*_t27 + _t1359*_t29 + _t1372*_t31 + _t1389*_t33
+            + _t1406*_t35 + _t1427*_t37 + _t1448*_t39 + _t1450 - _t490 - _t495 - _t496 - _t497
+            - _t498 + _t499 - _t504 - _t505 + _t729 + _t730 + _t731 + _t732;
+    const train5_real_t _t1452 = _ms306*_ms345 + _ms307*_ms357 + _ms308*_ms373 + _ms309*_ms393
+            - _t506 - _t507;
+    const train5_real_t _t1453 = -_ms310 + _ms320*_ms345 + _ms321*_ms357 + _ms322*_ms373
+            + _ms323*_ms393 - _t513 + _t733 + _t734 + _t735 + _t736;
+    const train5_real_t _t1454 = J_theta_cart2*_ms345 + _ms324*_ms357 + _ms325*_ms373
+            + _ms326*_ms393 - _t514 + _t737;
+    const train5_real_t _t1455 = J_theta_cart3*_ms357 + _ms324*_ms345 + _ms327*_ms373
+            + _ms328*_ms393 - _t515 + _t738;
+    const train5_real_t _t1456 = J_theta_cart4*_ms373 + _ms325*_ms345 + _ms327*_ms357
+            + _ms329*_ms393 - _t516 + _t739;
+    const train5_real_t _t1457 = J_theta_cart5*_ms393 + _ms326*_ms345 + _ms328*_ms357
+            + _ms329*_ms373 - _t517 + _t740;
+    const train5_real_t _t1458 = _ms224*_t1453 + _ms228*_t1454 + _ms232*_t1455 + _ms236*_t1456
+            + _ms240*_t1457 + _ms256*_t718 + _ms260*_t717 + _ms264*_t720 + _ms268*_t719
+            + _ms272*_t722 + _ms276*_t721 + _ms280*_t724 + _ms284*_t723 + _ms345*_t12 + _ms357*_t14
+            + _ms373*_t16 + _ms393*_t18 + _ms425*_t24 + _ms437*_t26 + _ms449*_t28 + _ms465*_t30
+            + _ms481*_t32 + _ms501*_t34 + _ms521*_t36 + _ms545*_t38 + _t1452 - _t518 - _t519 - _t520
+            - _t521 - _t522;
+    const train5_real_t _t1459 = -_t1316*_t531 + _t1318*_t535 + _t1458*_t537;
+    const train5_real_t _t1460 = -_t1459*_t540;
+    const train5_real_t _t1461 = -_t1316*_t547 + _t1318*_t544 - _t1449*_t545 + _t1451*_t542
+            + _t1460*_t548;
+    const train5_real_t _t1462 = -_t1316*_t544 + _t1449*_t542 - _t1451*_t549 + _t1458*_t547
+            + _t1460*_t550;
+    const train5_real_t _t1463 = _t1461*_t523 + _t1462*_t526;
+    const train5_real_t _t1464 = _ms306*_ms351 + _ms307*_ms363 + _ms308*_ms379 + _ms309*_ms399
+            - _t45;
+    const train5_real_t _t1465 = _ms320*_ms351 + _ms321*_ms363 + _ms322*_ms379 + _ms323*_ms399
+            - _t554;
+    const train5_real_t _t1466 = J_theta_cart2*_ms351 + _ms324*_ms363 + _ms325*_ms379
+            + _ms326*_ms399 - _t561 + _t744 + _t746 + _t748 - _t97;
+    const train5_real_t _t1467 = J_theta_cart3*_ms363 + _ms324*_ms351 + _ms327*_ms379
+            + _ms328*_ms399 + _t749;
+    const train5_real_t _t1468 = J_theta_cart4*_ms379 + _ms325*_ms351 + _ms327*_ms363
+            + _ms329*_ms399 + _t750;
+    const train5_real_t _t1469 = J_theta_cart5*_ms399 + _ms326*_ms351 + _ms328*_ms363
+            + _ms329*_ms379 + _t751;
+    const train5_real_t _t1470 = _ms224*_t1465 + _ms228*_t1466 + _ms232*_t1467 + _ms236*_t1468
+            + _ms240*_t1469 + _ms256*_t752 + _ms260*_t753 + _ms264*_t754 + _ms268*_t755
+            + _ms272*_t756 + _ms276*_t757 + _ms280*_t758 + _ms284*_t759 + _ms349*_t13 + _ms361*_t15
+            + _ms377*_t17 + _ms397*_t19 + _ms429*_t25 + _ms441*_t27 + _ms453*_t29 + _ms469*_t31
+            + _ms485*_t33 + _ms505*_t35 + _ms525*_t37 + _ms549*_t39 + _t1464;
+    const train5_real_t _t1471 = _ms316*_ms351 + _ms317*_ms363 + _ms318*_ms379 + _ms319*_ms399
+            - _t98;
+    const train5_real_t _t1472 = _ms225*_t1465 + _ms229*_t1466 + _ms233*_t1467 + _ms237*_t1468
+            + _ms241*_t1469 + _ms257*_t752 + _ms261*_t753 + _ms265*_t754 + _ms269*_t755
+            + _ms273*_t756 + _ms277*_t757 + _ms281*_t758 + _ms285*_t759 + _ms351*_t13 + _ms363*_t15
+            + _ms379*_t17 + _ms399*_t19 + _ms431*_t25 + _ms443*_t27 + _ms455*_t29 + _ms471*_t31
+            + _ms487*_t33 + _ms507*_t35 + _ms527*_t37 + _ms551*_t39 + _t1471;
+    const train5_real_t _t1473 = _t1074*_t120 + _t1079*_t124 + _t1085*_t128 + _t1092*_t132 - _t134
+            - _t135;
+    const train5_real_t _t1474 = _t1074*_t155 + _t1079*_t158 + _t1085*_t161 + _t1092*_t164 + _t574
+            - _t577 - _t578 - _t579;
+    const train5_real_t _t1475 = _t1079*_t173 + _t1085*_t175 + _t1092*_t177 + _t165 - _t166 + _t589
+            - _t761 + _t762 + _t763 + _t764 + _t766 + _t768;
+    const train5_real_t _t1476 = _t1074*_t184 + _t1085*_t186 + _t1092*_t188 - _t770 - _t772 - _t773
+            + _t774;
+    const train5_real_t _t1477 = _t1074*_t193 + _t1079*_t196 + _t1092*_t198 - _t775 - _t776 - _t777
+            + _t778;
+    const train5_real_t _t1478 = _t1074*_t203 + _t1079*_t204 + _t1085*_t207 - _t779 - _t780 - _t781
+            + _t782;
+    const train5_real_t _t1479 = _ms286*_t1074;
+    const train5_real_t _t1480 = _ms287*_t1074;
+    const train5_real_t _t1481 = -_ms228*_ms571 - _ms229*_ms572 + _ms349*_t1479 + _ms351*_t1480
+            + _ms567*_t266 + _ms568*_t270 + _t220;
+    const train5_real_t _t1482 = _ms286*_t1079;
+    const train5_real_t _t1483 = _ms287*_t1079;
+    const train5_real_t _t1484 = _ms361*_t1479 + _ms363*_t1480 + _ms365*_t1482 + _ms367*_t1483
+            + _ms567*_t303 + _ms568*_t308 + _ms569*_t622 + _ms570*_t627 + _ms571*_t798
+            + _ms572*_t804 + _ms574*_t810 + _ms575*_t813;
+    const train5_real_t _t1485 = _ms286*_t1085;
+    const train5_real_t _t1486 = _ms287*_t1085;
+    const train5_real_t _t1487 = _ms377*_t1479 + _ms379*_t1480 + _ms381*_t1482 + _ms383*_t1483
+            + _ms385*_t1485 + _ms387*_t1486 + _ms567*_t341 + _ms568*_t346 + _ms569*_t648
+            + _ms570*_t653 + _ms571*_t816 + _ms572*_t821 + _ms574*_t826 + _ms575*_t831
+            + _ms577*_t836 + _ms578*_t840;
+    const train5_real_t _t1488 = _ms286*_t1092;
+    const train5_real_t _t1489 = _ms287*_t1092;
+    const train5_real_t _t1490 = _ms397*_t1479 + _ms399*_t1480 + _ms401*_t1482 + _ms403*_t1483
+            + _ms405*_t1485 + _ms407*_t1486 + _ms409*_t1488 + _ms411*_t1489 + _ms567*_t389
+            + _ms568*_t394 + _ms569*_t682 + _ms570*_t687 + _ms571*_t844 + _ms572*_t849
+            + _ms574*_t854 + _ms575*_t859 + _ms577*_t864 + _ms578*_t869 + _ms580*_t874
+            + _ms581*_t878;
+    const train5_real_t _t1491 = -_ms256*_ms571 - _ms257*_ms572 + _ms429*_t1479 + _ms431*_t1480
+            + _ms567*_t1184 + _ms568*_t1186 + _t278;
+    const train5_real_t _t1492 = -_ms260*_ms571 - _ms261*_ms572 + _ms441*_t1479 + _ms443*_t1480
+            + _ms567*_t1189 + _ms568*_t1191 + _t285;
+    const train5_real_t _t1493 = _t799 - _t801 + TRAIN5_LIT(2.0)*_t802;
+    const train5_real_t _t1494 = _ms94*_t1493;
+    const train5_real_t _t1495 = _t805 - _t807 + TRAIN5_LIT(2.0)*_t808;
+    const train5_real_t _t1496 = _ms94*_t1495;
+    const train5_real_t _t1497 = _t800 - _t802 + _t811;
+    const train5_real_t _t1498 = _ms94*_t1497;
+    const train5_real_t _t1499 = _t806 - _t808 + _t814;
+    const train5_real_t _t1500 = _ms94*_t1499;
+    const train5_real_t _t1501 = _ms453*_t1479 + _ms455*_t1480 + _ms457*_t1482 + _ms459*_t1483
+            + _ms567*_t1198 + _ms568*_t1200 + _ms569*_t1352 + _ms570*_t1354 + _ms571*_t1494
+            + _ms572*_t1496 + _ms574*_t1498 + _ms575*_t1500;
+    const train5_real_t _t1502 = TRAIN5_LIT(2.0)*_ms152*_ms228 - _t799 - _t801;
+    const train5_real_t _t1503 = _ms99*_t1502;
+    const train5_real_t _t1504 = TRAIN5_LIT(2.0)*_ms152*_ms229 - _t805 - _t807;
+    const train5_real_t _t1505 = _ms99*_t1504;
+    const train5_real_t _t1506 = _ms133*_ms349 - _t802 - _t811;
+    const train5_real_t _t1507 = _ms99*_t1506;
+    const train5_real_t _t1508 = _ms133*_ms351 - _t808 - _t814;
+    const train5_real_t _t1509 = _ms99*_t1508;
+    const train5_real_t _t1510 = _ms469*_t1479 + _ms471*_t1480 + _ms473*_t1482 + _ms475*_t1483
+            + _ms567*_t1211 + _ms568*_t1213 + _ms569*_t1365 + _ms570*_t1367 + _ms571*_t1503
+            + _ms572*_t1505 + _ms574*_t1507 + _ms575*_t1509;
+    const train5_real_t _t1511 = _t817 - _t819;
+    const train5_real_t _t1512 = _ms104*_t1511;
+    const train5_real_t _t1513 = _t822 - _t824;
+    const train5_real_t _t1514 = _ms104*_t1513;
+    const train5_real_t _t1515 = _t827 - _t829;
+    const train5_real_t _t1516 = _ms104*_t1515;
+    const train5_real_t _t1517 = _t832 - _t834;
+    const train5_real_t _t1518 = _ms104*_t1517;
+    const train5_real_t _t1519 = _t818 + _t828 + _t837 - _t838;
+    const train5_real_t _t1520 = _ms104*_t1519;
+    const train5_real_t _t1521 = _t823 + _t833 + _t841 - _t842;
+    const train5_real_t _t1522 = _ms104*_t1521;
+    const train5_real_t _t1523 = _ms485*_t1479 + _ms487*_t1480 + _ms489*_t1482 + _ms491*_t1483
+            + _ms493*_t1485 + _ms495*_t1486 + _ms567*_t1224 + _ms568*_t1226 + _ms569*_t1378
+            + _ms570*_t1380 + _ms571*_t1512 + _ms572*_t1514 + _ms574*_t1516 + _ms575*_t1518
+            + _ms577*_t1520 + _ms578*_t1522;
+    const train5_real_t _t1524 = -_t817 - _t819;
+    const train5_real_t _t1525 = _ms109*_t1524;
+    const train5_real_t _t1526 = -_t822 - _t824;
+    const train5_real_t _t1527 = _ms109*_t1526;
+    const train5_real_t _t1528 = -_t827 - _t829;
+    const train5_real_t _t1529 = _ms109*_t1528;
+    const train5_real_t _t1530 = -_t832 - _t834;
+    const train5_real_t _t1531 = _ms109*_t1530;
+    const train5_real_t _t1532 = _ms138*_ms349 + _t828 - _t837 - _t838;
+    const train5_real_t _t1533 = _ms109*_t1532;
+    const train5_real_t _t1534 = _ms138*_ms351 + _t833 - _t841 - _t842;
+    const train5_real_t _t1535 = _ms109*_t1534;
+    const train5_real_t _t1536 = _ms505*_t1479 + _ms507*_t1480 + _ms509*_t1482 + _ms511*_t1483
+            + _ms513*_t1485 + _ms515*_t1486 + _ms567*_t1241 + _ms568*_t1243 + _ms569*_t1395
+            + _ms570*_t1397 + _ms571*_t1525 + _ms572*_t1527 + _ms574*_t1529 + _ms575*_t1531
+            + _ms577*_t1533 + _ms578*_t1535;
+    const train5_real_t _t1537 = _t845 - _t847;
+    const train5_real_t _t1538 = _ms114*_t1537;
+    const train5_real_t _t1539 = _t850 - _t852;
+    const train5_real_t _t1540 = _ms114*_t1539;
+    const train5_real_t _t1541 = _t855 - _t857;
+    const train5_real_t _t1542 = _ms114*_t1541;
+    const train5_real_t _t1543 = _t860 - _t862;
+    const train5_real_t _t1544 = _ms114*_t1543;
+    const train5_real_t _t1545 = _t865 - _t867;
+    const train5_real_t _t1546 = _ms114*_t1545;
+    const train5_real_t _t1547 = _t870 - _t872;
+    const train5_real_t _t1548 = _ms114*_t1547;
+    const train5_real_t _t1549 = _t875 + _t876;
+    const train5_real_t _t1550 = _ms114*_t1549;
+    const train5_real_t _t1551 = _t879 + _t880;
+    const train5_real_t _t1552 = _ms114*_t1551;
+    const train5_real_t _t1553 = _ms525*_t1479 + _ms527*_t1480 + _ms529*_t1482 + _ms531*_t1483
+            + _ms533*_t1485 + _ms535*_t1486 + _ms537*_t1488 + _ms539*_t1489 + _ms567*_t1258
+            + _ms568*_t1260 + _ms569*_t1412 + _ms570*_t1414 + _ms571*_t1538 + _ms572*_t1540
+            + _ms574*_t1542 + _ms575*_t1544 + _ms577*_t1546 + _ms578*_t1548 + _ms580*_t1550
+            + _ms581*_t1552;
+    const train5_real_t _t1554 = -_t845 - _t847;
+    const train5_real_t _t1555 = _ms119*_t1554;
+    const train5_real_t _t1556 = -_t850 - _t852;
+    const train5_real_t _t1557 = _ms119*_t1556;
+    const train5_real_t _t1558 = -_t855 - _t857;
+    const train5_real_t _t1559 = _ms119*_t1558;
+    const train5_real_t _t1560 = -_t860 - _t862;
+    const train5_real_t _t1561 = _ms119*_t1560;
+    const train5_real_t _t1562 = -_t865 - _t867;
+    const train5_real_t _t1563 = _ms119*_t1562;
+    const train5_real_t _t1564 = -_t870 - _t872;
+    const train5_real_t _t1565 = _ms119*_t1564;
+    const train5_real_t _t1566 = -_t875 + _t876;
+    const train5_real_t _t1567 = _ms119*_t1566;
+    const train5_real_t _t1568 = -_t879 + _t880;
+    const train5_real_t _t1569 = _ms119*_t1568;
+    const train5_real_t _t1570 = _ms549*_t1479 + _ms551*_t1480 + _ms553*_t1482 + _ms555*_t1483
+            + _ms557*_t1485 + _ms559*_t1486 + _ms561*_t1488 + _ms563*_t1489 + _ms567*_t1279
+            + _ms568*_t1281 + _ms569*_t1433 + _ms570*_t1435 + _ms571*_t1555 + _ms572*_t1557
+            + _ms574*_t1559 + _ms575*_t1561 + _ms577*_t1563 + _ms578*_t1565 + _ms580*_t1567
+            + _ms581*_t1569;
+    const train5_real_t _t1571 = _ms224*_t1474 + _ms228*_t1475 + _ms232*_t1476 + _ms236*_t1477
+            + _ms240*_t1478 + _ms349*_t460 + _ms361*_t461 + _ms377*_t462 + _ms397*_t463
+            + _ms585*_t882 + _ms586*_t881 + _ms587*_t884 + _ms588*_t883 + _ms589*_t886
+            + _ms590*_t885 + _ms591*_t888 + _ms592*_t887 + _t12*_t1481 + _t14*_t1484 + _t1473
+            + _t1487*_t16 + _t1490*_t18 + _t1491*_t24 + _t1492*_t26 + _t1501*_t28 + _t1510*_t30
+            + _t1523*_t32 + _t1536*_t34 + _t1553*_t36 + _t1570*_t38 - _t431 + _t452 - _t725 + _t889
+            + _t890 + _t891;
+    const train5_real_t _t1572 = _t1074*_t483 + _t1079*_t485 + _t1085*_t487 + _t1092*_t489 - _t465
+            + _t466;
+    const train5_real_t _t1573 = _ms225*_t1474 + _ms229*_t1475 + _ms233*_t1476 + _ms237*_t1477
+            + _ms241*_t1478 + _ms351*_t460 + _ms363*_t461 + _ms379*_t462 + _ms399*_t463
+            + _ms585*_t752 + _ms586*_t753 + _ms587*_t754 + _ms588*_t755 + _ms589*_t756
+            + _ms590*_t757 + _ms591*_t758 + _ms592*_t759 + _t13*_t1481 + _t1484*_t15 + _t1487*_t17
+            + _t1490*_t19 + _t1491*_t25 + _t1492*_t27 + _t1501*_t29 + _t1510*_t31 + _t1523*_t33
+            + _t1536*_t35 + _t1553*_t37 + _t1570*_t39 + _t1572 - _t491 + _t500 - _t729 + _t892
+            + _t893 + _t894;
+    const train5_real_t _t1574 = _ms306*_ms349 + _ms307*_ms361 + _ms308*_ms377 + _ms309*_ms397
+            - _t508;
+    const train5_real_t _t1575 = _ms320*_ms349 + _ms321*_ms361 + _ms322*_ms377 + _ms323*_ms397
             - _t733;
-    const train5_real_t _t1847 = _t1220*_t589 + _t1221*_t596 + _t1222*_t603 + _t1223*_t610
-            + _t1224*_t617 + _t1225*_t624 + _t1226*_t631 + _t1227*_t638 + _t124*_t1844 + _t1840*_t37
-            + _t1841*_t47 + _t1842*_t60 + _t1843*_t76 + _t1846 + _t303*_t557 + _t329*_t562
-            + _t366*_t566 + _t488*_t569 + _t590*_t841 + _t597*_t852 + _t604*_t885 + _t611*_t891
-            + _t618*_t927 + _t625*_t933 + _t632*_t979 + _t639*_t985 - _t734 - _t735 - _t736 - _t737
-            - _t738;
-    const train5_real_t _t1848 = _t1602*_t744 + _t1607*_t746 + _t1613*_t748 + _t1620*_t750 - _t742
-            - _t751 - _t752;
-    const train5_real_t _t1849 = -_t1228 - _t1229 + _t1230 + _t1231 + _t1232 + _t1233 + _t1234
-            + _t1235 + _t1236 + _t1237 + _t1602*_t759 + _t1607*_t762 + _t1613*_t765 + _t1620*_t768
-            + _t755 - _t756;
-    const train5_real_t _t1850 = -_t1238 + _t1607*_t777 + _t1613*_t779 + _t1620*_t781 - _t775;
-    const train5_real_t _t1851 = -_t1239 + _t1602*_t788 + _t1613*_t790 + _t1620*_t792 - _t785;
-    const train5_real_t _t1852 = -_t1240 + _t1602*_t797 + _t1607*_t800 + _t1620*_t802 - _t796;
-    const train5_real_t _t1853 = -_t1241 + _t1602*_t807 + _t1607*_t808 + _t1613*_t811 - _t806;
-    const train5_real_t _t1854 = _t1602*_t208;
-    const train5_real_t _t1855 = _t1602*_t204;
-    const train5_real_t _t1856 = _t1243*_t528 + _t1247*_t529 + _t1854*_t307 + _t1855*_t310
-            + _t205*_t817 + _t527*_t816 + _t645*_t816 + _t646*_t817 + _t813 + _t815;
-    const train5_real_t _t1857 = _t1607*_t208;
-    const train5_real_t _t1858 = _t1607*_t204;
-    const train5_real_t _t1859 = _t1251*_t528 + _t1255*_t529 + _t1259*_t645 + _t1263*_t646
-            + _t1266*_t648 + _t1268*_t649 + _t1854*_t334 + _t1855*_t338 + _t1857*_t341
-            + _t1858*_t344 + _t205*_t865 + _t527*_t860 + _t821 + _t822;
-    const train5_real_t _t1860 = _t1613*_t208;
-    const train5_real_t _t1861 = _t1613*_t204;
-    const train5_real_t _t1862 = _t1271*_t528 + _t1276*_t529 + _t1281*_t645 + _t1285*_t646
-            + _t1289*_t648 + _t1293*_t649 + _t1296*_t651 + _t1298*_t652 + _t1854*_t371
-            + _t1855*_t376 + _t1857*_t380 + _t1858*_t384 + _t1860*_t387 + _t1861*_t390 + _t205*_t899
-            + _t527*_t894 + _t825 + _t826;
-    const train5_real_t _t1863 = _t1620*_t208;
-    const train5_real_t _t1864 = _t1620*_t204;
-    const train5_real_t _t1865 = _t1301*_t528 + _t1305*_t529 + _t1309*_t645 + _t1313*_t646
-            + _t1317*_t648 + _t1321*_t649 + _t1325*_t651 + _t1329*_t652 + _t1332*_t654
-            + _t1334*_t655 + _t1854*_t495 + _t1855*_t500 + _t1857*_t505 + _t1858*_t510
-            + _t1860*_t515 + _t1861*_t519 + _t1863*_t523 + _t1864*_t525 + _t205*_t942 + _t527*_t936
-            + _t829 + _t830;
-    const train5_real_t _t1866 = _t1244 + _t1245;
-    const train5_real_t _t1867 = _t1866*_t584;
-    const train5_real_t _t1868 = _t1248 + _t1249;
-    const train5_real_t _t1869 = _t1868*_t584;
-    const train5_real_t _t1870 = _t1110*_t1854 + _t1112*_t1855 + _t1867*_t528 + _t1869*_t529
-            + _t205*_t846 + _t527*_t844 + _t645*_t844 + _t646*_t846 + _t839 + _t842;
-    const train5_real_t _t1871 = -_t1244 + _t1245;
-    const train5_real_t _t1872 = _t1871*_t591;
-    const train5_real_t _t1873 = -_t1248 + _t1249;
-    const train5_real_t _t1874 = _t1873*_t591;
-    const train5_real_t _t1875 = _t1115*_t1854 + _t1117*_t1855 + _t1872*_t528 + _t1874*_t529
-            + _t205*_t857 + _t527*_t855 + _t645*_t855 + _t646*_t857 + _t850 + _t853;
-    const train5_real_t _t1876 = _t1252 - _t1253 + TRAIN5_LIT(2.0)*_t291 + TRAIN5_LIT(2.0)*_t90;
-    const train5_real_t _t1877 = _t1876*_t598;
-    const train5_real_t _t1878 = _t1256 - _t1257 + TRAIN5_LIT(2.0)*_t295 + TRAIN5_LIT(2.0)*_t96;
-    const train5_real_t _t1879 = _t1878*_t598;
-    const train5_real_t _t1880 = _t1260 - _t1261;
-    const train5_real_t _t1881 = _t1880*_t598;
-    const train5_real_t _t1882 = _t1264 - _t1265;
-    const train5_real_t _t1883 = _t1882*_t598;
-    const train5_real_t _t1884 = _t1267 - _t291 + _t300 + _t91;
-    const train5_real_t _t1885 = _t1884*_t598;
-    const train5_real_t _t1886 = _t1269 - _t295 + _t304 - _t96;
-    const train5_real_t _t1887 = _t1886*_t598;
-    const train5_real_t _t1888 = _t1120*_t1854 + _t1122*_t1855 + _t1124*_t1857 + _t1126*_t1858
-            + _t1723*_t527 + _t1725*_t205 + _t1877*_t528 + _t1879*_t529 + _t1881*_t645
-            + _t1883*_t646 + _t1885*_t648 + _t1887*_t649 + _t883 + _t886;
-    const train5_real_t _t1889 = -_t1252 - _t1253 + TRAIN5_LIT(2.0)*_t283*_t40
-            + TRAIN5_LIT(2.0)*_t34*_t89;
-    const train5_real_t _t1890 = _t1889*_t605;
-    const train5_real_t _t1891 = -_t1256 - _t1257 + TRAIN5_LIT(2.0)*_t286*_t40
-            + TRAIN5_LIT(2.0)*_t37*_t89;
-    const train5_real_t _t1892 = _t1891*_t605;
-    const train5_real_t _t1893 = -_t1260 - _t1261;
-    const train5_real_t _t1894 = _t1893*_t605;
-    const train5_real_t _t1895 = -_t1264 - _t1265;
-    const train5_real_t _t1896 = _t1895*_t605;
-    const train5_real_t _t1897 = -_t1267 - _t302;
-    const train5_real_t _t1898 = _t1897*_t605;
-    const train5_real_t _t1899 = -_t1269 - _t306;
-    const train5_real_t _t1900 = _t1899*_t605;
-    const train5_real_t _t1901 = _t1129*_t1854 + _t1131*_t1855 + _t1133*_t1857 + _t1135*_t1858
-            + _t1736*_t527 + _t1738*_t205 + _t1890*_t528 + _t1892*_t529 + _t1894*_t645
-            + _t1896*_t646 + _t1898*_t648 + _t1900*_t649 + _t889 + _t892;
-    const train5_real_t _t1902 = TRAIN5_LIT(2.0)*_t102 + _t1272 - _t1273 - _t1274
-            + TRAIN5_LIT(2.0)*_t313;
-    const train5_real_t _t1903 = _t1902*_t612;
-    const train5_real_t _t1904 = TRAIN5_LIT(2.0)*_t109 + _t1277 - _t1278 - _t1279
-            + TRAIN5_LIT(2.0)*_t318;
-    const train5_real_t _t1905 = _t1904*_t612;
-    const train5_real_t _t1906 = _t1282 - _t1283;
-    const train5_real_t _t1907 = _t1906*_t612;
-    const train5_real_t _t1908 = _t1286 - _t1287;
-    const train5_real_t _t1909 = _t1908*_t612;
-    const train5_real_t _t1910 = _t1290 - _t1291;
-    const train5_real_t _t1911 = _t1910*_t612;
-    const train5_real_t _t1912 = _t1294 - _t1295;
-    const train5_real_t _t1913 = _t1912*_t612;
-    const train5_real_t _t1914 = -_t102 + _t1297 - _t313 + _t323 + _t325;
-    const train5_real_t _t1915 = _t1914*_t612;
-    const train5_real_t _t1916 = -_t109 + _t1299 - _t318 + _t328 + _t330;
-    const train5_real_t _t1917 = _t1916*_t612;
-    const train5_real_t _t1918 = _t1138*_t1854 + _t1140*_t1855 + _t1142*_t1857 + _t1144*_t1858
-            + _t1146*_t1860 + _t1148*_t1861 + _t1749*_t527 + _t1751*_t205 + _t1903*_t528
-            + _t1905*_t529 + _t1907*_t645 + _t1909*_t646 + _t1911*_t648 + _t1913*_t649
-            + _t1915*_t651 + _t1917*_t652 + _t925 + _t928;
-    const train5_real_t _t1919 = TRAIN5_LIT(2.0)*_t101*_t34 - _t1272 - _t1273 - _t1274
-            + TRAIN5_LIT(2.0)*_t283*_t50;
-    const train5_real_t _t1920 = _t1919*_t619;
-    const train5_real_t _t1921 = TRAIN5_LIT(2.0)*_t101*_t37 - _t1277 - _t1278 - _t1279
-            + TRAIN5_LIT(2.0)*_t286*_t50;
-    const train5_real_t _t1922 = _t1921*_t619;
-    const train5_real_t _t1923 = -_t1282 - _t1283;
-    const train5_real_t _t1924 = _t1923*_t619;
-    const train5_real_t _t1925 = -_t1286 - _t1287;
-    const train5_real_t _t1926 = _t1925*_t619;
-    const train5_real_t _t1927 = -_t1290 - _t1291;
-    const train5_real_t _t1928 = _t1927*_t619;
-    const train5_real_t _t1929 = -_t1294 - _t1295;
-    const train5_real_t _t1930 = _t1929*_t619;
-    const train5_real_t _t1931 = -_t1297 - _t327;
-    const train5_real_t _t1932 = _t1931*_t619;
-    const train5_real_t _t1933 = -_t1299 - _t332;
-    const train5_real_t _t1934 = _t1933*_t619;
-    const train5_real_t _t1935 = _t1151*_t1854 + _t1153*_t1855 + _t1155*_t1857 + _t1157*_t1858
-            + _t1159*_t1860 + _t1161*_t1861 + _t1766*_t527 + _t1768*_t205 + _t1920*_t528
-            + _t1922*_t529 + _t1924*_t645 + _t1926*_t646 + _t1928*_t648 + _t1930*_t649
-            + _t1932*_t651 + _t1934*_t652 + _t931 + _t934;
-    const train5_real_t _t1936 = _t1302 - _t1303;
-    const train5_real_t _t1937 = _t1936*_t626;
-    const train5_real_t _t1938 = _t1306 - _t1307;
-    const train5_real_t _t1939 = _t1938*_t626;
-    const train5_real_t _t1940 = _t1310 - _t1311;
-    const train5_real_t _t1941 = _t1940*_t626;
-    const train5_real_t _t1942 = _t1314 - _t1315;
-    const train5_real_t _t1943 = _t1942*_t626;
-    const train5_real_t _t1944 = _t1318 - _t1319;
-    const train5_real_t _t1945 = _t1944*_t626;
-    const train5_real_t _t1946 = _t1322 - _t1323;
-    const train5_real_t _t1947 = _t1946*_t626;
-    const train5_real_t _t1948 = _t1326 - _t1327;
-    const train5_real_t _t1949 = _t1948*_t626;
-    const train5_real_t _t1950 = _t1330 - _t1331;
-    const train5_real_t _t1951 = _t1950*_t626;
-    const train5_real_t _t1952 = _t1333 + _t363;
-    const train5_real_t _t1953 = _t1952*_t626;
-    const train5_real_t _t1954 = _t1335 + _t368;
-    const train5_real_t _t1955 = _t1954*_t626;
-    const train5_real_t _t1956 = _t1164*_t1854 + _t1166*_t1855 + _t1168*_t1857 + _t1170*_t1858
-            + _t1172*_t1860 + _t1174*_t1861 + _t1176*_t1863 + _t1178*_t1864 + _t1783*_t527
-            + _t1785*_t205 + _t1937*_t528 + _t1939*_t529 + _t1941*_t645 + _t1943*_t646
-            + _t1945*_t648 + _t1947*_t649 + _t1949*_t651 + _t1951*_t652 + _t1953*_t654
-            + _t1955*_t655 + _t977 + _t980;
-    const train5_real_t _t1957 = -_t1302 - _t1303;
-    const train5_real_t _t1958 = _t1957*_t633;
-    const train5_real_t _t1959 = -_t1306 - _t1307;
-    const train5_real_t _t1960 = _t1959*_t633;
-    const train5_real_t _t1961 = -_t1310 - _t1311;
-    const train5_real_t _t1962 = _t1961*_t633;
-    const train5_real_t _t1963 = -_t1314 - _t1315;
-    const train5_real_t _t1964 = _t1963*_t633;
-    const train5_real_t _t1965 = -_t1318 - _t1319;
-    const train5_real_t _t1966 = _t1965*_t633;
-    const train5_real_t _t1967 = -_t1322 - _t1323;
-    const train5_real_t _t1968 = _t1967*_t633;
-    const train5_real_t _t1969 = -_t1326 - _t1327;
-    const train5_real_t _t1970 = _t1969*_t633;
-    const train5_real_t _t1971 = -_t1330 - _t1331;
-    const train5_real_t _t1972 = _t1971*_t633;
-    const train5_real_t _t1973 = -_t1333 + _t359 + _t360 + _t362 - _t939;
-    const train5_real_t _t1974 = _t1973*_t633;
-    const train5_real_t _t1975 = -_t1335 + _t364 + _t365 + _t367 - _t945;
-    const train5_real_t _t1976 = _t1975*_t633;
-    const train5_real_t _t1977 = _t1181*_t1854 + _t1183*_t1855 + _t1185*_t1857 + _t1187*_t1858
-            + _t1189*_t1860 + _t1191*_t1861 + _t1193*_t1863 + _t1195*_t1864 + _t1804*_t527
-            + _t1806*_t205 + _t1958*_t528 + _t1960*_t529 + _t1962*_t645 + _t1964*_t646
-            + _t1966*_t648 + _t1968*_t649 + _t1970*_t651 + _t1972*_t652 + _t1974*_t654
-            + _t1976*_t655 + _t983 + _t986;
-    const train5_real_t _t1978 = -_t1017 - _t1020 - _t1022 - _t1025 + _t1026 - _t1032 - _t1033
-            + _t1113*_t1337 + _t1118*_t1336 + _t1127*_t1339 + _t113*_t1853 + _t1136*_t1338
-            + _t1149*_t1341 + _t1162*_t1340 + _t1179*_t1343 + _t1196*_t1342 + _t1344 + _t1345
-            + _t1346 + _t1347 + _t1848 + _t1849*_t34 + _t1850*_t43 + _t1851*_t55 + _t1852*_t70
-            + _t1856*_t555 + _t1859*_t560 + _t1862*_t564 + _t1865*_t567 + _t1870*_t587
-            + _t1875*_t594 + _t1888*_t601 + _t1901*_t608 + _t1918*_t615 + _t1935*_t622
-            + _t1956*_t629 + _t1977*_t636 + _t299*_t660 + _t324*_t663 + _t361*_t666 + _t481*_t669
+    const train5_real_t _t1576 = J_theta_cart2*_ms349 - _ms311 + _ms324*_ms361 + _ms325*_ms377
+            + _ms326*_ms397 - _t737 + _t895 + _t896 + _t897;
+    const train5_real_t _t1577 = J_theta_cart3*_ms361 + _ms324*_ms349 + _ms327*_ms377
+            + _ms328*_ms397 + _t898;
+    const train5_real_t _t1578 = J_theta_cart4*_ms377 + _ms325*_ms349 + _ms327*_ms361
+            + _ms329*_ms397 + _t899;
+    const train5_real_t _t1579 = J_theta_cart5*_ms397 + _ms326*_ms349 + _ms328*_ms361
+            + _ms329*_ms377 + _t900;
+    const train5_real_t _t1580 = _ms224*_t1575 + _ms228*_t1576 + _ms232*_t1577 + _ms236*_t1578
+            + _ms240*_t1579 + _ms256*_t882 + _ms260*_t881 + _ms264*_t884 + _ms268*_t883
+            + _ms272*_t886 + _ms276*_t885 + _ms280*_t888 + _ms284*_t887 + _ms349*_t12 + _ms361*_t14
+            + _ms377*_t16 + _ms397*_t18 + _ms429*_t24 + _ms441*_t26 + _ms453*_t28 + _ms469*_t30
+            + _ms485*_t32 + _ms505*_t34 + _ms525*_t36 + _ms549*_t38 + _t1574;
+    const train5_real_t _t1581 = -_t1470*_t531 + _t1472*_t535 + _t1580*_t537;
+    const train5_real_t _t1582 = -_t1581*_t540;
+    const train5_real_t _t1583 = -_t1470*_t547 + _t1472*_t544 - _t1571*_t545 + _t1573*_t542
+            + _t1582*_t548;
+    const train5_real_t _t1584 = -_t1470*_t544 + _t1571*_t542 - _t1573*_t549 + _t1580*_t547
+            + _t1582*_t550;
+    const train5_real_t _t1585 = _t1583*_t523 + _t1584*_t526;
+    const train5_real_t _t1586 = _ms307*_ms367 + _ms308*_ms383 + _ms309*_ms403 - _t46;
+    const train5_real_t _t1587 = _ms321*_ms367 + _ms322*_ms383 + _ms323*_ms403 - _t556;
+    const train5_real_t _t1588 = _ms324*_ms367 + _ms325*_ms383 + _ms326*_ms403 - _t744;
+    const train5_real_t _t1589 = J_theta_cart3*_ms367 + _ms327*_ms383 + _ms328*_ms403 - _t562
+            - _t749 + _t904 + _t906 - _t99;
+    const train5_real_t _t1590 = J_theta_cart4*_ms383 + _ms327*_ms367 + _ms329*_ms403 + _t907;
+    const train5_real_t _t1591 = J_theta_cart5*_ms403 + _ms328*_ms367 + _ms329*_ms383 + _t908;
+    const train5_real_t _t1592 = _ms224*_t1587 + _ms228*_t1588 + _ms232*_t1589 + _ms236*_t1590
+            + _ms240*_t1591 + _ms264*_t909 + _ms268*_t910 + _ms272*_t911 + _ms276*_t912
+            + _ms280*_t913 + _ms284*_t914 + _ms365*_t15 + _ms381*_t17 + _ms401*_t19 + _ms457*_t29
+            + _ms473*_t31 + _ms489*_t33 + _ms509*_t35 + _ms529*_t37 + _ms553*_t39 + _t1586;
+    const train5_real_t _t1593 = _ms317*_ms367 + _ms318*_ms383 + _ms319*_ms403 - _t100;
+    const train5_real_t _t1594 = _ms225*_t1587 + _ms229*_t1588 + _ms233*_t1589 + _ms237*_t1590
+            + _ms241*_t1591 + _ms265*_t909 + _ms269*_t910 + _ms273*_t911 + _ms277*_t912
+            + _ms281*_t913 + _ms285*_t914 + _ms367*_t15 + _ms383*_t17 + _ms403*_t19 + _ms459*_t29
+            + _ms475*_t31 + _ms491*_t33 + _ms511*_t35 + _ms531*_t37 + _ms555*_t39 + _t1593;
+    const train5_real_t _t1595 = _t1080*_t124 + _t1086*_t128 + _t1093*_t132 - _t137 - _t138;
+    const train5_real_t _t1596 = _t1080*_t158 + _t1086*_t161 + _t1093*_t164 + _t576 - _t580 - _t581
+            - _t582;
+    const train5_real_t _t1597 = _t1080*_t173 + _t1086*_t175 + _t1093*_t177 + _t761 - _t762 - _t763
+            - _t764;
+    const train5_real_t _t1598 = _t1086*_t186 + _t1093*_t188 + _t178 - _t179 + _t590 + _t770 + _t772
+            + _t773 - _t774 + _t916 + _t918;
+    const train5_real_t _t1599 = _t1080*_t196 + _t1093*_t198 - _t921;
+    const train5_real_t _t1600 = _t1080*_t204 + _t1086*_t207 - _t922;
+    const train5_real_t _t1601 = _ms286*_t1080;
+    const train5_real_t _t1602 = _ms287*_t1080;
+    const train5_real_t _t1603 = -_ms232*_ms574 - _ms233*_ms575 + _ms365*_t1601 + _ms367*_t1602
+            + _ms567*_t313 + _ms568*_t317 + _ms569*_t632 + _ms570*_t635 + _ms571*_t810
+            + _ms572*_t813;
+    const train5_real_t _t1604 = _ms286*_t1086;
+    const train5_real_t _t1605 = _ms287*_t1086;
+    const train5_real_t _t1606 = _ms381*_t1601 + _ms383*_t1602 + _ms385*_t1604 + _ms387*_t1605
+            + _ms567*_t351 + _ms568*_t356 + _ms569*_t658 + _ms570*_t663 + _ms571*_t826
+            + _ms572*_t831 + _ms574*_t934 + _ms575*_t940 + _ms577*_t946 + _ms578*_t949;
+    const train5_real_t _t1607 = _ms286*_t1093;
+    const train5_real_t _t1608 = _ms287*_t1093;
+    const train5_real_t _t1609 = _ms401*_t1601 + _ms403*_t1602 + _ms405*_t1604 + _ms407*_t1605
+            + _ms409*_t1607 + _ms411*_t1608 + _ms567*_t399 + _ms568*_t404 + _ms569*_t692
+            + _ms570*_t697 + _ms571*_t854 + _ms572*_t859 + _ms574*_t952 + _ms575*_t957
+            + _ms577*_t962 + _ms578*_t967 + _ms580*_t972 + _ms581*_t976;
+    const train5_real_t _t1610 = -_ms264*_ms574 - _ms265*_ms575 + _ms457*_t1601 + _ms459*_t1602
+            + _ms567*_t1202 + _ms568*_t1204 + _ms569*_t1356 + _ms570*_t1358 + _ms571*_t1498
+            + _ms572*_t1500;
+    const train5_real_t _t1611 = -_ms268*_ms574 - _ms269*_ms575 + _ms473*_t1601 + _ms475*_t1602
+            + _ms567*_t1215 + _ms568*_t1217 + _ms569*_t1369 + _ms570*_t1371 + _ms571*_t1507
+            + _ms572*_t1509;
+    const train5_real_t _t1612 = _t935 - _t937 + TRAIN5_LIT(2.0)*_t938;
+    const train5_real_t _t1613 = _ms104*_t1612;
+    const train5_real_t _t1614 = _t941 - _t943 + TRAIN5_LIT(2.0)*_t944;
+    const train5_real_t _t1615 = _ms104*_t1614;
+    const train5_real_t _t1616 = _t936 - _t938 + _t947;
+    const train5_real_t _t1617 = _ms104*_t1616;
+    const train5_real_t _t1618 = _t942 - _t944 + _t950;
+    const train5_real_t _t1619 = _ms104*_t1618;
+    const train5_real_t _t1620 = _ms489*_t1601 + _ms491*_t1602 + _ms493*_t1604 + _ms495*_t1605
+            + _ms567*_t1228 + _ms568*_t1230 + _ms569*_t1382 + _ms570*_t1384 + _ms571*_t1516
+            + _ms572*_t1518 + _ms574*_t1613 + _ms575*_t1615 + _ms577*_t1617 + _ms578*_t1619;
+    const train5_real_t _t1621 = TRAIN5_LIT(2.0)*_ms156*_ms232 - _t935 - _t937;
+    const train5_real_t _t1622 = _ms109*_t1621;
+    const train5_real_t _t1623 = TRAIN5_LIT(2.0)*_ms156*_ms233 - _t941 - _t943;
+    const train5_real_t _t1624 = _ms109*_t1623;
+    const train5_real_t _t1625 = _ms139*_ms365 - _t938 - _t947;
+    const train5_real_t _t1626 = _ms109*_t1625;
+    const train5_real_t _t1627 = _ms139*_ms367 - _t944 - _t950;
+    const train5_real_t _t1628 = _ms109*_t1627;
+    const train5_real_t _t1629 = _ms509*_t1601 + _ms511*_t1602 + _ms513*_t1604 + _ms515*_t1605
+            + _ms567*_t1245 + _ms568*_t1247 + _ms569*_t1399 + _ms570*_t1401 + _ms571*_t1529
+            + _ms572*_t1531 + _ms574*_t1622 + _ms575*_t1624 + _ms577*_t1626 + _ms578*_t1628;
+    const train5_real_t _t1630 = _t953 - _t955;
+    const train5_real_t _t1631 = _ms114*_t1630;
+    const train5_real_t _t1632 = _t958 - _t960;
+    const train5_real_t _t1633 = _ms114*_t1632;
+    const train5_real_t _t1634 = _t963 - _t965;
+    const train5_real_t _t1635 = _ms114*_t1634;
+    const train5_real_t _t1636 = _t968 - _t970;
+    const train5_real_t _t1637 = _ms114*_t1636;
+    const train5_real_t _t1638 = _t973 + _t974;
+    const train5_real_t _t1639 = _ms114*_t1638;
+    const train5_real_t _t1640 = _t977 + _t978;
+    const train5_real_t _t1641 = _ms114*_t1640;
+    const train5_real_t _t1642 = _ms529*_t1601 + _ms531*_t1602 + _ms533*_t1604 + _ms535*_t1605
+            + _ms537*_t1607 + _ms539*_t1608 + _ms567*_t1262 + _ms568*_t1264 + _ms569*_t1416
+            + _ms570*_t1418 + _ms571*_t1542 + _ms572*_t1544 + _ms574*_t1631 + _ms575*_t1633
+            + _ms577*_t1635 + _ms578*_t1637 + _ms580*_t1639 + _ms581*_t1641;
+    const train5_real_t _t1643 = -_t953 - _t955;
+    const train5_real_t _t1644 = _ms119*_t1643;
+    const train5_real_t _t1645 = -_t958 - _t960;
+    const train5_real_t _t1646 = _ms119*_t1645;
+    const train5_real_t _t1647 = -_t963 - _t965;
+    const train5_real_t _t1648 = _ms119*_t1647;
+    const train5_real_t _t1649 = -_t968 - _t970;
+    const train5_real_t _t1650 = _ms119*_t1649;
+    const train5_real_t _t1651 = -_t973 + _t974;
+    const train5_real_t _t1652 = _ms119*_t1651;
+    const train5_real_t _t1653 = -_t977 + _t978;
+    const train5_real_t _t1654 = _ms119*_t1653;
+    const train5_real_t _t1655 = _ms553*_t1601 + _ms555*_t1602 + _ms557*_t1604 + _ms559*_t1605
+            + _ms561*_t1607 + _ms563*_t1608 + _ms567*_t1283 + _ms568*_t1285 + _ms569*_t1437
+            + _ms570*_t1439 + _ms571*_t1559 + _ms572*_t1561 + _ms574*_t1644 + _ms575*_t1646
+            + _ms577*_t1648 + _ms578*_t1650 + _ms580*_t1652 + _ms581*_t1654;
+    const train5_real_t _t1656 = _ms224*_t1596 + _ms228*_t1597 + _ms232*_t1598 + _ms236*_t1599
+            + _ms240*_t1600 + _ms365*_t461 + _ms381*_t462 + _ms401*_t463 + _ms587*_t980
+            + _ms588*_t979 + _ms589*_t982 + _ms590*_t981 + _ms591*_t984 + _ms592*_t983 + _t14*_t1603
+            + _t1595 + _t16*_t1606 + _t1609*_t18 + _t1610*_t28 + _t1611*_t30 + _t1620*_t32
+            + _t1629*_t34 + _t1642*_t36 + _t1655*_t38 - _t432 + _t453 - _t726 - _t889 + _t985
+            + _t986;
+    const train5_real_t _t1657 = _t1080*_t485 + _t1086*_t487 + _t1093*_t489 - _t468 + _t469;
+    const train5_real_t _t1658 = _ms225*_t1596 + _ms229*_t1597 + _ms233*_t1598 + _ms237*_t1599
+            + _ms241*_t1600 + _ms367*_t461 + _ms383*_t462 + _ms403*_t463 + _ms587*_t909
+            + _ms588*_t910 + _ms589*_t911 + _ms590*_t912 + _ms591*_t913 + _ms592*_t914 + _t15*_t1603
+            + _t1606*_t17 + _t1609*_t19 + _t1610*_t29 + _t1611*_t31 + _t1620*_t33 + _t1629*_t35
+            + _t1642*_t37 + _t1655*_t39 + _t1657 - _t492 + _t501 - _t730 - _t892 + _t987 + _t988;
+    const train5_real_t _t1659 = _ms307*_ms365 + _ms308*_ms381 + _ms309*_ms401 - _t509;
+    const train5_real_t _t1660 = _ms321*_ms365 + _ms322*_ms381 + _ms323*_ms401 - _t734;
+    const train5_real_t _t1661 = _ms324*_ms365 + _ms325*_ms381 + _ms326*_ms401 - _t895;
+    const train5_real_t _t1662 = J_theta_cart3*_ms365 - _ms312 + _ms327*_ms381 + _ms328*_ms401
+            - _t738 - _t898 + _t989 + _t990;
+    const train5_real_t _t1663 = J_theta_cart4*_ms381 + _ms327*_ms365 + _ms329*_ms401 + _t991;
+    const train5_real_t _t1664 = J_theta_cart5*_ms401 + _ms328*_ms365 + _ms329*_ms381 + _t992;
+    const train5_real_t _t1665 = _ms224*_t1660 + _ms228*_t1661 + _ms232*_t1662 + _ms236*_t1663
+            + _ms240*_t1664 + _ms264*_t980 + _ms268*_t979 + _ms272*_t982 + _ms276*_t981
+            + _ms280*_t984 + _ms284*_t983 + _ms365*_t14 + _ms381*_t16 + _ms401*_t18 + _ms457*_t28
+            + _ms473*_t30 + _ms489*_t32 + _ms509*_t34 + _ms529*_t36 + _ms553*_t38 + _t1659;
+    const train5_real_t _t1666 = -_t1592*_t531 + _t1594*_t535 + _t1665*_t537;
+    const train5_real_t _t1667 = -_t1666*_t540;
+    const train5_real_t _t1668 = -_t1592*_t547 + _t1594*_t544 - _t1656*_t545 + _t1658*_t542
+            + _t1667*_t548;
+    const train5_real_t _t1669 = -_t1592*_t544 + _t1656*_t542 - _t1658*_t549 + _t1665*_t547
+            + _t1667*_t550;
+    const train5_real_t _t1670 = _t1668*_t523 + _t1669*_t526;
+    const train5_real_t _t1671 = _ms308*_ms387 + _ms309*_ms407 - _t47;
+    const train5_real_t _t1672 = _ms322*_ms387 + _ms323*_ms407 - _t558;
+    const train5_real_t _t1673 = _ms325*_ms387 + _ms326*_ms407 - _t746;
+    const train5_real_t _t1674 = _ms327*_ms387 + _ms328*_ms407 - _t904;
+    const train5_real_t _t1675 = J_theta_cart4*_ms387 + _ms329*_ms407 - _t101 - _t563 - _t750
+            - _t907 + _t996;
+    const train5_real_t _t1676 = J_theta_cart5*_ms407 + _ms329*_ms387 + _t997;
+    const train5_real_t _t1677 = _ms224*_t1672 + _ms228*_t1673 + _ms232*_t1674 + _ms236*_t1675
+            + _ms240*_t1676 + _ms272*_t998 + _ms276*_t999 + _ms280*_t1000 + _ms284*_t1001
+            + _ms385*_t17 + _ms405*_t19 + _ms493*_t33 + _ms513*_t35 + _ms533*_t37 + _ms557*_t39
+            + _t1671;
+    const train5_real_t _t1678 = _ms318*_ms387 + _ms319*_ms407 - _t102;
+    const train5_real_t _t1679 = _ms225*_t1672 + _ms229*_t1673 + _ms233*_t1674 + _ms237*_t1675
+            + _ms241*_t1676 + _ms273*_t998 + _ms277*_t999 + _ms281*_t1000 + _ms285*_t1001
+            + _ms387*_t17 + _ms407*_t19 + _ms495*_t33 + _ms515*_t35 + _ms535*_t37 + _ms559*_t39
+            + _t1678;
+    const train5_real_t _t1680 = _t1087*_t128 + _t1094*_t132 - _t149;
+    const train5_real_t _t1681 = _t1087*_t161 + _t1094*_t164 - _t586;
+    const train5_real_t _t1682 = _t1087*_t175 + _t1094*_t177 - _t768;
+    const train5_real_t _t1683 = _t1087*_t186 + _t1094*_t188 - _t918;
+    const train5_real_t _t1684 = _t1003 + _t1094*_t198 + _t189 - _t190 + _t591 + _t775 + _t776
+            + _t777 - _t778 + _t921;
+    const train5_real_t _t1685 = -_t1006 + _t1087*_t207;
+    const train5_real_t _t1686 = _ms286*_t1087;
+    const train5_real_t _t1687 = _ms287*_t1087;
+    const train5_real_t _t1688 = -_ms236*_ms577 - _ms237*_ms578 + _ms385*_t1686 + _ms387*_t1687
+            + _ms567*_t361 + _ms568*_t365 + _ms569*_t668 + _ms570*_t671 + _ms571*_t836
+            + _ms572*_t840 + _ms574*_t946 + _ms575*_t949;
+    const train5_real_t _t1689 = _ms286*_t1094;
+    const train5_real_t _t1690 = _ms287*_t1094;
+    const train5_real_t _t1691 = _ms405*_t1686 + _ms407*_t1687 + _ms409*_t1689 + _ms411*_t1690
+            + _ms567*_t409 + _ms568*_t414 + _ms569*_t702 + _ms570*_t707 + _ms571*_t864
+            + _ms572*_t869 + _ms574*_t962 + _ms575*_t967 + _ms577*_t1012 + _ms578*_t1018
+            + _ms580*_t1024 + _ms581*_t1027;
+    const train5_real_t _t1692 = -_ms272*_ms577 - _ms273*_ms578 + _ms493*_t1686 + _ms495*_t1687
+            + _ms567*_t1232 + _ms568*_t1234 + _ms569*_t1386 + _ms570*_t1388 + _ms571*_t1520
+            + _ms572*_t1522 + _ms574*_t1617 + _ms575*_t1619;
+    const train5_real_t _t1693 = -_ms276*_ms577 - _ms277*_ms578 + _ms513*_t1686 + _ms515*_t1687
+            + _ms567*_t1249 + _ms568*_t1251 + _ms569*_t1403 + _ms570*_t1405 + _ms571*_t1533
+            + _ms572*_t1535 + _ms574*_t1626 + _ms575*_t1628;
+    const train5_real_t _t1694 = _t1013 - _t1015 + TRAIN5_LIT(2.0)*_t1016;
+    const train5_real_t _t1695 = _ms114*_t1694;
+    const train5_real_t _t1696 = _t1019 - _t1021 + TRAIN5_LIT(2.0)*_t1022;
+    const train5_real_t _t1697 = _ms114*_t1696;
+    const train5_real_t _t1698 = _t1014 - _t1016 + _t1025;
+    const train5_real_t _t1699 = _ms114*_t1698;
+    const train5_real_t _t1700 = _t1020 - _t1022 + _t1028;
+    const train5_real_t _t1701 = _ms114*_t1700;
+    const train5_real_t _t1702 = _ms533*_t1686 + _ms535*_t1687 + _ms537*_t1689 + _ms539*_t1690
+            + _ms567*_t1266 + _ms568*_t1268 + _ms569*_t1420 + _ms570*_t1422 + _ms571*_t1546
+            + _ms572*_t1548 + _ms574*_t1635 + _ms575*_t1637 + _ms577*_t1695 + _ms578*_t1697
+            + _ms580*_t1699 + _ms581*_t1701;
+    const train5_real_t _t1703 = TRAIN5_LIT(2.0)*_ms161*_ms236 - _t1013 - _t1015;
+    const train5_real_t _t1704 = _ms119*_t1703;
+    const train5_real_t _t1705 = TRAIN5_LIT(2.0)*_ms161*_ms237 - _t1019 - _t1021;
+    const train5_real_t _t1706 = _ms119*_t1705;
+    const train5_real_t _t1707 = _ms146*_ms385 - _t1016 - _t1025;
+    const train5_real_t _t1708 = _ms119*_t1707;
+    const train5_real_t _t1709 = _ms146*_ms387 - _t1022 - _t1028;
+    const train5_real_t _t1710 = _ms119*_t1709;
+    const train5_real_t _t1711 = _ms557*_t1686 + _ms559*_t1687 + _ms561*_t1689 + _ms563*_t1690
+            + _ms567*_t1287 + _ms568*_t1289 + _ms569*_t1441 + _ms570*_t1443 + _ms571*_t1563
+            + _ms572*_t1565 + _ms574*_t1648 + _ms575*_t1650 + _ms577*_t1704 + _ms578*_t1706
+            + _ms580*_t1708 + _ms581*_t1710;
+    const train5_real_t _t1712 = _ms224*_t1681 + _ms228*_t1682 + _ms232*_t1683 + _ms236*_t1684
+            + _ms240*_t1685 + _ms385*_t462 + _ms405*_t463 + _ms589*_t1030 + _ms590*_t1029
+            + _ms591*_t1032 + _ms592*_t1031 + _t1033 + _t16*_t1688 + _t1680 + _t1691*_t18
+            + _t1692*_t32 + _t1693*_t34 + _t1702*_t36 + _t1711*_t38 - _t433 + _t454 - _t727 - _t890
+            - _t985;
+    const train5_real_t _t1713 = _t1087*_t487 + _t1094*_t489 - _t471 + _t472;
+    const train5_real_t _t1714 = _ms225*_t1681 + _ms229*_t1682 + _ms233*_t1683 + _ms237*_t1684
+            + _ms241*_t1685 + _ms387*_t462 + _ms407*_t463 + _ms589*_t998 + _ms590*_t999
+            + _ms591*_t1000 + _ms592*_t1001 + _t1034 + _t1688*_t17 + _t1691*_t19 + _t1692*_t33
+            + _t1693*_t35 + _t1702*_t37 + _t1711*_t39 + _t1713 - _t493 + _t502 - _t731 - _t893
             - _t987;
-    const train5_real_t _t1979 = -_t1042 + _t1043 - _t1046 + _t1048*_t1602 + _t1050*_t1607
-            + _t1052*_t1613 + _t1054*_t1620;
-    const train5_real_t _t1980 = -_t1055 - _t1060 - _t1061 - _t1062 - _t1063 + _t1064 - _t1069
-            - _t1070 + _t1113*_t1220 + _t1118*_t1221 + _t1127*_t1222 + _t1136*_t1223 + _t1149*_t1224
-            + _t1162*_t1225 + _t1179*_t1226 + _t1196*_t1227 + _t124*_t1853 + _t1348 + _t1349
-            + _t1350 + _t1351 + _t1849*_t37 + _t1850*_t47 + _t1851*_t60 + _t1852*_t76 + _t1856*_t557
-            + _t1859*_t562 + _t1862*_t566 + _t1865*_t569 + _t1870*_t590 + _t1875*_t597
-            + _t1888*_t604 + _t1901*_t611 + _t1918*_t618 + _t1935*_t625 + _t1956*_t632
-            + _t1977*_t639 + _t1979 + _t303*_t660 + _t329*_t663 + _t366*_t666 + _t488*_t669;
-    const train5_real_t _t1981 = -_t1071 - _t1072 + _t299*_t532 + _t324*_t534 + _t361*_t536
-            + _t481*_t538;
-    const train5_real_t _t1982 = -_t1078 + _t1352 + _t1353 + _t1354 + _t1355 + _t299*_t545
-            + _t324*_t546 + _t361*_t547 + _t481*_t548 - _t640;
-    const train5_real_t _t1983 = J_theta_cart2*_t299 - _t1079 + _t1356 + _t324*_t552 + _t361*_t553
-            + _t481*_t554;
-    const train5_real_t _t1984 = J_theta_cart3*_t324 - _t1080 + _t1357 + _t299*_t552 + _t361*_t558
-            + _t481*_t559;
-    const train5_real_t _t1985 = J_theta_cart4*_t361 - _t1081 + _t1358 + _t299*_t553 + _t324*_t558
-            + _t481*_t563;
-    const train5_real_t _t1986 = J_theta_cart5*_t481 - _t1082 + _t1359 + _t299*_t554 + _t324*_t559
-            + _t361*_t563;
-    const train5_real_t _t1987 = -_t1083 - _t1084 - _t1085 - _t1086 - _t1087 + _t113*_t1986
-            + _t1336*_t593 + _t1337*_t586 + _t1338*_t607 + _t1339*_t600 + _t1340*_t621
-            + _t1341*_t614 + _t1342*_t635 + _t1343*_t628 + _t1981 + _t1982*_t34 + _t1983*_t43
-            + _t1984*_t55 + _t1985*_t70 + _t299*_t555 + _t324*_t560 + _t361*_t564 + _t481*_t567
-            + _t587*_t838 + _t594*_t849 + _t601*_t882 + _t608*_t888 + _t615*_t924 + _t622*_t930
-            + _t629*_t976 + _t636*_t982;
-    const train5_real_t _t1988 = -_t1096*_t1845 + _t1100*_t1847 + _t1102*_t1987;
-    const train5_real_t _t1989 = -_t1105*_t1988;
-    const train5_real_t _t1990 = _t1107*_t1980 + _t1199*_t1847 - _t1200*_t1978 - _t1204*_t1845
-            + _t1205*_t1989;
-    const train5_real_t _t1991 = _t1107*_t1978 - _t1199*_t1845 + _t1204*_t1987 - _t1206*_t1980
-            + _t1207*_t1989;
-    const train5_real_t _t1992 = _t1088*_t1990 + _t1091*_t1991;
-    const train5_real_t _t1993 = _t310*_t532 + _t338*_t534 + _t376*_t536 + _t500*_t538 - _t675;
-    const train5_real_t _t1994 = -_t1209 + _t310*_t545 + _t338*_t546 + _t376*_t547 + _t500*_t548;
-    const train5_real_t _t1995 = J_theta_cart2*_t310 - _t1216 + _t1361 + _t1363 + _t1365
-            + _t338*_t552 + _t376*_t553 + _t500*_t554 - _t725;
-    const train5_real_t _t1996 = J_theta_cart3*_t338 + _t1366 + _t310*_t552 + _t376*_t558
-            + _t500*_t559;
-    const train5_real_t _t1997 = J_theta_cart4*_t376 + _t1367 + _t310*_t553 + _t338*_t558
-            + _t500*_t563;
-    const train5_real_t _t1998 = J_theta_cart5*_t500 + _t1368 + _t310*_t554 + _t338*_t559
-            + _t376*_t563;
-    const train5_real_t _t1999 = _t1110*_t590 + _t1115*_t597 + _t1120*_t604 + _t1129*_t611
-            + _t113*_t1998 + _t1138*_t618 + _t1151*_t625 + _t1164*_t632 + _t1181*_t639
-            + _t1369*_t586 + _t1370*_t593 + _t1371*_t600 + _t1372*_t607 + _t1373*_t614
-            + _t1374*_t621 + _t1375*_t628 + _t1376*_t635 + _t1993 + _t1994*_t34 + _t1995*_t43
-            + _t1996*_t55 + _t1997*_t70 + _t307*_t557 + _t334*_t562 + _t371*_t566 + _t495*_t569;
-    const train5_real_t _t2000 = _t310*_t556 + _t338*_t561 + _t376*_t565 + _t500*_t568 - _t726;
-    const train5_real_t _t2001 = _t1112*_t590 + _t1117*_t597 + _t1122*_t604 + _t1131*_t611
-            + _t1140*_t618 + _t1153*_t625 + _t1166*_t632 + _t1183*_t639 + _t124*_t1998
-            + _t1369*_t589 + _t1370*_t596 + _t1371*_t603 + _t1372*_t610 + _t1373*_t617
-            + _t1374*_t624 + _t1375*_t631 + _t1376*_t638 + _t1994*_t37 + _t1995*_t47 + _t1996*_t60
-            + _t1997*_t76 + _t2000 + _t310*_t557 + _t338*_t562 + _t376*_t566 + _t500*_t569;
-    const train5_real_t _t2002 = _t1603*_t744 + _t1608*_t746 + _t1614*_t748 + _t1621*_t750 - _t238
-            - _t239;
-    const train5_real_t _t2003 = _t1228 - _t1230 - _t1231 - _t1232 + _t1603*_t759 + _t1608*_t762
-            + _t1614*_t765 + _t1621*_t768;
-    const train5_real_t _t2004 = _t1238 - _t1377 + _t1378 + _t1379 + _t1380 + _t1381 + _t1382
-            + _t1608*_t777 + _t1614*_t779 + _t1621*_t781 + _t769 - _t770;
-    const train5_real_t _t2005 = -_t1383 - _t1384 - _t1385 + _t1386 + _t1603*_t788 + _t1614*_t790
-            + _t1621*_t792;
-    const train5_real_t _t2006 = -_t1387 - _t1388 - _t1389 + _t1390 + _t1603*_t797 + _t1608*_t800
-            + _t1621*_t802;
-    const train5_real_t _t2007 = -_t1391 - _t1392 - _t1393 + _t1394 + _t1603*_t807 + _t1608*_t808
-            + _t1614*_t811;
-    const train5_real_t _t2008 = _t1603*_t208;
-    const train5_real_t _t2009 = _t1603*_t204;
-    const train5_real_t _t2010 = _t2008*_t307 + _t2009*_t310 + _t205*_t835 - _t43*_t645 - _t47*_t646
-            + _t527*_t833 + _t818;
-    const train5_real_t _t2011 = _t1608*_t208;
-    const train5_real_t _t2012 = _t1608*_t204;
-    const train5_real_t _t2013 = _t1259*_t528 + _t1263*_t529 + _t1396*_t645 + _t1400*_t646
-            + _t1403*_t648 + _t1405*_t649 + _t2008*_t334 + _t2009*_t338 + _t2011*_t341
-            + _t2012*_t344 + _t205*_t874 + _t527*_t870;
-    const train5_real_t _t2014 = _t1614*_t208;
-    const train5_real_t _t2015 = _t1614*_t204;
-    const train5_real_t _t2016 = _t1281*_t528 + _t1285*_t529 + _t1408*_t645 + _t1412*_t646
-            + _t1416*_t648 + _t1420*_t649 + _t1423*_t651 + _t1425*_t652 + _t2008*_t371
-            + _t2009*_t376 + _t2011*_t380 + _t2012*_t384 + _t2014*_t387 + _t2015*_t390 + _t205*_t908
-            + _t527*_t904;
-    const train5_real_t _t2017 = _t1621*_t208;
-    const train5_real_t _t2018 = _t1621*_t204;
-    const train5_real_t _t2019 = _t1309*_t528 + _t1313*_t529 + _t1428*_t645 + _t1432*_t646
-            + _t1436*_t648 + _t1440*_t649 + _t1444*_t651 + _t1448*_t652 + _t1451*_t654
-            + _t1453*_t655 + _t2008*_t495 + _t2009*_t500 + _t2011*_t505 + _t2012*_t510
-            + _t2014*_t515 + _t2015*_t519 + _t2017*_t523 + _t2018*_t525 + _t205*_t952 + _t527*_t948;
-    const train5_real_t _t2020 = _t1110*_t2008 + _t1112*_t2009 + _t1713*_t527 + _t1715*_t205
-            - _t586*_t645 - _t589*_t646 + _t847;
-    const train5_real_t _t2021 = _t1115*_t2008 + _t1117*_t2009 + _t1718*_t527 + _t1720*_t205
-            - _t593*_t645 - _t596*_t646 + _t858;
-    const train5_real_t _t2022 = _t1397 - _t1398 + TRAIN5_LIT(2.0)*_t93;
-    const train5_real_t _t2023 = _t2022*_t598;
-    const train5_real_t _t2024 = _t1401 - _t1402 + TRAIN5_LIT(2.0)*_t97;
-    const train5_real_t _t2025 = _t2024*_t598;
-    const train5_real_t _t2026 = _t1404 + _t309;
-    const train5_real_t _t2027 = _t2026*_t598;
-    const train5_real_t _t2028 = _t1406 + _t312;
-    const train5_real_t _t2029 = _t2028*_t598;
-    const train5_real_t _t2030 = _t1120*_t2008 + _t1122*_t2009 + _t1124*_t2011 + _t1126*_t2012
-            + _t1727*_t527 + _t1729*_t205 + _t1881*_t528 + _t1883*_t529 + _t2023*_t645
-            + _t2025*_t646 + _t2027*_t648 + _t2029*_t649;
-    const train5_real_t _t2031 = -_t1397 - _t1398 + TRAIN5_LIT(2.0)*_t43*_t92;
-    const train5_real_t _t2032 = _t2031*_t605;
-    const train5_real_t _t2033 = -_t1401 - _t1402 + TRAIN5_LIT(2.0)*_t47*_t92;
-    const train5_real_t _t2034 = _t2033*_t605;
-    const train5_real_t _t2035 = -_t1404 + _t308 - _t93;
-    const train5_real_t _t2036 = _t2035*_t605;
-    const train5_real_t _t2037 = -_t1406 + _t311 - _t97;
-    const train5_real_t _t2038 = _t2037*_t605;
-    const train5_real_t _t2039 = _t1129*_t2008 + _t1131*_t2009 + _t1133*_t2011 + _t1135*_t2012
-            + _t1740*_t527 + _t1742*_t205 + _t1894*_t528 + _t1896*_t529 + _t2032*_t645
-            + _t2034*_t646 + _t2036*_t648 + _t2038*_t649;
-    const train5_real_t _t2040 = _t1409 - _t1410;
-    const train5_real_t _t2041 = _t2040*_t612;
-    const train5_real_t _t2042 = _t1413 - _t1414;
-    const train5_real_t _t2043 = _t2042*_t612;
-    const train5_real_t _t2044 = _t1417 - _t1418;
-    const train5_real_t _t2045 = _t2044*_t612;
-    const train5_real_t _t2046 = _t1421 - _t1422;
-    const train5_real_t _t2047 = _t2046*_t612;
-    const train5_real_t _t2048 = _t1424 + _t336;
-    const train5_real_t _t2049 = _t2048*_t612;
-    const train5_real_t _t2050 = _t1426 + _t340;
-    const train5_real_t _t2051 = _t2050*_t612;
-    const train5_real_t _t2052 = _t1138*_t2008 + _t1140*_t2009 + _t1142*_t2011 + _t1144*_t2012
-            + _t1146*_t2014 + _t1148*_t2015 + _t1753*_t527 + _t1755*_t205 + _t1907*_t528
-            + _t1909*_t529 + _t2041*_t645 + _t2043*_t646 + _t2045*_t648 + _t2047*_t649
-            + _t2049*_t651 + _t2051*_t652;
-    const train5_real_t _t2053 = -_t1409 - _t1410;
-    const train5_real_t _t2054 = _t2053*_t619;
-    const train5_real_t _t2055 = -_t1413 - _t1414;
-    const train5_real_t _t2056 = _t2055*_t619;
-    const train5_real_t _t2057 = -_t1417 - _t1418;
-    const train5_real_t _t2058 = _t2057*_t619;
-    const train5_real_t _t2059 = -_t1421 - _t1422;
-    const train5_real_t _t2060 = _t2059*_t619;
-    const train5_real_t _t2061 = -_t104 - _t1424 + _t333 + _t335;
-    const train5_real_t _t2062 = _t2061*_t619;
-    const train5_real_t _t2063 = -_t110 - _t1426 + _t337 + _t339;
-    const train5_real_t _t2064 = _t2063*_t619;
-    const train5_real_t _t2065 = _t1151*_t2008 + _t1153*_t2009 + _t1155*_t2011 + _t1157*_t2012
-            + _t1159*_t2014 + _t1161*_t2015 + _t1770*_t527 + _t1772*_t205 + _t1924*_t528
-            + _t1926*_t529 + _t2054*_t645 + _t2056*_t646 + _t2058*_t648 + _t2060*_t649
-            + _t2062*_t651 + _t2064*_t652;
-    const train5_real_t _t2066 = _t1429 - _t1430;
-    const train5_real_t _t2067 = _t2066*_t626;
-    const train5_real_t _t2068 = _t1433 - _t1434;
-    const train5_real_t _t2069 = _t2068*_t626;
-    const train5_real_t _t2070 = _t1437 - _t1438;
-    const train5_real_t _t2071 = _t2070*_t626;
-    const train5_real_t _t2072 = _t1441 - _t1442;
-    const train5_real_t _t2073 = _t2072*_t626;
-    const train5_real_t _t2074 = _t1445 - _t1446;
-    const train5_real_t _t2075 = _t2074*_t626;
-    const train5_real_t _t2076 = _t1449 - _t1450;
-    const train5_real_t _t2077 = _t2076*_t626;
-    const train5_real_t _t2078 = _t1452 + _t373;
-    const train5_real_t _t2079 = _t2078*_t626;
-    const train5_real_t _t2080 = _t1454 + _t378;
-    const train5_real_t _t2081 = _t2080*_t626;
-    const train5_real_t _t2082 = _t1164*_t2008 + _t1166*_t2009 + _t1168*_t2011 + _t1170*_t2012
-            + _t1172*_t2014 + _t1174*_t2015 + _t1176*_t2017 + _t1178*_t2018 + _t1787*_t527
-            + _t1789*_t205 + _t1941*_t528 + _t1943*_t529 + _t2067*_t645 + _t2069*_t646
-            + _t2071*_t648 + _t2073*_t649 + _t2075*_t651 + _t2077*_t652 + _t2079*_t654
-            + _t2081*_t655;
-    const train5_real_t _t2083 = -_t1429 - _t1430;
-    const train5_real_t _t2084 = _t2083*_t633;
-    const train5_real_t _t2085 = -_t1433 - _t1434;
-    const train5_real_t _t2086 = _t2085*_t633;
-    const train5_real_t _t2087 = -_t1437 - _t1438;
-    const train5_real_t _t2088 = _t2087*_t633;
-    const train5_real_t _t2089 = -_t1441 - _t1442;
-    const train5_real_t _t2090 = _t2089*_t633;
-    const train5_real_t _t2091 = -_t1445 - _t1446;
-    const train5_real_t _t2092 = _t2091*_t633;
-    const train5_real_t _t2093 = -_t1449 - _t1450;
-    const train5_real_t _t2094 = _t2093*_t633;
-    const train5_real_t _t2095 = -_t1452 + _t373;
-    const train5_real_t _t2096 = _t2095*_t633;
-    const train5_real_t _t2097 = -_t1454 + _t378;
-    const train5_real_t _t2098 = _t2097*_t633;
-    const train5_real_t _t2099 = _t1181*_t2008 + _t1183*_t2009 + _t1185*_t2011 + _t1187*_t2012
-            + _t1189*_t2014 + _t1191*_t2015 + _t1193*_t2017 + _t1195*_t2018 + _t1808*_t527
-            + _t1810*_t205 + _t1962*_t528 + _t1964*_t529 + _t2084*_t645 + _t2086*_t646
-            + _t2088*_t648 + _t2090*_t649 + _t2092*_t651 + _t2094*_t652 + _t2096*_t654
-            + _t2098*_t655;
-    const train5_real_t _t2100 = _t1027 + _t1113*_t1456 + _t1118*_t1455 + _t1127*_t1458
-            + _t113*_t2007 + _t1136*_t1457 + _t1149*_t1460 + _t1162*_t1459 + _t1179*_t1462
-            + _t1196*_t1461 - _t1344 + _t1463 + _t1464 + _t1465 + _t2002 + _t2003*_t34 + _t2004*_t43
-            + _t2005*_t55 + _t2006*_t70 + _t2010*_t555 + _t2013*_t560 + _t2016*_t564 + _t2019*_t567
-            + _t2020*_t587 + _t2021*_t594 + _t2030*_t601 + _t2039*_t608 + _t2052*_t615
-            + _t2065*_t622 + _t2082*_t629 + _t2099*_t636 + _t307*_t660 + _t334*_t663 + _t371*_t666
-            + _t495*_t669 - _t988;
-    const train5_real_t _t2101 = -_t1034 + _t1035 + _t1048*_t1603 + _t1050*_t1608 + _t1052*_t1614
-            + _t1054*_t1621;
-    const train5_real_t _t2102 = -_t1056 + _t1065 + _t1113*_t1369 + _t1118*_t1370 + _t1127*_t1371
-            + _t1136*_t1372 + _t1149*_t1373 + _t1162*_t1374 + _t1179*_t1375 + _t1196*_t1376
-            + _t124*_t2007 - _t1348 + _t1466 + _t1467 + _t1468 + _t2003*_t37 + _t2004*_t47
-            + _t2005*_t60 + _t2006*_t76 + _t2010*_t557 + _t2013*_t562 + _t2016*_t566 + _t2019*_t569
-            + _t2020*_t590 + _t2021*_t597 + _t2030*_t604 + _t2039*_t611 + _t2052*_t618
-            + _t2065*_t625 + _t2082*_t632 + _t2099*_t639 + _t2101 + _t310*_t660 + _t338*_t663
-            + _t376*_t666 + _t500*_t669;
-    const train5_real_t _t2103 = -_t1073 + _t307*_t532 + _t334*_t534 + _t371*_t536 + _t495*_t538;
-    const train5_real_t _t2104 = -_t1352 + _t307*_t545 + _t334*_t546 + _t371*_t547 + _t495*_t548;
-    const train5_real_t _t2105 = J_theta_cart2*_t307 - _t1356 + _t1469 + _t1470 + _t1471
-            + _t334*_t552 + _t371*_t553 + _t495*_t554 - _t658;
-    const train5_real_t _t2106 = J_theta_cart3*_t334 + _t1472 + _t307*_t552 + _t371*_t558
-            + _t495*_t559;
-    const train5_real_t _t2107 = J_theta_cart4*_t371 + _t1473 + _t307*_t553 + _t334*_t558
-            + _t495*_t563;
-    const train5_real_t _t2108 = J_theta_cart5*_t495 + _t1474 + _t307*_t554 + _t334*_t559
-            + _t371*_t563;
-    const train5_real_t _t2109 = _t1110*_t587 + _t1115*_t594 + _t1120*_t601 + _t1129*_t608
-            + _t113*_t2108 + _t1138*_t615 + _t1151*_t622 + _t1164*_t629 + _t1181*_t636
-            + _t1455*_t593 + _t1456*_t586 + _t1457*_t607 + _t1458*_t600 + _t1459*_t621
-            + _t1460*_t614 + _t1461*_t635 + _t1462*_t628 + _t2103 + _t2104*_t34 + _t2105*_t43
-            + _t2106*_t55 + _t2107*_t70 + _t307*_t555 + _t334*_t560 + _t371*_t564 + _t495*_t567;
-    const train5_real_t _t2110 = -_t1096*_t1999 + _t1100*_t2001 + _t1102*_t2109;
-    const train5_real_t _t2111 = -_t1105*_t2110;
-    const train5_real_t _t2112 = _t1107*_t2102 + _t1199*_t2001 - _t1200*_t2100 - _t1204*_t1999
-            + _t1205*_t2111;
-    const train5_real_t _t2113 = _t1107*_t2100 - _t1199*_t1999 + _t1204*_t2109 - _t1206*_t2102
-            + _t1207*_t2111;
-    const train5_real_t _t2114 = _t1088*_t2112 + _t1091*_t2113;
-    const train5_real_t _t2115 = _t344*_t534 + _t384*_t536 + _t510*_t538 - _t676;
-    const train5_real_t _t2116 = -_t1211 + _t344*_t546 + _t384*_t547 + _t510*_t548;
-    const train5_real_t _t2117 = -_t1361 + _t344*_t552 + _t384*_t553 + _t510*_t554;
-    const train5_real_t _t2118 = J_theta_cart3*_t344 - _t1217 - _t1366 + _t1476 + _t1478
-            + _t384*_t558 + _t510*_t559 - _t727;
-    const train5_real_t _t2119 = J_theta_cart4*_t384 + _t1479 + _t344*_t558 + _t510*_t563;
-    const train5_real_t _t2120 = J_theta_cart5*_t510 + _t1480 + _t344*_t559 + _t384*_t563;
-    const train5_real_t _t2121 = _t1124*_t604 + _t113*_t2120 + _t1133*_t611 + _t1142*_t618
-            + _t1155*_t625 + _t1168*_t632 + _t1185*_t639 + _t1481*_t600 + _t1482*_t607
-            + _t1483*_t614 + _t1484*_t621 + _t1485*_t628 + _t1486*_t635 + _t2115 + _t2116*_t34
-            + _t2117*_t43 + _t2118*_t55 + _t2119*_t70 + _t341*_t562 + _t380*_t566 + _t505*_t569;
-    const train5_real_t _t2122 = _t344*_t561 + _t384*_t565 + _t510*_t568 - _t728;
-    const train5_real_t _t2123 = _t1126*_t604 + _t1135*_t611 + _t1144*_t618 + _t1157*_t625
-            + _t1170*_t632 + _t1187*_t639 + _t124*_t2120 + _t1481*_t603 + _t1482*_t610
-            + _t1483*_t617 + _t1484*_t624 + _t1485*_t631 + _t1486*_t638 + _t2116*_t37 + _t2117*_t47
-            + _t2118*_t60 + _t2119*_t76 + _t2122 + _t344*_t562 + _t384*_t566 + _t510*_t569;
-    const train5_real_t _t2124 = _t1609*_t746 + _t1615*_t748 + _t1622*_t750 - _t240 - _t241;
-    const train5_real_t _t2125 = _t1229 - _t1233 - _t1234 - _t1235 + _t1609*_t762 + _t1615*_t765
-            + _t1622*_t768;
-    const train5_real_t _t2126 = _t1377 - _t1378 - _t1379 - _t1380 + _t1609*_t777 + _t1615*_t779
-            + _t1622*_t781;
-    const train5_real_t _t2127 = _t1239 + _t1383 + _t1384 + _t1385 - _t1386 + _t1487 + _t1488
-            + _t1615*_t790 + _t1622*_t792 + _t782 - _t783;
-    const train5_real_t _t2128 = -_t1489 + _t1609*_t800 + _t1622*_t802;
-    const train5_real_t _t2129 = -_t1490 + _t1609*_t808 + _t1615*_t811;
-    const train5_real_t _t2130 = _t1609*_t208;
-    const train5_real_t _t2131 = _t1609*_t204;
-    const train5_real_t _t2132 = _t1266*_t528 + _t1268*_t529 + _t1403*_t645 + _t1405*_t646
-            + _t205*_t879 + _t2130*_t341 + _t2131*_t344 + _t527*_t877 - _t55*_t648 - _t60*_t649;
-    const train5_real_t _t2133 = _t1615*_t208;
-    const train5_real_t _t2134 = _t1615*_t204;
-    const train5_real_t _t2135 = _t1289*_t528 + _t1293*_t529 + _t1416*_t645 + _t1420*_t646
-            + _t1492*_t648 + _t1496*_t649 + _t1499*_t651 + _t1501*_t652 + _t205*_t916 + _t2130*_t380
-            + _t2131*_t384 + _t2133*_t387 + _t2134*_t390 + _t527*_t912;
-    const train5_real_t _t2136 = _t1622*_t208;
-    const train5_real_t _t2137 = _t1622*_t204;
-    const train5_real_t _t2138 = _t1317*_t528 + _t1321*_t529 + _t1436*_t645 + _t1440*_t646
-            + _t1504*_t648 + _t1508*_t649 + _t1512*_t651 + _t1516*_t652 + _t1519*_t654
-            + _t1521*_t655 + _t205*_t960 + _t2130*_t505 + _t2131*_t510 + _t2133*_t515 + _t2134*_t519
-            + _t2136*_t523 + _t2137*_t525 + _t527*_t956;
-    const train5_real_t _t2139 = _t1124*_t2130 + _t1126*_t2131 + _t1731*_t527 + _t1733*_t205
-            + _t1885*_t528 + _t1887*_t529 + _t2027*_t645 + _t2029*_t646 - _t600*_t648 - _t603*_t649;
-    const train5_real_t _t2140 = _t1133*_t2130 + _t1135*_t2131 + _t1744*_t527 + _t1746*_t205
-            + _t1898*_t528 + _t1900*_t529 + _t2036*_t645 + _t2038*_t646 - _t607*_t648 - _t610*_t649;
-    const train5_real_t _t2141 = TRAIN5_LIT(2.0)*_t106 + _t1493 - _t1494;
-    const train5_real_t _t2142 = _t2141*_t612;
-    const train5_real_t _t2143 = TRAIN5_LIT(2.0)*_t111 + _t1497 - _t1498;
-    const train5_real_t _t2144 = _t2143*_t612;
-    const train5_real_t _t2145 = _t1500 + _t343;
-    const train5_real_t _t2146 = _t2145*_t612;
-    const train5_real_t _t2147 = _t1502 + _t346;
-    const train5_real_t _t2148 = _t2147*_t612;
-    const train5_real_t _t2149 = _t1142*_t2130 + _t1144*_t2131 + _t1146*_t2133 + _t1148*_t2134
-            + _t1757*_t527 + _t1759*_t205 + _t1911*_t528 + _t1913*_t529 + _t2045*_t645
-            + _t2047*_t646 + _t2142*_t648 + _t2144*_t649 + _t2146*_t651 + _t2148*_t652;
-    const train5_real_t _t2150 = TRAIN5_LIT(2.0)*_t105*_t55 - _t1493 - _t1494;
-    const train5_real_t _t2151 = _t2150*_t619;
-    const train5_real_t _t2152 = TRAIN5_LIT(2.0)*_t105*_t60 - _t1497 - _t1498;
-    const train5_real_t _t2153 = _t2152*_t619;
-    const train5_real_t _t2154 = -_t106 - _t1500 + _t342;
-    const train5_real_t _t2155 = _t2154*_t619;
-    const train5_real_t _t2156 = -_t111 - _t1502 + _t345;
-    const train5_real_t _t2157 = _t2156*_t619;
-    const train5_real_t _t2158 = _t1155*_t2130 + _t1157*_t2131 + _t1159*_t2133 + _t1161*_t2134
-            + _t1774*_t527 + _t1776*_t205 + _t1928*_t528 + _t1930*_t529 + _t2058*_t645
-            + _t2060*_t646 + _t2151*_t648 + _t2153*_t649 + _t2155*_t651 + _t2157*_t652;
-    const train5_real_t _t2159 = _t1505 - _t1506;
-    const train5_real_t _t2160 = _t2159*_t626;
-    const train5_real_t _t2161 = _t1509 - _t1510;
-    const train5_real_t _t2162 = _t2161*_t626;
-    const train5_real_t _t2163 = _t1513 - _t1514;
-    const train5_real_t _t2164 = _t2163*_t626;
-    const train5_real_t _t2165 = _t1517 - _t1518;
-    const train5_real_t _t2166 = _t2165*_t626;
-    const train5_real_t _t2167 = _t1520 + _t382;
-    const train5_real_t _t2168 = _t2167*_t626;
-    const train5_real_t _t2169 = _t1522 + _t386;
-    const train5_real_t _t2170 = _t2169*_t626;
-    const train5_real_t _t2171 = _t1168*_t2130 + _t1170*_t2131 + _t1172*_t2133 + _t1174*_t2134
-            + _t1176*_t2136 + _t1178*_t2137 + _t1791*_t527 + _t1793*_t205 + _t1945*_t528
-            + _t1947*_t529 + _t2071*_t645 + _t2073*_t646 + _t2160*_t648 + _t2162*_t649
-            + _t2164*_t651 + _t2166*_t652 + _t2168*_t654 + _t2170*_t655;
-    const train5_real_t _t2172 = -_t1505 - _t1506;
-    const train5_real_t _t2173 = _t2172*_t633;
-    const train5_real_t _t2174 = -_t1509 - _t1510;
-    const train5_real_t _t2175 = _t2174*_t633;
-    const train5_real_t _t2176 = -_t1513 - _t1514;
-    const train5_real_t _t2177 = _t2176*_t633;
-    const train5_real_t _t2178 = -_t1517 - _t1518;
-    const train5_real_t _t2179 = _t2178*_t633;
-    const train5_real_t _t2180 = -_t1520 + _t382;
-    const train5_real_t _t2181 = _t2180*_t633;
-    const train5_real_t _t2182 = -_t1522 + _t386;
-    const train5_real_t _t2183 = _t2182*_t633;
-    const train5_real_t _t2184 = _t1185*_t2130 + _t1187*_t2131 + _t1189*_t2133 + _t1191*_t2134
-            + _t1193*_t2136 + _t1195*_t2137 + _t1812*_t527 + _t1814*_t205 + _t1966*_t528
-            + _t1968*_t529 + _t2088*_t645 + _t2090*_t646 + _t2173*_t648 + _t2175*_t649
-            + _t2177*_t651 + _t2179*_t652 + _t2181*_t654 + _t2183*_t655;
-    const train5_real_t _t2185 = _t1028 + _t1127*_t1524 + _t113*_t2129 + _t1136*_t1523
-            + _t1149*_t1526 + _t1162*_t1525 + _t1179*_t1528 + _t1196*_t1527 - _t1345 - _t1463
-            + _t1529 + _t1530 + _t2124 + _t2125*_t34 + _t2126*_t43 + _t2127*_t55 + _t2128*_t70
-            + _t2132*_t560 + _t2135*_t564 + _t2138*_t567 + _t2139*_t601 + _t2140*_t608
-            + _t2149*_t615 + _t2158*_t622 + _t2171*_t629 + _t2184*_t636 + _t341*_t663 + _t380*_t666
-            + _t505*_t669 - _t989;
-    const train5_real_t _t2186 = -_t1036 + _t1037 + _t1050*_t1609 + _t1052*_t1615 + _t1054*_t1622;
-    const train5_real_t _t2187 = -_t1057 + _t1066 + _t1127*_t1481 + _t1136*_t1482 + _t1149*_t1483
-            + _t1162*_t1484 + _t1179*_t1485 + _t1196*_t1486 + _t124*_t2129 - _t1349 - _t1466
-            + _t1531 + _t1532 + _t2125*_t37 + _t2126*_t47 + _t2127*_t60 + _t2128*_t76 + _t2132*_t562
-            + _t2135*_t566 + _t2138*_t569 + _t2139*_t604 + _t2140*_t611 + _t2149*_t618
-            + _t2158*_t625 + _t2171*_t632 + _t2184*_t639 + _t2186 + _t344*_t663 + _t384*_t666
-            + _t510*_t669;
-    const train5_real_t _t2188 = -_t1074 + _t341*_t534 + _t380*_t536 + _t505*_t538;
-    const train5_real_t _t2189 = -_t1353 + _t341*_t546 + _t380*_t547 + _t505*_t548;
-    const train5_real_t _t2190 = -_t1469 + _t341*_t552 + _t380*_t553 + _t505*_t554;
-    const train5_real_t _t2191 = J_theta_cart3*_t341 - _t1357 - _t1472 + _t1533 + _t1534
-            + _t380*_t558 + _t505*_t559 - _t661;
-    const train5_real_t _t2192 = J_theta_cart4*_t380 + _t1535 + _t341*_t558 + _t505*_t563;
-    const train5_real_t _t2193 = J_theta_cart5*_t505 + _t1536 + _t341*_t559 + _t380*_t563;
-    const train5_real_t _t2194 = _t1124*_t601 + _t113*_t2193 + _t1133*_t608 + _t1142*_t615
-            + _t1155*_t622 + _t1168*_t629 + _t1185*_t636 + _t1523*_t607 + _t1524*_t600
-            + _t1525*_t621 + _t1526*_t614 + _t1527*_t635 + _t1528*_t628 + _t2188 + _t2189*_t34
-            + _t2190*_t43 + _t2191*_t55 + _t2192*_t70 + _t341*_t560 + _t380*_t564 + _t505*_t567;
-    const train5_real_t _t2195 = -_t1096*_t2121 + _t1100*_t2123 + _t1102*_t2194;
-    const train5_real_t _t2196 = -_t1105*_t2195;
-    const train5_real_t _t2197 = _t1107*_t2187 + _t1199*_t2123 - _t1200*_t2185 - _t1204*_t2121
-            + _t1205*_t2196;
-    const train5_real_t _t2198 = _t1107*_t2185 - _t1199*_t2121 + _t1204*_t2194 - _t1206*_t2187
-            + _t1207*_t2196;
-    const train5_real_t _t2199 = _t1088*_t2197 + _t1091*_t2198;
-    const train5_real_t _t2200 = _t390*_t536 + _t519*_t538 - _t677;
-    const train5_real_t _t2201 = -_t1213 + _t390*_t547 + _t519*_t548;
-    const train5_real_t _t2202 = -_t1363 + _t390*_t553 + _t519*_t554;
-    const train5_real_t _t2203 = -_t1476 + _t390*_t558 + _t519*_t559;
-    const train5_real_t _t2204 = J_theta_cart4*_t390 - _t1218 - _t1367 - _t1479 + _t1538
-            + _t519*_t563 - _t729;
-    const train5_real_t _t2205 = J_theta_cart5*_t519 + _t1539 + _t390*_t563;
-    const train5_real_t _t2206 = _t113*_t2205 + _t1146*_t618 + _t1159*_t625 + _t1172*_t632
-            + _t1189*_t639 + _t1540*_t614 + _t1541*_t621 + _t1542*_t628 + _t1543*_t635 + _t2200
-            + _t2201*_t34 + _t2202*_t43 + _t2203*_t55 + _t2204*_t70 + _t387*_t566 + _t515*_t569;
-    const train5_real_t _t2207 = _t390*_t565 + _t519*_t568 - _t730;
-    const train5_real_t _t2208 = _t1148*_t618 + _t1161*_t625 + _t1174*_t632 + _t1191*_t639
-            + _t124*_t2205 + _t1540*_t617 + _t1541*_t624 + _t1542*_t631 + _t1543*_t638 + _t2201*_t37
-            + _t2202*_t47 + _t2203*_t60 + _t2204*_t76 + _t2207 + _t390*_t566 + _t519*_t569;
-    const train5_real_t _t2209 = _t1616*_t748 + _t1623*_t750 - _t754;
-    const train5_real_t _t2210 = -_t1237 + _t1616*_t765 + _t1623*_t768;
-    const train5_real_t _t2211 = -_t1382 + _t1616*_t779 + _t1623*_t781;
-    const train5_real_t _t2212 = -_t1488 + _t1616*_t790 + _t1623*_t792;
-    const train5_real_t _t2213 = _t1240 + _t1387 + _t1388 + _t1389 - _t1390 + _t1489 + _t1544
-            + _t1623*_t802 + _t793 - _t794;
-    const train5_real_t _t2214 = -_t1545 + _t1616*_t811;
-    const train5_real_t _t2215 = _t1616*_t208;
-    const train5_real_t _t2216 = _t1616*_t204;
-    const train5_real_t _t2217 = _t1296*_t528 + _t1298*_t529 + _t1423*_t645 + _t1425*_t646
-            + _t1499*_t648 + _t1501*_t649 + _t205*_t921 + _t2215*_t387 + _t2216*_t390 + _t527*_t919
-            - _t651*_t70 - _t652*_t76;
-    const train5_real_t _t2218 = _t1623*_t208;
-    const train5_real_t _t2219 = _t1623*_t204;
-    const train5_real_t _t2220 = _t1325*_t528 + _t1329*_t529 + _t1444*_t645 + _t1448*_t646
-            + _t1512*_t648 + _t1516*_t649 + _t1547*_t651 + _t1551*_t652 + _t1554*_t654
-            + _t1556*_t655 + _t205*_t968 + _t2215*_t515 + _t2216*_t519 + _t2218*_t523 + _t2219*_t525
-            + _t527*_t964;
-    const train5_real_t _t2221 = _t1146*_t2215 + _t1148*_t2216 + _t1761*_t527 + _t1763*_t205
-            + _t1915*_t528 + _t1917*_t529 + _t2049*_t645 + _t2051*_t646 + _t2146*_t648
-            + _t2148*_t649 - _t614*_t651 - _t617*_t652;
-    const train5_real_t _t2222 = _t1159*_t2215 + _t1161*_t2216 + _t1778*_t527 + _t1780*_t205
-            + _t1932*_t528 + _t1934*_t529 + _t2062*_t645 + _t2064*_t646 + _t2155*_t648
-            + _t2157*_t649 - _t621*_t651 - _t624*_t652;
-    const train5_real_t _t2223 = TRAIN5_LIT(2.0)*_t122 + _t1548 - _t1549;
-    const train5_real_t _t2224 = _t2223*_t626;
-    const train5_real_t _t2225 = TRAIN5_LIT(2.0)*_t129 + _t1552 - _t1553;
-    const train5_real_t _t2226 = _t2225*_t626;
-    const train5_real_t _t2227 = _t1555 + _t389;
-    const train5_real_t _t2228 = _t2227*_t626;
-    const train5_real_t _t2229 = _t1557 + _t392;
-    const train5_real_t _t2230 = _t2229*_t626;
-    const train5_real_t _t2231 = _t1172*_t2215 + _t1174*_t2216 + _t1176*_t2218 + _t1178*_t2219
-            + _t1795*_t527 + _t1797*_t205 + _t1949*_t528 + _t1951*_t529 + _t2075*_t645
-            + _t2077*_t646 + _t2164*_t648 + _t2166*_t649 + _t2224*_t651 + _t2226*_t652
-            + _t2228*_t654 + _t2230*_t655;
-    const train5_real_t _t2232 = TRAIN5_LIT(2.0)*_t121*_t70 - _t1548 - _t1549;
-    const train5_real_t _t2233 = _t2232*_t633;
-    const train5_real_t _t2234 = TRAIN5_LIT(2.0)*_t121*_t76 - _t1552 - _t1553;
-    const train5_real_t _t2235 = _t2234*_t633;
-    const train5_real_t _t2236 = -_t122 - _t1555 + _t388;
-    const train5_real_t _t2237 = _t2236*_t633;
-    const train5_real_t _t2238 = -_t129 - _t1557 + _t391;
-    const train5_real_t _t2239 = _t2238*_t633;
-    const train5_real_t _t2240 = _t1189*_t2215 + _t1191*_t2216 + _t1193*_t2218 + _t1195*_t2219
-            + _t1816*_t527 + _t1818*_t205 + _t1970*_t528 + _t1972*_t529 + _t2092*_t645
-            + _t2094*_t646 + _t2177*_t648 + _t2179*_t649 + _t2233*_t651 + _t2235*_t652
-            + _t2237*_t654 + _t2239*_t655;
-    const train5_real_t _t2241 = _t1029 + _t113*_t2214 + _t1149*_t1559 + _t1162*_t1558
-            + _t1179*_t1561 + _t1196*_t1560 - _t1346 - _t1464 - _t1529 + _t1562 + _t2209
-            + _t2210*_t34 + _t2211*_t43 + _t2212*_t55 + _t2213*_t70 + _t2217*_t564 + _t2220*_t567
-            + _t2221*_t615 + _t2222*_t622 + _t2231*_t629 + _t2240*_t636 + _t387*_t666 + _t515*_t669
-            - _t990;
-    const train5_real_t _t2242 = -_t1038 + _t1039 + _t1052*_t1616 + _t1054*_t1623;
-    const train5_real_t _t2243 = -_t1058 + _t1067 + _t1149*_t1540 + _t1162*_t1541 + _t1179*_t1542
-            + _t1196*_t1543 + _t124*_t2214 - _t1350 - _t1467 - _t1531 + _t1563 + _t2210*_t37
-            + _t2211*_t47 + _t2212*_t60 + _t2213*_t76 + _t2217*_t566 + _t2220*_t569 + _t2221*_t618
-            + _t2222*_t625 + _t2231*_t632 + _t2240*_t639 + _t2242 + _t390*_t666 + _t519*_t669;
-    const train5_real_t _t2244 = -_t1075 + _t387*_t536 + _t515*_t538;
-    const train5_real_t _t2245 = -_t1354 + _t387*_t547 + _t515*_t548;
-    const train5_real_t _t2246 = -_t1470 + _t387*_t553 + _t515*_t554;
-    const train5_real_t _t2247 = -_t1533 + _t387*_t558 + _t515*_t559;
-    const train5_real_t _t2248 = J_theta_cart4*_t387 - _t1358 - _t1473 - _t1535 + _t1564
-            + _t515*_t563 - _t664;
-    const train5_real_t _t2249 = J_theta_cart5*_t515 + _t1565 + _t387*_t563;
-    const train5_real_t _t2250 = _t113*_t2249 + _t1146*_t615 + _t1159*_t622 + _t1172*_t629
-            + _t1189*_t636 + _t1558*_t621 + _t1559*_t614 + _t1560*_t635 + _t1561*_t628 + _t2244
-            + _t2245*_t34 + _t2246*_t43 + _t2247*_t55 + _t2248*_t70 + _t387*_t564 + _t515*_t567;
-    const train5_real_t _t2251 = -_t1096*_t2206 + _t1100*_t2208 + _t1102*_t2250;
-    const train5_real_t _t2252 = -_t1105*_t2251;
-    const train5_real_t _t2253 = _t1107*_t2243 + _t1199*_t2208 - _t1200*_t2241 - _t1204*_t2206
-            + _t1205*_t2252;
-    const train5_real_t _t2254 = _t1107*_t2241 - _t1199*_t2206 + _t1204*_t2250 - _t1206*_t2243
-            + _t1207*_t2252;
-    const train5_real_t _t2255 = _t1088*_t2253 + _t1091*_t2254;
-    const train5_real_t _t2256 = _t525*_t538 - _t673;
-    const train5_real_t _t2257 = -_t1215 + _t525*_t548;
-    const train5_real_t _t2258 = -_t1365 + _t525*_t554;
-    const train5_real_t _t2259 = -_t1478 + _t525*_t559;
-    const train5_real_t _t2260 = -_t1538 + _t525*_t563;
-    const train5_real_t _t2261 = J_theta_cart5*_t525 - _t1219 - _t1368 - _t1480 - _t1539 - _t731;
-    const train5_real_t _t2262 = _t113*_t2261 + _t1176*_t632 + _t1193*_t639 + _t1566*_t628
-            + _t1567*_t635 + _t2256 + _t2257*_t34 + _t2258*_t43 + _t2259*_t55 + _t2260*_t70
-            + _t523*_t569;
-    const train5_real_t _t2263 = _t525*_t568 - _t732;
-    const train5_real_t _t2264 = _t1178*_t632 + _t1195*_t639 + _t124*_t2261 + _t1566*_t631
-            + _t1567*_t638 + _t2257*_t37 + _t2258*_t47 + _t2259*_t60 + _t2260*_t76 + _t2263
-            + _t525*_t569;
-    const train5_real_t _t2265 = _t1624*_t750 - _t753;
-    const train5_real_t _t2266 = -_t1236 + _t1624*_t768;
-    const train5_real_t _t2267 = -_t1381 + _t1624*_t781;
-    const train5_real_t _t2268 = -_t1487 + _t1624*_t792;
-    const train5_real_t _t2269 = -_t1544 + _t1624*_t802;
-    const train5_real_t _t2270 = _t1241 + _t1391 + _t1392 + _t1393 - _t1394 + _t1490 + _t1545
-            + _t803 - _t804;
-    const train5_real_t _t2271 = _t1624*_t208;
-    const train5_real_t _t2272 = _t1624*_t204;
-    const train5_real_t _t2273 = -_t113*_t654 - _t124*_t655 + _t1332*_t528 + _t1334*_t529
-            + _t1451*_t645 + _t1453*_t646 + _t1519*_t648 + _t1521*_t649 + _t1554*_t651
-            + _t1556*_t652 + _t205*_t973 + _t2271*_t523 + _t2272*_t525 + _t527*_t971;
-    const train5_real_t _t2274 = _t1176*_t2271 + _t1178*_t2272 + _t1799*_t527 + _t1801*_t205
-            + _t1953*_t528 + _t1955*_t529 + _t2079*_t645 + _t2081*_t646 + _t2168*_t648
-            + _t2170*_t649 + _t2228*_t651 + _t2230*_t652 - _t628*_t654 - _t631*_t655;
-    const train5_real_t _t2275 = _t1193*_t2271 + _t1195*_t2272 + _t1820*_t527 + _t1822*_t205
-            + _t1974*_t528 + _t1976*_t529 + _t2096*_t645 + _t2098*_t646 + _t2181*_t648
-            + _t2183*_t649 + _t2237*_t651 + _t2239*_t652 - _t635*_t654 - _t638*_t655;
-    const train5_real_t _t2276 = _t1030 + _t113*_t2270 + _t1179*_t1569 + _t1196*_t1568 - _t1347
-            - _t1465 - _t1530 - _t1562 + _t2265 + _t2266*_t34 + _t2267*_t43 + _t2268*_t55
-            + _t2269*_t70 + _t2273*_t567 + _t2274*_t629 + _t2275*_t636 + _t523*_t669 - _t991;
-    const train5_real_t _t2277 = -_t1040 + _t1041 + _t1054*_t1624;
-    const train5_real_t _t2278 = -_t1059 + _t1068 + _t1179*_t1566 + _t1196*_t1567 + _t124*_t2270
-            - _t1351 - _t1468 - _t1532 - _t1563 + _t2266*_t37 + _t2267*_t47 + _t2268*_t60
-            + _t2269*_t76 + _t2273*_t569 + _t2274*_t632 + _t2275*_t639 + _t2277 + _t525*_t669;
-    const train5_real_t _t2279 = -_t1076 + _t523*_t538;
-    const train5_real_t _t2280 = -_t1355 + _t523*_t548;
-    const train5_real_t _t2281 = -_t1471 + _t523*_t554;
-    const train5_real_t _t2282 = -_t1534 + _t523*_t559;
-    const train5_real_t _t2283 = -_t1564 + _t523*_t563;
-    const train5_real_t _t2284 = J_theta_cart5*_t523 - _t1359 - _t1474 - _t1536 - _t1565 - _t667;
-    const train5_real_t _t2285 = _t113*_t2284 + _t1176*_t629 + _t1193*_t636 + _t1568*_t635
-            + _t1569*_t628 + _t2279 + _t2280*_t34 + _t2281*_t43 + _t2282*_t55 + _t2283*_t70
-            + _t523*_t567;
-    const train5_real_t _t2286 = -_t1096*_t2262 + _t1100*_t2264 + _t1102*_t2285;
-    const train5_real_t _t2287 = -_t1105*_t2286;
-    const train5_real_t _t2288 = _t1107*_t2278 + _t1199*_t2264 - _t1200*_t2276 - _t1204*_t2262
-            + _t1205*_t2287;
-    const train5_real_t _t2289 = _t1107*_t2276 - _t1199*_t2262 + _t1204*_t2285 - _t1206*_t2278
-            + _t1207*_t2287;
-    const train5_real_t _t2290 = _t1088*_t2288 + _t1091*_t2289;
-    const train5_real_t _t2291 = K_theta_tractor_x_tractor*_t1571 + _t1579*_t740 + _t1604*_t744
-            + _t1610*_t746 + _t1617*_t748 + _t1625*_t750;
-    const train5_real_t _t2292 = _t1573*_t202 + _t1604*_t759 + _t1610*_t762 + _t1617*_t765
-            + _t1625*_t768;
-    const train5_real_t _t2293 = _t1574*_t202 + _t1579*_t774 + _t1610*_t777 + _t1617*_t779
-            + _t1625*_t781;
-    const train5_real_t _t2294 = _t1575*_t202 + _t1579*_t784 + _t1604*_t788 + _t1617*_t790
-            + _t1625*_t792;
-    const train5_real_t _t2295 = _t1576*_t202 + _t1579*_t795 + _t1604*_t797 + _t1610*_t800
-            + _t1625*_t802;
-    const train5_real_t _t2296 = _t1577*_t202 + _t1579*_t805 + _t1604*_t807 + _t1610*_t808
-            + _t1617*_t811;
-    const train5_real_t _t2297 = _t1578 - _t1580 + _t1582*_t206;
-    const train5_real_t _t2298 = -_t1583 + _t1584*_t202;
-    const train5_real_t _t2299 = _t2297*_t283 + _t2298*_t286;
-    const train5_real_t _t2300 = _t1578 + _t204*_t206;
-    const train5_real_t _t2301 = _t1580 + _t206*_t221;
-    const train5_real_t _t2302 = _t1583 + _t202*_t221;
-    const train5_real_t _t2303 = _t1604*_t208 + _t206*_t209;
-    const train5_real_t _t2304 = _t1604*_t204 + _t202*_t209;
-    const train5_real_t _t2305 = _t1571*_t296 + _t2300*_t292 + _t2301*_t299 + _t2302*_t303
-            + _t2303*_t307 + _t2304*_t310;
-    const train5_real_t _t2306 = _t1610*_t208 + _t206*_t212;
-    const train5_real_t _t2307 = _t1610*_t204 + _t202*_t212;
-    const train5_real_t _t2308 = _t1571*_t320 + _t2300*_t315 + _t2301*_t324 + _t2302*_t329
-            + _t2303*_t334 + _t2304*_t338 + _t2306*_t341 + _t2307*_t344;
-    const train5_real_t _t2309 = _t1617*_t208 + _t206*_t215;
-    const train5_real_t _t2310 = _t1617*_t204 + _t202*_t215;
-    const train5_real_t _t2311 = _t1571*_t356 + _t2300*_t350 + _t2301*_t361 + _t2302*_t366
-            + _t2303*_t371 + _t2304*_t376 + _t2306*_t380 + _t2307*_t384 + _t2309*_t387
-            + _t2310*_t390;
-    const train5_real_t _t2312 = _t1625*_t208 + _t206*_t218;
-    const train5_real_t _t2313 = _t1625*_t204 + _t202*_t218;
-    const train5_real_t _t2314 = _t1571*_t474 + _t2300*_t467 + _t2301*_t481 + _t2302*_t488
-            + _t2303*_t495 + _t2304*_t500 + _t2306*_t505 + _t2307*_t510 + _t2309*_t515
-            + _t2310*_t519 + _t2312*_t523 + _t2313*_t525;
-    const train5_real_t _t2315 = _t2297*_t718 + _t2298*_t685;
-    const train5_real_t _t2316 = _t2297*_t721 + _t2298*_t688;
-    const train5_real_t _t2317 = _t1110*_t2303 + _t1112*_t2304 + _t1571*_t691 + _t2300*_t996
-            + _t2301*_t838 + _t2302*_t841;
-    const train5_real_t _t2318 = _t1115*_t2303 + _t1117*_t2304 + _t1571*_t694 + _t2300*_t993
-            + _t2301*_t849 + _t2302*_t852;
-    const train5_real_t _t2319 = _t1002*_t2300 + _t1120*_t2303 + _t1122*_t2304 + _t1124*_t2306
-            + _t1126*_t2307 + _t1571*_t697 + _t2301*_t882 + _t2302*_t885;
-    const train5_real_t _t2320 = _t1129*_t2303 + _t1131*_t2304 + _t1133*_t2306 + _t1135*_t2307
-            + _t1571*_t700 + _t2300*_t999 + _t2301*_t888 + _t2302*_t891;
-    const train5_real_t _t2321 = _t1008*_t2300 + _t1138*_t2303 + _t1140*_t2304 + _t1142*_t2306
-            + _t1144*_t2307 + _t1146*_t2309 + _t1148*_t2310 + _t1571*_t703 + _t2301*_t924
-            + _t2302*_t927;
-    const train5_real_t _t2322 = _t1005*_t2300 + _t1151*_t2303 + _t1153*_t2304 + _t1155*_t2306
-            + _t1157*_t2307 + _t1159*_t2309 + _t1161*_t2310 + _t1571*_t706 + _t2301*_t930
-            + _t2302*_t933;
-    const train5_real_t _t2323 = _t1014*_t2300 + _t1164*_t2303 + _t1166*_t2304 + _t1168*_t2306
-            + _t1170*_t2307 + _t1172*_t2309 + _t1174*_t2310 + _t1176*_t2312 + _t1178*_t2313
-            + _t1571*_t709 + _t2301*_t976 + _t2302*_t979;
-    const train5_real_t _t2324 = _t1011*_t2300 + _t1181*_t2303 + _t1183*_t2304 + _t1185*_t2306
-            + _t1187*_t2307 + _t1189*_t2309 + _t1191*_t2310 + _t1193*_t2312 + _t1195*_t2313
-            + _t1571*_t712 + _t2301*_t982 + _t2302*_t985;
-    const train5_real_t _t2325 = _t1077*_t2300 + _t113*_t2296 + _t2291 + _t2292*_t34 + _t2293*_t43
-            + _t2294*_t55 + _t2295*_t70 + _t2299*_t549 + _t2305*_t555 + _t2308*_t560 + _t2311*_t564
-            + _t2314*_t567 + _t2315*_t573 + _t2316*_t580 + _t2317*_t587 + _t2318*_t594
-            + _t2319*_t601 + _t2320*_t608 + _t2321*_t615 + _t2322*_t622 + _t2323*_t629
-            + _t2324*_t636;
-    const train5_real_t _t2326 = _t1045*_t1579 + _t1048*_t1604 + _t1050*_t1610 + _t1052*_t1617
-            + _t1054*_t1625;
-    const train5_real_t _t2327 = _t124*_t2296 + _t1585*_t2300 + _t2292*_t37 + _t2293*_t47
-            + _t2294*_t60 + _t2295*_t76 + _t2299*_t551 + _t2305*_t557 + _t2308*_t562 + _t2311*_t566
-            + _t2314*_t569 + _t2315*_t576 + _t2316*_t583 + _t2317*_t590 + _t2318*_t597
-            + _t2319*_t604 + _t2320*_t611 + _t2321*_t618 + _t2322*_t625 + _t2323*_t632
-            + _t2324*_t639 + _t2326;
-    const train5_real_t _t2328 = _t1095*_t1106*_t2327 - _t1200*_t2325;
-    const train5_real_t _t2329 = _t1107*_t2325 - _t1206*_t2327;
-    const train5_real_t _t2330 = _t1088*_t2328 + _t1091*_t2329;
-    const train5_real_t _t2331 = K_theta_tractor_x_tractor*_t1586 + _t1588*_t740 + _t1605*_t744
-            + _t1611*_t746 + _t1618*_t748 + _t1626*_t750;
-    const train5_real_t _t2332 = _t1573*_t203 + _t1605*_t759 + _t1611*_t762 + _t1618*_t765
-            + _t1626*_t768;
-    const train5_real_t _t2333 = _t1574*_t203 + _t1588*_t774 + _t1611*_t777 + _t1618*_t779
-            + _t1626*_t781;
-    const train5_real_t _t2334 = _t1575*_t203 + _t1588*_t784 + _t1605*_t788 + _t1618*_t790
-            + _t1626*_t792;
-    const train5_real_t _t2335 = _t1576*_t203 + _t1588*_t795 + _t1605*_t797 + _t1611*_t800
-            + _t1626*_t802;
-    const train5_real_t _t2336 = _t1577*_t203 + _t1588*_t805 + _t1605*_t807 + _t1611*_t808
-            + _t1618*_t811;
-    const train5_real_t _t2337 = _t1582*_t207 + _t1587 - _t1589;
-    const train5_real_t _t2338 = _t1584*_t203 - _t1590;
-    const train5_real_t _t2339 = _t2337*_t283 + _t2338*_t286;
-    const train5_real_t _t2340 = _t1587 + _t204*_t207;
-    const train5_real_t _t2341 = _t1589 + _t207*_t221;
-    const train5_real_t _t2342 = _t1590 + _t203*_t221;
-    const train5_real_t _t2343 = _t1605*_t208 + _t207*_t209;
-    const train5_real_t _t2344 = _t1605*_t204 + _t203*_t209;
-    const train5_real_t _t2345 = _t1586*_t296 + _t2340*_t292 + _t2341*_t299 + _t2342*_t303
-            + _t2343*_t307 + _t2344*_t310;
-    const train5_real_t _t2346 = _t1611*_t208 + _t207*_t212;
-    const train5_real_t _t2347 = _t1611*_t204 + _t203*_t212;
-    const train5_real_t _t2348 = _t1586*_t320 + _t2340*_t315 + _t2341*_t324 + _t2342*_t329
-            + _t2343*_t334 + _t2344*_t338 + _t2346*_t341 + _t2347*_t344;
-    const train5_real_t _t2349 = _t1618*_t208 + _t207*_t215;
-    const train5_real_t _t2350 = _t1618*_t204 + _t203*_t215;
-    const train5_real_t _t2351 = _t1586*_t356 + _t2340*_t350 + _t2341*_t361 + _t2342*_t366
-            + _t2343*_t371 + _t2344*_t376 + _t2346*_t380 + _t2347*_t384 + _t2349*_t387
-            + _t2350*_t390;
-    const train5_real_t _t2352 = _t1626*_t208 + _t207*_t218;
-    const train5_real_t _t2353 = _t1626*_t204 + _t203*_t218;
-    const train5_real_t _t2354 = _t1586*_t474 + _t2340*_t467 + _t2341*_t481 + _t2342*_t488
-            + _t2343*_t495 + _t2344*_t500 + _t2346*_t505 + _t2347*_t510 + _t2349*_t515
-            + _t2350*_t519 + _t2352*_t523 + _t2353*_t525;
-    const train5_real_t _t2355 = _t2337*_t718 + _t2338*_t685;
-    const train5_real_t _t2356 = _t2337*_t721 + _t2338*_t688;
-    const train5_real_t _t2357 = _t1110*_t2343 + _t1112*_t2344 + _t1586*_t691 + _t2340*_t996
-            + _t2341*_t838 + _t2342*_t841;
-    const train5_real_t _t2358 = _t1115*_t2343 + _t1117*_t2344 + _t1586*_t694 + _t2340*_t993
-            + _t2341*_t849 + _t2342*_t852;
-    const train5_real_t _t2359 = _t1002*_t2340 + _t1120*_t2343 + _t1122*_t2344 + _t1124*_t2346
-            + _t1126*_t2347 + _t1586*_t697 + _t2341*_t882 + _t2342*_t885;
-    const train5_real_t _t2360 = _t1129*_t2343 + _t1131*_t2344 + _t1133*_t2346 + _t1135*_t2347
-            + _t1586*_t700 + _t2340*_t999 + _t2341*_t888 + _t2342*_t891;
-    const train5_real_t _t2361 = _t1008*_t2340 + _t1138*_t2343 + _t1140*_t2344 + _t1142*_t2346
-            + _t1144*_t2347 + _t1146*_t2349 + _t1148*_t2350 + _t1586*_t703 + _t2341*_t924
-            + _t2342*_t927;
-    const train5_real_t _t2362 = _t1005*_t2340 + _t1151*_t2343 + _t1153*_t2344 + _t1155*_t2346
-            + _t1157*_t2347 + _t1159*_t2349 + _t1161*_t2350 + _t1586*_t706 + _t2341*_t930
-            + _t2342*_t933;
-    const train5_real_t _t2363 = _t1014*_t2340 + _t1164*_t2343 + _t1166*_t2344 + _t1168*_t2346
-            + _t1170*_t2347 + _t1172*_t2349 + _t1174*_t2350 + _t1176*_t2352 + _t1178*_t2353
-            + _t1586*_t709 + _t2341*_t976 + _t2342*_t979;
-    const train5_real_t _t2364 = _t1011*_t2340 + _t1181*_t2343 + _t1183*_t2344 + _t1185*_t2346
-            + _t1187*_t2347 + _t1189*_t2349 + _t1191*_t2350 + _t1193*_t2352 + _t1195*_t2353
-            + _t1586*_t712 + _t2341*_t982 + _t2342*_t985;
-    const train5_real_t _t2365 = _t1077*_t2340 + _t113*_t2336 + _t2331 + _t2332*_t34 + _t2333*_t43
-            + _t2334*_t55 + _t2335*_t70 + _t2339*_t549 + _t2345*_t555 + _t2348*_t560 + _t2351*_t564
-            + _t2354*_t567 + _t2355*_t573 + _t2356*_t580 + _t2357*_t587 + _t2358*_t594
-            + _t2359*_t601 + _t2360*_t608 + _t2361*_t615 + _t2362*_t622 + _t2363*_t629
-            + _t2364*_t636;
-    const train5_real_t _t2366 = _t1045*_t1588 + _t1048*_t1605 + _t1050*_t1611 + _t1052*_t1618
-            + _t1054*_t1626;
-    const train5_real_t _t2367 = _t124*_t2336 + _t1585*_t2340 + _t2332*_t37 + _t2333*_t47
-            + _t2334*_t60 + _t2335*_t76 + _t2339*_t551 + _t2345*_t557 + _t2348*_t562 + _t2351*_t566
-            + _t2354*_t569 + _t2355*_t576 + _t2356*_t583 + _t2357*_t590 + _t2358*_t597
-            + _t2359*_t604 + _t2360*_t611 + _t2361*_t618 + _t2362*_t625 + _t2363*_t632
-            + _t2364*_t639 + _t2366;
-    const train5_real_t _t2368 = _t1095*_t1106*_t2367 - _t1200*_t2365;
-    const train5_real_t _t2369 = _t1107*_t2365 - _t1206*_t2367;
-    const train5_real_t _t2370 = _t1088*_t2368 + _t1091*_t2369;
-    const train5_real_t _t2371 = _t1089*_t1836 + _t1093*_t1837;
-    const train5_real_t _t2372 = _t1089*_t1990 + _t1093*_t1991;
-    const train5_real_t _t2373 = _t1089*_t2112 + _t1093*_t2113;
-    const train5_real_t _t2374 = _t1089*_t2197 + _t1093*_t2198;
-    const train5_real_t _t2375 = _t1089*_t2253 + _t1093*_t2254;
-    const train5_real_t _t2376 = _t1089*_t2288 + _t1093*_t2289;
-    const train5_real_t _t2377 = _t1089*_t2328 + _t1093*_t2329;
-    const train5_real_t _t2378 = _t1089*_t2368 + _t1093*_t2369;
-    const train5_real_t _t2379 = _t1088*_t1200 - _t1091*_t1107;
-    const train5_real_t _t2380 = -_t1088*_t1107 + _t1091*_t1100*_t1106;
-    const train5_real_t _t2381 = _t1088*_t2379 + _t1091*_t2380;
-    const train5_real_t _t2382 = _t1089*_t1200 - _t1093*_t1107;
-    const train5_real_t _t2383 = -_t1089*_t1107 + _t1093*_t1100*_t1106;
-    const train5_real_t _t2384 = _t1088*_t2382 + _t1091*_t2383;
-    const train5_real_t _t2385 = _t1089*_t2379 + _t1093*_t2380;
-    const train5_real_t _t2386 = _t1089*_t2382 + _t1093*_t2383;
+    const train5_real_t _t1715 = _ms308*_ms385 + _ms309*_ms405 - _t510;
+    const train5_real_t _t1716 = _ms322*_ms385 + _ms323*_ms405 - _t735;
+    const train5_real_t _t1717 = _ms325*_ms385 + _ms326*_ms405 - _t896;
+    const train5_real_t _t1718 = _ms327*_ms385 + _ms328*_ms405 - _t989;
+    const train5_real_t _t1719 = J_theta_cart4*_ms385 - _ms313 + _ms329*_ms405 + _t1035 - _t739
+            - _t899 - _t991;
+    const train5_real_t _t1720 = J_theta_cart5*_ms405 + _ms329*_ms385 + _t1036;
+    const train5_real_t _t1721 = _ms224*_t1716 + _ms228*_t1717 + _ms232*_t1718 + _ms236*_t1719
+            + _ms240*_t1720 + _ms272*_t1030 + _ms276*_t1029 + _ms280*_t1032 + _ms284*_t1031
+            + _ms385*_t16 + _ms405*_t18 + _ms493*_t32 + _ms513*_t34 + _ms533*_t36 + _ms557*_t38
+            + _t1715;
+    const train5_real_t _t1722 = -_t1677*_t531 + _t1679*_t535 + _t1721*_t537;
+    const train5_real_t _t1723 = -_t1722*_t540;
+    const train5_real_t _t1724 = -_t1677*_t547 + _t1679*_t544 - _t1712*_t545 + _t1714*_t542
+            + _t1723*_t548;
+    const train5_real_t _t1725 = -_t1677*_t544 + _t1712*_t542 - _t1714*_t549 + _t1721*_t547
+            + _t1723*_t550;
+    const train5_real_t _t1726 = _t1724*_t523 + _t1725*_t526;
+    const train5_real_t _t1727 = _ms309*_ms411 - _t43;
+    const train5_real_t _t1728 = _ms323*_ms411 - _t560;
+    const train5_real_t _t1729 = _ms326*_ms411 - _t748;
+    const train5_real_t _t1730 = _ms328*_ms411 - _t906;
+    const train5_real_t _t1731 = _ms329*_ms411 - _t996;
+    const train5_real_t _t1732 = J_theta_cart5*_ms411 - _t103 - _t564 - _t751 - _t908 - _t997;
+    const train5_real_t _t1733 = _ms224*_t1728 + _ms228*_t1729 + _ms232*_t1730 + _ms236*_t1731
+            + _ms240*_t1732 + _ms280*_t1037 + _ms284*_t1038 + _ms409*_t19 + _ms537*_t37
+            + _ms561*_t39 + _t1727;
+    const train5_real_t _t1734 = _ms319*_ms411 - _t104;
+    const train5_real_t _t1735 = _ms225*_t1728 + _ms229*_t1729 + _ms233*_t1730 + _ms237*_t1731
+            + _ms241*_t1732 + _ms281*_t1037 + _ms285*_t1038 + _ms411*_t19 + _ms539*_t37
+            + _ms563*_t39 + _t1734;
+    const train5_real_t _t1736 = _t1095*_t132 - _t145;
+    const train5_real_t _t1737 = _t1095*_t164 - _t584;
+    const train5_real_t _t1738 = _t1095*_t177 - _t766;
+    const train5_real_t _t1739 = _t1095*_t188 - _t916;
+    const train5_real_t _t1740 = -_t1003 + _t1095*_t198;
+    const train5_real_t _t1741 = _t1006 + _t199 - _t200 + _t592 + _t779 + _t780 + _t781 - _t782
+            + _t922;
+    const train5_real_t _t1742 = _ms286*_t1095;
+    const train5_real_t _t1743 = _ms287*_t1095;
+    const train5_real_t _t1744 = -_ms240*_ms580 - _ms241*_ms581 + _ms409*_t1742 + _ms411*_t1743
+            + _ms567*_t419 + _ms568*_t423 + _ms569*_t712 + _ms570*_t715 + _ms571*_t874
+            + _ms572*_t878 + _ms574*_t972 + _ms575*_t976 + _ms577*_t1024 + _ms578*_t1027;
+    const train5_real_t _t1745 = -_ms280*_ms580 - _ms281*_ms581 + _ms537*_t1742 + _ms539*_t1743
+            + _ms567*_t1270 + _ms568*_t1272 + _ms569*_t1424 + _ms570*_t1426 + _ms571*_t1550
+            + _ms572*_t1552 + _ms574*_t1639 + _ms575*_t1641 + _ms577*_t1699 + _ms578*_t1701;
+    const train5_real_t _t1746 = -_ms284*_ms580 - _ms285*_ms581 + _ms561*_t1742 + _ms563*_t1743
+            + _ms567*_t1291 + _ms568*_t1293 + _ms569*_t1445 + _ms570*_t1447 + _ms571*_t1567
+            + _ms572*_t1569 + _ms574*_t1652 + _ms575*_t1654 + _ms577*_t1708 + _ms578*_t1710;
+    const train5_real_t _t1747 = _ms224*_t1737 + _ms228*_t1738 + _ms232*_t1739 + _ms236*_t1740
+            + _ms240*_t1741 + _ms409*_t463 + _ms591*_t1040 + _ms592*_t1039 - _t1033 + _t1736
+            + _t1744*_t18 + _t1745*_t36 + _t1746*_t38 - _t434 + _t455 - _t728 - _t891 - _t986;
+    const train5_real_t _t1748 = _t1095*_t489 - _t474 + _t475;
+    const train5_real_t _t1749 = _ms225*_t1737 + _ms229*_t1738 + _ms233*_t1739 + _ms237*_t1740
+            + _ms241*_t1741 + _ms411*_t463 + _ms591*_t1037 + _ms592*_t1038 - _t1034 + _t1744*_t19
+            + _t1745*_t37 + _t1746*_t39 + _t1748 - _t494 + _t503 - _t732 - _t894 - _t988;
+    const train5_real_t _t1750 = _ms309*_ms409 - _t511;
+    const train5_real_t _t1751 = _ms323*_ms409 - _t736;
+    const train5_real_t _t1752 = _ms326*_ms409 - _t897;
+    const train5_real_t _t1753 = _ms328*_ms409 - _t990;
+    const train5_real_t _t1754 = _ms329*_ms409 - _t1035;
+    const train5_real_t _t1755 = J_theta_cart5*_ms409 - _ms314 - _t1036 - _t740 - _t900 - _t992;
+    const train5_real_t _t1756 = _ms224*_t1751 + _ms228*_t1752 + _ms232*_t1753 + _ms236*_t1754
+            + _ms240*_t1755 + _ms280*_t1040 + _ms284*_t1039 + _ms409*_t18 + _ms537*_t36
+            + _ms561*_t38 + _t1750;
+    const train5_real_t _t1757 = -_t1733*_t531 + _t1735*_t535 + _t1756*_t537;
+    const train5_real_t _t1758 = -_t1757*_t540;
+    const train5_real_t _t1759 = -_t1733*_t547 + _t1735*_t544 - _t1747*_t545 + _t1749*_t542
+            + _t1758*_t548;
+    const train5_real_t _t1760 = -_t1733*_t544 + _t1747*_t542 - _t1749*_t549 + _t1756*_t547
+            + _t1758*_t550;
+    const train5_real_t _t1761 = _t1759*_t523 + _t1760*_t526;
+    const train5_real_t _t1762 = K_theta_tractor_x_tractor*_t1042 + _t1050*_t114 + _t1075*_t120
+            + _t1081*_t124 + _t1088*_t128 + _t1096*_t132;
+    const train5_real_t _t1763 = _ms48*_t1044 + _t1075*_t155 + _t1081*_t158 + _t1088*_t161
+            + _t1096*_t164;
+    const train5_real_t _t1764 = _ms48*_t1045 + _t1050*_t170 + _t1081*_t173 + _t1088*_t175
+            + _t1096*_t177;
+    const train5_real_t _t1765 = _ms48*_t1046 + _t1050*_t180 + _t1075*_t184 + _t1088*_t186
+            + _t1096*_t188;
+    const train5_real_t _t1766 = _ms48*_t1047 + _t1050*_t191 + _t1075*_t193 + _t1081*_t196
+            + _t1096*_t198;
+    const train5_real_t _t1767 = _ms48*_t1048 + _t1050*_t201 + _t1075*_t203 + _t1081*_t204
+            + _t1088*_t207;
+    const train5_real_t _t1768 = _ms162*_t1053 + _t1049 - _t1051;
+    const train5_real_t _t1769 = _ms48*_t1055 - _t1054;
+    const train5_real_t _t1770 = _ms338*_t1768 + _ms339*_t1769;
+    const train5_real_t _t1771 = _ms162*_ms287 + _t1049;
+    const train5_real_t _t1772 = _ms162*_ms288 + _t1051;
+    const train5_real_t _t1773 = _ms288*_ms48 + _t1054;
+    const train5_real_t _t1774 = _ms162*_ms289 + _ms286*_t1075;
+    const train5_real_t _t1775 = _ms287*_t1075 + _ms289*_ms48;
+    const train5_real_t _t1776 = _ms341*_t1771 + _ms343*_t1042 + _ms345*_t1772 + _ms347*_t1773
+            + _ms349*_t1774 + _ms351*_t1775;
+    const train5_real_t _t1777 = _ms162*_ms290 + _ms286*_t1081;
+    const train5_real_t _t1778 = _ms287*_t1081 + _ms290*_ms48;
+    const train5_real_t _t1779 = _ms353*_t1771 + _ms355*_t1042 + _ms357*_t1772 + _ms359*_t1773
+            + _ms361*_t1774 + _ms363*_t1775 + _ms365*_t1777 + _ms367*_t1778;
+    const train5_real_t _t1780 = _ms162*_ms291 + _ms286*_t1088;
+    const train5_real_t _t1781 = _ms287*_t1088 + _ms291*_ms48;
+    const train5_real_t _t1782 = _ms369*_t1771 + _ms371*_t1042 + _ms373*_t1772 + _ms375*_t1773
+            + _ms377*_t1774 + _ms379*_t1775 + _ms381*_t1777 + _ms383*_t1778 + _ms385*_t1780
+            + _ms387*_t1781;
+    const train5_real_t _t1783 = _ms162*_ms292 + _ms286*_t1096;
+    const train5_real_t _t1784 = _ms287*_t1096 + _ms292*_ms48;
+    const train5_real_t _t1785 = _ms389*_t1771 + _ms391*_t1042 + _ms393*_t1772 + _ms395*_t1773
+            + _ms397*_t1774 + _ms399*_t1775 + _ms401*_t1777 + _ms403*_t1778 + _ms405*_t1780
+            + _ms407*_t1781 + _ms409*_t1783 + _ms411*_t1784;
+    const train5_real_t _t1786 = _ms413*_t1768 + _ms415*_t1769;
+    const train5_real_t _t1787 = _ms417*_t1768 + _ms419*_t1769;
+    const train5_real_t _t1788 = _ms421*_t1771 + _ms423*_t1042 + _ms425*_t1772 + _ms427*_t1773
+            + _ms429*_t1774 + _ms431*_t1775;
+    const train5_real_t _t1789 = _ms433*_t1771 + _ms435*_t1042 + _ms437*_t1772 + _ms439*_t1773
+            + _ms441*_t1774 + _ms443*_t1775;
+    const train5_real_t _t1790 = _ms445*_t1771 + _ms447*_t1042 + _ms449*_t1772 + _ms451*_t1773
+            + _ms453*_t1774 + _ms455*_t1775 + _ms457*_t1777 + _ms459*_t1778;
+    const train5_real_t _t1791 = _ms461*_t1771 + _ms463*_t1042 + _ms465*_t1772 + _ms467*_t1773
+            + _ms469*_t1774 + _ms471*_t1775 + _ms473*_t1777 + _ms475*_t1778;
+    const train5_real_t _t1792 = _ms477*_t1771 + _ms479*_t1042 + _ms481*_t1772 + _ms483*_t1773
+            + _ms485*_t1774 + _ms487*_t1775 + _ms489*_t1777 + _ms491*_t1778 + _ms493*_t1780
+            + _ms495*_t1781;
+    const train5_real_t _t1793 = _ms497*_t1771 + _ms499*_t1042 + _ms501*_t1772 + _ms503*_t1773
+            + _ms505*_t1774 + _ms507*_t1775 + _ms509*_t1777 + _ms511*_t1778 + _ms513*_t1780
+            + _ms515*_t1781;
+    const train5_real_t _t1794 = _ms517*_t1771 + _ms519*_t1042 + _ms521*_t1772 + _ms523*_t1773
+            + _ms525*_t1774 + _ms527*_t1775 + _ms529*_t1777 + _ms531*_t1778 + _ms533*_t1780
+            + _ms535*_t1781 + _ms537*_t1783 + _ms539*_t1784;
+    const train5_real_t _t1795 = _ms541*_t1771 + _ms543*_t1042 + _ms545*_t1772 + _ms547*_t1773
+            + _ms549*_t1774 + _ms551*_t1775 + _ms553*_t1777 + _ms555*_t1778 + _ms557*_t1780
+            + _ms559*_t1781 + _ms561*_t1783 + _ms563*_t1784;
+    const train5_real_t _t1796 = _ms224*_t1763 + _ms228*_t1764 + _ms232*_t1765 + _ms236*_t1766
+            + _ms240*_t1767 + _t10*_t1770 + _t12*_t1776 + _t14*_t1779 + _t16*_t1782 + _t1762
+            + _t1771*_t512 + _t1785*_t18 + _t1786*_t20 + _t1787*_t22 + _t1788*_t24 + _t1789*_t26
+            + _t1790*_t28 + _t1791*_t30 + _t1792*_t32 + _t1793*_t34 + _t1794*_t36 + _t1795*_t38;
+    const train5_real_t _t1797 = _t1050*_t480 + _t1075*_t483 + _t1081*_t485 + _t1088*_t487
+            + _t1096*_t489;
+    const train5_real_t _t1798 = _ms225*_t1763 + _ms229*_t1764 + _ms233*_t1765 + _ms237*_t1766
+            + _ms241*_t1767 + _t1056*_t1771 + _t11*_t1770 + _t13*_t1776 + _t15*_t1779 + _t17*_t1782
+            + _t1785*_t19 + _t1786*_t21 + _t1787*_t23 + _t1788*_t25 + _t1789*_t27 + _t1790*_t29
+            + _t1791*_t31 + _t1792*_t33 + _t1793*_t35 + _t1794*_t37 + _t1795*_t39 + _t1797;
+    const train5_real_t _t1799 = -_t1796*_t545 + _t1798*_t530*_t541;
+    const train5_real_t _t1800 = _t1796*_t542 - _t1798*_t549;
+    const train5_real_t _t1801 = _t1799*_t523 + _t1800*_t526;
+    const train5_real_t _t1802 = K_theta_tractor_x_tractor*_t1057 + _t1059*_t114 + _t1076*_t120
+            + _t1082*_t124 + _t1089*_t128 + _t1097*_t132;
+    const train5_real_t _t1803 = _ms49*_t1044 + _t1076*_t155 + _t1082*_t158 + _t1089*_t161
+            + _t1097*_t164;
+    const train5_real_t _t1804 = _ms49*_t1045 + _t1059*_t170 + _t1082*_t173 + _t1089*_t175
+            + _t1097*_t177;
+    const train5_real_t _t1805 = _ms49*_t1046 + _t1059*_t180 + _t1076*_t184 + _t1089*_t186
+            + _t1097*_t188;
+    const train5_real_t _t1806 = _ms49*_t1047 + _t1059*_t191 + _t1076*_t193 + _t1082*_t196
+            + _t1097*_t198;
+    const train5_real_t _t1807 = _ms49*_t1048 + _t1059*_t201 + _t1076*_t203 + _t1082*_t204
+            + _t1089*_t207;
+    const train5_real_t _t1808 = _ms163*_t1053 + _t1058 - _t1060;
+    const train5_real_t _t1809 = _ms49*_t1055 - _t1061;
+    const train5_real_t _t1810 = _ms338*_t1808 + _ms339*_t1809;
+    const train5_real_t _t1811 = _ms163*_ms287 + _t1058;
+    const train5_real_t _t1812 = _ms163*_ms288 + _t1060;
+    const train5_real_t _t1813 = _ms288*_ms49 + _t1061;
+    const train5_real_t _t1814 = _ms163*_ms289 + _ms286*_t1076;
+    const train5_real_t _t1815 = _ms287*_t1076 + _ms289*_ms49;
+    const train5_real_t _t1816 = _ms341*_t1811 + _ms343*_t1057 + _ms345*_t1812 + _ms347*_t1813
+            + _ms349*_t1814 + _ms351*_t1815;
+    const train5_real_t _t1817 = _ms163*_ms290 + _ms286*_t1082;
+    const train5_real_t _t1818 = _ms287*_t1082 + _ms290*_ms49;
+    const train5_real_t _t1819 = _ms353*_t1811 + _ms355*_t1057 + _ms357*_t1812 + _ms359*_t1813
+            + _ms361*_t1814 + _ms363*_t1815 + _ms365*_t1817 + _ms367*_t1818;
+    const train5_real_t _t1820 = _ms163*_ms291 + _ms286*_t1089;
+    const train5_real_t _t1821 = _ms287*_t1089 + _ms291*_ms49;
+    const train5_real_t _t1822 = _ms369*_t1811 + _ms371*_t1057 + _ms373*_t1812 + _ms375*_t1813
+            + _ms377*_t1814 + _ms379*_t1815 + _ms381*_t1817 + _ms383*_t1818 + _ms385*_t1820
+            + _ms387*_t1821;
+    const train5_real_t _t1823 = _ms163*_ms292 + _ms286*_t1097;
+    const train5_real_t _t1824 = _ms287*_t1097 + _ms292*_ms49;
+    const train5_real_t _t1825 = _ms389*_t1811 + _ms391*_t1057 + _ms393*_t1812 + _ms395*_t1813
+            + _ms397*_t1814 + _ms399*_t1815 + _ms401*_t1817 + _ms403*_t1818 + _ms405*_t1820
+            + _ms407*_t1821 + _ms409*_t1823 + _ms411*_t1824;
+    const train5_real_t _t1826 = _ms413*_t1808 + _ms415*_t1809;
+    const train5_real_t _t1827 = _ms417*_t1808 + _ms419*_t1809;
+    const train5_real_t _t1828 = _ms421*_t1811 + _ms423*_t1057 + _ms425*_t1812 + _ms427*_t1813
+            + _ms429*_t1814 + _ms431*_t1815;
+    const train5_real_t _t1829 = _ms433*_t1811 + _ms435*_t1057 + _ms437*_t1812 + _ms439*_t1813
+            + _ms441*_t1814 + _ms443*_t1815;
+    const train5_real_t _t1830 = _ms445*_t1811 + _ms447*_t1057 + _ms449*_t1812 + _ms451*_t1813
+            + _ms453*_t1814 + _ms455*_t1815 + _ms457*_t1817 + _ms459*_t1818;
+    const train5_real_t _t1831 = _ms461*_t1811 + _ms463*_t1057 + _ms465*_t1812 + _ms467*_t1813
+            + _ms469*_t1814 + _ms471*_t1815 + _ms473*_t1817 + _ms475*_t1818;
+    const train5_real_t _t1832 = _ms477*_t1811 + _ms479*_t1057 + _ms481*_t1812 + _ms483*_t1813
+            + _ms485*_t1814 + _ms487*_t1815 + _ms489*_t1817 + _ms491*_t1818 + _ms493*_t1820
+            + _ms495*_t1821;
+    const train5_real_t _t1833 = _ms497*_t1811 + _ms499*_t1057 + _ms501*_t1812 + _ms503*_t1813
+            + _ms505*_t1814 + _ms507*_t1815 + _ms509*_t1817 + _ms511*_t1818 + _ms513*_t1820
+            + _ms515*_t1821;
+    const train5_real_t _t1834 = _ms517*_t1811 + _ms519*_t1057 + _ms521*_t1812 + _ms523*_t1813
+            + _ms525*_t1814 + _ms527*_t1815 + _ms529*_t1817 + _ms531*_t1818 + _ms533*_t1820
+            + _ms535*_t1821 + _ms537*_t1823 + _ms539*_t1824;
+    const train5_real_t _t1835 = _ms541*_t1811 + _ms543*_t1057 + _ms545*_t1812 + _ms547*_t1813
+            + _ms549*_t1814 + _ms551*_t1815 + _ms553*_t1817 + _ms555*_t1818 + _ms557*_t1820
+            + _ms559*_t1821 + _ms561*_t1823 + _ms563*_t1824;
+    const train5_real_t _t1836 = _ms224*_t1803 + _ms228*_t1804 + _ms232*_t1805 + _ms236*_t1806
+            + _ms240*_t1807 + _t10*_t1810 + _t12*_t1816 + _t14*_t1819 + _t16*_t1822 + _t18*_t1825
+            + _t1802 + _t1811*_t512 + _t1826*_t20 + _t1827*_t22 + _t1828*_t24 + _t1829*_t26
+            + _t1830*_t28 + _t1831*_t30 + _t1832*_t32 + _t1833*_t34 + _t1834*_t36 + _t1835*_t38;
+    const train5_real_t _t1837 = _t1059*_t480 + _t1076*_t483 + _t1082*_t485 + _t1089*_t487
+            + _t1097*_t489;
+    const train5_real_t _t1838 = _ms225*_t1803 + _ms229*_t1804 + _ms233*_t1805 + _ms237*_t1806
+            + _ms241*_t1807 + _t1056*_t1811 + _t11*_t1810 + _t13*_t1816 + _t15*_t1819 + _t17*_t1822
+            + _t1825*_t19 + _t1826*_t21 + _t1827*_t23 + _t1828*_t25 + _t1829*_t27 + _t1830*_t29
+            + _t1831*_t31 + _t1832*_t33 + _t1833*_t35 + _t1834*_t37 + _t1835*_t39 + _t1837;
+    const train5_real_t _t1839 = -_t1836*_t545 + _t1838*_t530*_t541;
+    const train5_real_t _t1840 = _t1836*_t542 - _t1838*_t549;
+    const train5_real_t _t1841 = _t1839*_t523 + _t1840*_t526;
+    const train5_real_t _t1842 = _t1307*_t524 + _t1308*_t528;
+    const train5_real_t _t1843 = _t1461*_t524 + _t1462*_t528;
+    const train5_real_t _t1844 = _t1583*_t524 + _t1584*_t528;
+    const train5_real_t _t1845 = _t1668*_t524 + _t1669*_t528;
+    const train5_real_t _t1846 = _t1724*_t524 + _t1725*_t528;
+    const train5_real_t _t1847 = _t1759*_t524 + _t1760*_t528;
+    const train5_real_t _t1848 = _t1799*_t524 + _t1800*_t528;
+    const train5_real_t _t1849 = _t1839*_t524 + _t1840*_t528;
+    const train5_real_t _t1850 = _t523*_t545 - _t526*_t542;
+    const train5_real_t _t1851 = -_t523*_t542 + _t526*_t535*_t541;
+    const train5_real_t _t1852 = _t1850*_t523 + _t1851*_t526;
+    const train5_real_t _t1853 = _t524*_t545 - _t528*_t542;
+    const train5_real_t _t1854 = -_t524*_t542 + _t528*_t535*_t541;
+    const train5_real_t _t1855 = _t1853*_t523 + _t1854*_t526;
+    const train5_real_t _t1856 = _t1850*_t524 + _t1851*_t528;
+    const train5_real_t _t1857 = _t1853*_t524 + _t1854*_t528;
     A[0] = TRAIN5_LIT(0.0);
     A[1] = TRAIN5_LIT(0.0);
-    A[2] = -_t1596;
+    A[2] = -_t1067;
     A[3] = TRAIN5_LIT(0.0);
     A[4] = TRAIN5_LIT(0.0);
     A[5] = TRAIN5_LIT(0.0);
@@ -7296,11 +5835,11 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[17] = TRAIN5_LIT(0.0);
     A[18] = TRAIN5_LIT(0.0);
     A[19] = TRAIN5_LIT(0.0);
-    A[20] = _t1597;
-    A[21] = _t1598;
+    A[20] = _t1068;
+    A[21] = _t1069;
     A[22] = TRAIN5_LIT(0.0);
     A[23] = TRAIN5_LIT(0.0);
-    A[24] = _t1595;
+    A[24] = _t1066;
     A[25] = TRAIN5_LIT(0.0);
     A[26] = TRAIN5_LIT(0.0);
     A[27] = TRAIN5_LIT(0.0);
@@ -7318,8 +5857,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[39] = TRAIN5_LIT(0.0);
     A[40] = TRAIN5_LIT(0.0);
     A[41] = TRAIN5_LIT(0.0);
-    A[42] = _t1599;
-    A[43] = _t1600;
+    A[42] = _t1070;
+    A[43] = _t1071;
     A[44] = TRAIN5_LIT(0.0);
     A[45] = TRAIN5_LIT(0.0);
     A[46] = TRAIN5_LIT(0.0);
@@ -7340,12 +5879,12 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[61] = TRAIN5_LIT(0.0);
     A[62] = TRAIN5_LIT(0.0);
     A[63] = TRAIN5_LIT(0.0);
-    A[64] = _t202;
-    A[65] = _t203;
+    A[64] = _ms48;
+    A[65] = _ms49;
     A[66] = TRAIN5_LIT(0.0);
     A[67] = TRAIN5_LIT(0.0);
-    A[68] = _t741;
-    A[69] = -_t741;
+    A[68] = _t115;
+    A[69] = -_t115;
     A[70] = TRAIN5_LIT(0.0);
     A[71] = TRAIN5_LIT(0.0);
     A[72] = TRAIN5_LIT(0.0);
@@ -7362,13 +5901,13 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[83] = TRAIN5_LIT(0.0);
     A[84] = TRAIN5_LIT(0.0);
     A[85] = TRAIN5_LIT(0.0);
-    A[86] = _t1579;
-    A[87] = _t1588;
+    A[86] = _t1050;
+    A[87] = _t1059;
     A[88] = TRAIN5_LIT(0.0);
     A[89] = TRAIN5_LIT(0.0);
-    A[90] = _t1601;
-    A[91] = _t1602;
-    A[92] = _t1603;
+    A[90] = _t1072;
+    A[91] = _t1073;
+    A[92] = _t1074;
     A[93] = TRAIN5_LIT(0.0);
     A[94] = TRAIN5_LIT(0.0);
     A[95] = TRAIN5_LIT(0.0);
@@ -7384,14 +5923,14 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[105] = TRAIN5_LIT(0.0);
     A[106] = TRAIN5_LIT(0.0);
     A[107] = TRAIN5_LIT(0.0);
-    A[108] = _t1604;
-    A[109] = _t1605;
+    A[108] = _t1075;
+    A[109] = _t1076;
     A[110] = TRAIN5_LIT(0.0);
     A[111] = TRAIN5_LIT(0.0);
-    A[112] = _t1606;
-    A[113] = _t1607;
-    A[114] = _t1608;
-    A[115] = _t1609;
+    A[112] = _t1077;
+    A[113] = _t1078;
+    A[114] = _t1079;
+    A[115] = _t1080;
     A[116] = TRAIN5_LIT(0.0);
     A[117] = TRAIN5_LIT(0.0);
     A[118] = TRAIN5_LIT(0.0);
@@ -7406,15 +5945,15 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[127] = TRAIN5_LIT(0.0);
     A[128] = TRAIN5_LIT(0.0);
     A[129] = TRAIN5_LIT(0.0);
-    A[130] = _t1610;
-    A[131] = _t1611;
+    A[130] = _t1081;
+    A[131] = _t1082;
     A[132] = TRAIN5_LIT(0.0);
     A[133] = TRAIN5_LIT(0.0);
-    A[134] = _t1612;
-    A[135] = _t1613;
-    A[136] = _t1614;
-    A[137] = _t1615;
-    A[138] = _t1616;
+    A[134] = _t1083;
+    A[135] = _t1084;
+    A[136] = _t1085;
+    A[137] = _t1086;
+    A[138] = _t1087;
     A[139] = TRAIN5_LIT(0.0);
     A[140] = TRAIN5_LIT(0.0);
     A[141] = TRAIN5_LIT(0.0);
@@ -7428,16 +5967,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[149] = TRAIN5_LIT(0.0);
     A[150] = TRAIN5_LIT(0.0);
     A[151] = TRAIN5_LIT(0.0);
-    A[152] = _t1617;
-    A[153] = _t1618;
+    A[152] = _t1088;
+    A[153] = _t1089;
     A[154] = TRAIN5_LIT(0.0);
     A[155] = TRAIN5_LIT(0.0);
-    A[156] = _t1619;
-    A[157] = _t1620;
-    A[158] = _t1621;
-    A[159] = _t1622;
-    A[160] = _t1623;
-    A[161] = _t1624;
+    A[156] = _t1090;
+    A[157] = _t1091;
+    A[158] = _t1092;
+    A[159] = _t1093;
+    A[160] = _t1094;
+    A[161] = _t1095;
     A[162] = TRAIN5_LIT(0.0);
     A[163] = TRAIN5_LIT(0.0);
     A[164] = TRAIN5_LIT(0.0);
@@ -7450,8 +5989,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[171] = TRAIN5_LIT(0.0);
     A[172] = TRAIN5_LIT(0.0);
     A[173] = TRAIN5_LIT(0.0);
-    A[174] = _t1625;
-    A[175] = _t1626;
+    A[174] = _t1096;
+    A[175] = _t1097;
     A[176] = TRAIN5_LIT(0.0);
     A[177] = TRAIN5_LIT(0.0);
     A[178] = TRAIN5_LIT(0.0);
@@ -7472,8 +6011,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[193] = TRAIN5_LIT(0.0);
     A[194] = TRAIN5_LIT(0.0);
     A[195] = TRAIN5_LIT(0.0);
-    A[196] = _t1591;
-    A[197] = _t1593;
+    A[196] = _t1062;
+    A[197] = _t1064;
     A[198] = TRAIN5_LIT(0.0);
     A[199] = TRAIN5_LIT(0.0);
     A[200] = TRAIN5_LIT(0.0);
@@ -7494,12 +6033,12 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[215] = TRAIN5_LIT(0.0);
     A[216] = TRAIN5_LIT(0.0);
     A[217] = TRAIN5_LIT(0.0);
-    A[218] = _t1592;
-    A[219] = _t1594;
+    A[218] = _t1063;
+    A[219] = _t1065;
     A[220] = TRAIN5_LIT(0.0);
     A[221] = TRAIN5_LIT(0.0);
-    A[222] = _t1627;
-    A[223] = -_t1627;
+    A[222] = _t1098;
+    A[223] = -_t1098;
     A[224] = TRAIN5_LIT(0.0);
     A[225] = TRAIN5_LIT(0.0);
     A[226] = TRAIN5_LIT(0.0);
@@ -7516,12 +6055,12 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[237] = TRAIN5_LIT(0.0);
     A[238] = TRAIN5_LIT(0.0);
     A[239] = TRAIN5_LIT(0.0);
-    A[240] = _t1628;
-    A[241] = _t1629;
+    A[240] = _t1099;
+    A[241] = _t1100;
     A[242] = TRAIN5_LIT(0.0);
     A[243] = TRAIN5_LIT(0.0);
-    A[244] = _t1630;
-    A[245] = -_t1630;
+    A[244] = _t1101;
+    A[245] = -_t1101;
     A[246] = TRAIN5_LIT(0.0);
     A[247] = TRAIN5_LIT(0.0);
     A[248] = TRAIN5_LIT(0.0);
@@ -7538,13 +6077,13 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[259] = TRAIN5_LIT(0.0);
     A[260] = TRAIN5_LIT(0.0);
     A[261] = TRAIN5_LIT(0.0);
-    A[262] = _t1631;
-    A[263] = _t1632;
+    A[262] = _t1102;
+    A[263] = _t1103;
     A[264] = TRAIN5_LIT(0.0);
     A[265] = TRAIN5_LIT(0.0);
-    A[266] = _t1633;
-    A[267] = _t1634;
-    A[268] = _t1635;
+    A[266] = _t1104;
+    A[267] = _t1105;
+    A[268] = _t1106;
     A[269] = TRAIN5_LIT(0.0);
     A[270] = TRAIN5_LIT(0.0);
     A[271] = TRAIN5_LIT(0.0);
@@ -7560,13 +6099,13 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[281] = TRAIN5_LIT(0.0);
     A[282] = TRAIN5_LIT(0.0);
     A[283] = TRAIN5_LIT(0.0);
-    A[284] = _t1636;
-    A[285] = _t1637;
+    A[284] = _t1107;
+    A[285] = _t1108;
     A[286] = TRAIN5_LIT(0.0);
     A[287] = TRAIN5_LIT(0.0);
-    A[288] = _t1638;
-    A[289] = _t1639;
-    A[290] = _t1640;
+    A[288] = _t1109;
+    A[289] = _t1110;
+    A[290] = _t1111;
     A[291] = TRAIN5_LIT(0.0);
     A[292] = TRAIN5_LIT(0.0);
     A[293] = TRAIN5_LIT(0.0);
@@ -7582,14 +6121,14 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[303] = TRAIN5_LIT(0.0);
     A[304] = TRAIN5_LIT(0.0);
     A[305] = TRAIN5_LIT(0.0);
-    A[306] = _t1641;
-    A[307] = _t1642;
+    A[306] = _t1112;
+    A[307] = _t1113;
     A[308] = TRAIN5_LIT(0.0);
     A[309] = TRAIN5_LIT(0.0);
-    A[310] = _t1643;
-    A[311] = _t1644;
-    A[312] = _t1645;
-    A[313] = _t1646;
+    A[310] = _t1114;
+    A[311] = _t1115;
+    A[312] = _t1116;
+    A[313] = _t1117;
     A[314] = TRAIN5_LIT(0.0);
     A[315] = TRAIN5_LIT(0.0);
     A[316] = TRAIN5_LIT(0.0);
@@ -7604,14 +6143,14 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[325] = TRAIN5_LIT(0.0);
     A[326] = TRAIN5_LIT(0.0);
     A[327] = TRAIN5_LIT(0.0);
-    A[328] = _t1647;
-    A[329] = _t1648;
+    A[328] = _t1118;
+    A[329] = _t1119;
     A[330] = TRAIN5_LIT(0.0);
     A[331] = TRAIN5_LIT(0.0);
-    A[332] = _t1649;
-    A[333] = _t1650;
-    A[334] = _t1651;
-    A[335] = _t1652;
+    A[332] = _t1120;
+    A[333] = _t1121;
+    A[334] = _t1122;
+    A[335] = _t1123;
     A[336] = TRAIN5_LIT(0.0);
     A[337] = TRAIN5_LIT(0.0);
     A[338] = TRAIN5_LIT(0.0);
@@ -7626,15 +6165,15 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[347] = TRAIN5_LIT(0.0);
     A[348] = TRAIN5_LIT(0.0);
     A[349] = TRAIN5_LIT(0.0);
-    A[350] = _t1653;
-    A[351] = _t1654;
+    A[350] = _t1124;
+    A[351] = _t1125;
     A[352] = TRAIN5_LIT(0.0);
     A[353] = TRAIN5_LIT(0.0);
-    A[354] = _t1655;
-    A[355] = _t1656;
-    A[356] = _t1657;
-    A[357] = _t1658;
-    A[358] = _t1659;
+    A[354] = _t1126;
+    A[355] = _t1127;
+    A[356] = _t1128;
+    A[357] = _t1129;
+    A[358] = _t1130;
     A[359] = TRAIN5_LIT(0.0);
     A[360] = TRAIN5_LIT(0.0);
     A[361] = TRAIN5_LIT(0.0);
@@ -7648,15 +6187,15 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[369] = TRAIN5_LIT(0.0);
     A[370] = TRAIN5_LIT(0.0);
     A[371] = TRAIN5_LIT(0.0);
-    A[372] = _t1660;
-    A[373] = _t1661;
+    A[372] = _t1131;
+    A[373] = _t1132;
     A[374] = TRAIN5_LIT(0.0);
     A[375] = TRAIN5_LIT(0.0);
-    A[376] = _t1662;
-    A[377] = _t1663;
-    A[378] = _t1664;
-    A[379] = _t1665;
-    A[380] = _t1666;
+    A[376] = _t1133;
+    A[377] = _t1134;
+    A[378] = _t1135;
+    A[379] = _t1136;
+    A[380] = _t1137;
     A[381] = TRAIN5_LIT(0.0);
     A[382] = TRAIN5_LIT(0.0);
     A[383] = TRAIN5_LIT(0.0);
@@ -7670,16 +6209,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[391] = TRAIN5_LIT(0.0);
     A[392] = TRAIN5_LIT(0.0);
     A[393] = TRAIN5_LIT(0.0);
-    A[394] = _t1667;
-    A[395] = _t1668;
+    A[394] = _t1138;
+    A[395] = _t1139;
     A[396] = TRAIN5_LIT(0.0);
     A[397] = TRAIN5_LIT(0.0);
-    A[398] = _t1669;
-    A[399] = _t1670;
-    A[400] = _t1671;
-    A[401] = _t1672;
-    A[402] = _t1673;
-    A[403] = _t1674;
+    A[398] = _t1140;
+    A[399] = _t1141;
+    A[400] = _t1142;
+    A[401] = _t1143;
+    A[402] = _t1144;
+    A[403] = _t1145;
     A[404] = TRAIN5_LIT(0.0);
     A[405] = TRAIN5_LIT(0.0);
     A[406] = TRAIN5_LIT(0.0);
@@ -7692,16 +6231,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[413] = TRAIN5_LIT(0.0);
     A[414] = TRAIN5_LIT(0.0);
     A[415] = TRAIN5_LIT(0.0);
-    A[416] = _t1675;
-    A[417] = _t1676;
+    A[416] = _t1146;
+    A[417] = _t1147;
     A[418] = TRAIN5_LIT(0.0);
     A[419] = TRAIN5_LIT(0.0);
-    A[420] = _t1677;
-    A[421] = _t1678;
-    A[422] = _t1679;
-    A[423] = _t1680;
-    A[424] = _t1681;
-    A[425] = _t1682;
+    A[420] = _t1148;
+    A[421] = _t1149;
+    A[422] = _t1150;
+    A[423] = _t1151;
+    A[424] = _t1152;
+    A[425] = _t1153;
     A[426] = TRAIN5_LIT(0.0);
     A[427] = TRAIN5_LIT(0.0);
     A[428] = TRAIN5_LIT(0.0);
@@ -7714,16 +6253,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[435] = TRAIN5_LIT(0.0);
     A[436] = TRAIN5_LIT(0.0);
     A[437] = TRAIN5_LIT(0.0);
-    A[438] = _t1683;
-    A[439] = _t1684;
+    A[438] = _t1154;
+    A[439] = _t1155;
     A[440] = TRAIN5_LIT(0.0);
     A[441] = TRAIN5_LIT(0.0);
-    A[442] = _t1838;
-    A[443] = _t1992;
-    A[444] = _t2114;
-    A[445] = _t2199;
-    A[446] = _t2255;
-    A[447] = _t2290;
+    A[442] = _t1309;
+    A[443] = _t1463;
+    A[444] = _t1585;
+    A[445] = _t1670;
+    A[446] = _t1726;
+    A[447] = _t1761;
     A[448] = TRAIN5_LIT(0.0);
     A[449] = TRAIN5_LIT(0.0);
     A[450] = TRAIN5_LIT(0.0);
@@ -7736,16 +6275,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[457] = TRAIN5_LIT(0.0);
     A[458] = TRAIN5_LIT(0.0);
     A[459] = TRAIN5_LIT(0.0);
-    A[460] = _t2330;
-    A[461] = _t2370;
+    A[460] = _t1801;
+    A[461] = _t1841;
     A[462] = TRAIN5_LIT(0.0);
     A[463] = TRAIN5_LIT(0.0);
-    A[464] = _t2371;
-    A[465] = _t2372;
-    A[466] = _t2373;
-    A[467] = _t2374;
-    A[468] = _t2375;
-    A[469] = _t2376;
+    A[464] = _t1842;
+    A[465] = _t1843;
+    A[466] = _t1844;
+    A[467] = _t1845;
+    A[468] = _t1846;
+    A[469] = _t1847;
     A[470] = TRAIN5_LIT(0.0);
     A[471] = TRAIN5_LIT(0.0);
     A[472] = TRAIN5_LIT(0.0);
@@ -7758,8 +6297,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[479] = TRAIN5_LIT(0.0);
     A[480] = TRAIN5_LIT(0.0);
     A[481] = TRAIN5_LIT(0.0);
-    A[482] = _t2377;
-    A[483] = _t2378;
+    A[482] = _t1848;
+    A[483] = _t1849;
     B[0] = TRAIN5_LIT(0.0);
     B[1] = TRAIN5_LIT(0.0);
     B[2] = TRAIN5_LIT(0.0);
@@ -7800,14 +6339,14 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     B[37] = TRAIN5_LIT(0.0);
     B[38] = TRAIN5_LIT(0.0);
     B[39] = TRAIN5_LIT(0.0);
-    B[40] = _t2381;
-    B[41] = _t2384;
-    B[42] = _t2385;
-    B[43] = _t2386;
+    B[40] = _t1852;
+    B[41] = _t1855;
+    B[42] = _t1856;
+    B[43] = _t1857;
 }
 
 /* train5_wheel_contact_forces: documented in train5_model.h.
-   operations after CSE: 1147 add, 1532 mul, 13 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 951 add, 1336 mul, 13 div, 20 sin/cos, 0 sqrt */
 train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *longitudinal,
     train5_real_t *lateral)
@@ -7898,1016 +6437,315 @@ train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const trai
             | train5_exp_carry(tau_left)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
-    const train5_real_t _t0 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t _t1 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t _t2 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t _t3 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t _t4 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t _t5 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t _t6 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t _t7 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t _t8 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t _t9 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t10 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t11 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t12 = _t10*thetadot_right + _t11*thetadot_left;
-    const train5_real_t _t13 = _t12*thetadot_right;
-    const train5_real_t _t14 = _t12*thetadot_left;
-    const train5_real_t _t15 = -theta_tractor;
-    const train5_real_t _t16 = _t15 + theta_cart;
-    const train5_real_t _t17 = TRAIN5_SIN(_t16);
-    const train5_real_t _t18 = -_t17;
-    const train5_real_t _t19 = TRAIN5_COS(_t16);
-    const train5_real_t _t20 = TRAIN5_LIT(0.3)*_t19;
-    const train5_real_t _t21 = -_t20;
-    const train5_real_t _t22 = _t15 + theta_cart2;
-    const train5_real_t _t23 = TRAIN5_SIN(_t22);
-    const train5_real_t _t24 = -_t23;
-    const train5_real_t _t25 = TRAIN5_COS(_t22);
-    const train5_real_t _t26 = TRAIN5_LIT(0.3)*_t25;
-    const train5_real_t _t27 = -_t26;
-    const train5_real_t _t28 = TRAIN5_LIT(0.85)*_t17;
-    const train5_real_t _t29 = TRAIN5_LIT(0.85)*_t19;
-    const train5_real_t _t30 = -_t23*_t28 - _t25*_t29;
-    const train5_real_t _t31 = _t15 + theta_cart3;
-    const train5_real_t _t32 = TRAIN5_SIN(_t31);
-    const train5_real_t _t33 = -_t32;
-    const train5_real_t _t34 = TRAIN5_COS(_t31);
-    const train5_real_t _t35 = TRAIN5_LIT(0.3)*_t34;
-    const train5_real_t _t36 = -_t35;
-    const train5_real_t _t37 = -_t28*_t32 - _t29*_t34;
-    const train5_real_t _t38 = TRAIN5_LIT(0.85)*_t23;
-    const train5_real_t _t39 = TRAIN5_LIT(0.85)*_t25;
-    const train5_real_t _t40 = -_t32*_t38 - _t34*_t39;
-    const train5_real_t _t41 = _t15 + theta_cart4;
-    const train5_real_t _t42 = TRAIN5_SIN(_t41);
-    const train5_real_t _t43 = -_t42;
-    const train5_real_t _t44 = TRAIN5_COS(_t41);
-    const train5_real_t _t45 = TRAIN5_LIT(0.3)*_t44;
-    const train5_real_t _t46 = -_t45;
-    const train5_real_t _t47 = -_t28*_t42 - _t29*_t44;
-    const train5_real_t _t48 = -_t38*_t42 - _t39*_t44;
-    const train5_real_t _t49 = TRAIN5_LIT(0.85)*_t32;
-    const train5_real_t _t50 = TRAIN5_LIT(0.85)*_t34;
-    const train5_real_t _t51 = -_t42*_t49 - _t44*_t50;
-    const train5_real_t _t52 = _t15 + theta_cart5;
-    const train5_real_t _t53 = TRAIN5_SIN(_t52);
-    const train5_real_t _t54 = -_t53;
-    const train5_real_t _t55 = TRAIN5_COS(_t52);
-    const train5_real_t _t56 = TRAIN5_LIT(0.3)*_t55;
-    const train5_real_t _t57 = -_t56;
-    const train5_real_t _t58 = -_t28*_t53 - _t29*_t55;
-    const train5_real_t _t59 = -_t38*_t53 - _t39*_t55;
-    const train5_real_t _t60 = -_t49*_t53 - _t50*_t55;
-    const train5_real_t _t61 = TRAIN5_LIT(0.85)*_t55;
-    const train5_real_t _t62 = -TRAIN5_LIT(0.85)*_t42*_t53 - _t44*_t61;
-    const train5_real_t _t63 = TRAIN5_LIT(0.3)*_t17;
-    const train5_real_t _t64 = TRAIN5_LIT(0.3)*_t23;
-    const train5_real_t _t65 = TRAIN5_LIT(0.85)*_t19*_t23 - _t25*_t28;
-    const train5_real_t _t66 = TRAIN5_LIT(0.3)*_t32;
-    const train5_real_t _t67 = TRAIN5_LIT(0.85)*_t19*_t32 - _t28*_t34;
-    const train5_real_t _t68 = TRAIN5_LIT(0.85)*_t25*_t32 - _t34*_t38;
-    const train5_real_t _t69 = TRAIN5_LIT(0.3)*_t42;
-    const train5_real_t _t70 = TRAIN5_LIT(0.85)*_t19*_t42 - _t28*_t44;
-    const train5_real_t _t71 = TRAIN5_LIT(0.85)*_t25*_t42 - _t38*_t44;
-    const train5_real_t _t72 = TRAIN5_LIT(0.85)*_t34*_t42 - _t44*_t49;
-    const train5_real_t _t73 = TRAIN5_LIT(0.3)*_t53;
-    const train5_real_t _t74 = TRAIN5_LIT(0.85)*_t19*_t53 - _t28*_t55;
-    const train5_real_t _t75 = TRAIN5_LIT(0.85)*_t25*_t53 - _t38*_t55;
-    const train5_real_t _t76 = TRAIN5_LIT(0.85)*_t34*_t53 - _t49*_t55;
-    const train5_real_t _t77 = -_t42*_t61 + TRAIN5_LIT(0.85)*_t44*_t53;
-    const train5_real_t _t78 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t79 = _t10*_t21 + _t18*_t78;
-    const train5_real_t _t80 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t81 = _t11*_t21 + _t18*_t80;
-    const train5_real_t _t82 = TRAIN5_LIT(1.6666666666666667)*_t79;
-    const train5_real_t _t83 = _t30*_t82;
-    const train5_real_t _t84 = _t10*_t27 + _t24*_t78;
-    const train5_real_t _t85 = _t83 + _t84;
-    const train5_real_t _t86 = TRAIN5_LIT(1.6666666666666667)*_t81;
-    const train5_real_t _t87 = _t30*_t86;
-    const train5_real_t _t88 = _t11*_t27 + _t24*_t80;
-    const train5_real_t _t89 = _t87 + _t88;
-    const train5_real_t _t90 = TRAIN5_LIT(1.6666666666666667)*_t85;
-    const train5_real_t _t91 = _t40*_t90;
-    const train5_real_t _t92 = _t37*_t82;
-    const train5_real_t _t93 = _t10*_t36 + _t33*_t78;
-    const train5_real_t _t94 = _t91 + _t92 + _t93;
-    const train5_real_t _t95 = TRAIN5_LIT(1.6666666666666667)*_t89;
-    const train5_real_t _t96 = _t40*_t95;
-    const train5_real_t _t97 = _t37*_t86;
-    const train5_real_t _t98 = _t11*_t36 + _t33*_t80;
-    const train5_real_t _t99 = _t96 + _t97 + _t98;
-    const train5_real_t _t100 = TRAIN5_LIT(1.6666666666666667)*_t94;
-    const train5_real_t _t101 = _t100*_t51;
-    const train5_real_t _t102 = _t48*_t90;
-    const train5_real_t _t103 = _t47*_t82;
-    const train5_real_t _t104 = _t10*_t46 + _t43*_t78;
-    const train5_real_t _t105 = _t101 + _t102 + _t103 + _t104;
-    const train5_real_t _t106 = TRAIN5_LIT(1.6666666666666667)*_t99;
-    const train5_real_t _t107 = _t106*_t51;
-    const train5_real_t _t108 = _t48*_t95;
-    const train5_real_t _t109 = _t47*_t86;
-    const train5_real_t _t110 = _t11*_t46 + _t43*_t80;
-    const train5_real_t _t111 = _t107 + _t108 + _t109 + _t110;
-    const train5_real_t _t112 = TRAIN5_LIT(1.6666666666666667)*_t105;
-    const train5_real_t _t113 = _t112*_t62;
-    const train5_real_t _t114 = _t100*_t60;
-    const train5_real_t _t115 = _t59*_t90;
-    const train5_real_t _t116 = _t58*_t82;
-    const train5_real_t _t117 = _t10*_t57 + _t54*_t78;
-    const train5_real_t _t118 = _t113 + _t114 + _t115 + _t116 + _t117;
-    const train5_real_t _t119 = TRAIN5_LIT(1.6666666666666667)*_t111;
-    const train5_real_t _t120 = _t119*_t62;
-    const train5_real_t _t121 = _t106*_t60;
-    const train5_real_t _t122 = _t59*_t95;
-    const train5_real_t _t123 = _t58*_t86;
-    const train5_real_t _t124 = _t11*_t57 + _t54*_t80;
-    const train5_real_t _t125 = _t120 + _t121 + _t122 + _t123 + _t124;
-    const train5_real_t _t126 = TRAIN5_LIT(0.2)*_t82;
-    const train5_real_t _t127 = _t19*_t78;
-    const train5_real_t _t128 = _t10*_t63;
-    const train5_real_t _t129 = TRAIN5_LIT(0.2)*_t86;
-    const train5_real_t _t130 = _t19*_t80;
-    const train5_real_t _t131 = _t11*_t63;
-    const train5_real_t _t132 = -_t127 + _t128;
-    const train5_real_t _t133 = -_t130 + _t131;
-    const train5_real_t _t134 = TRAIN5_LIT(0.2)*_t90;
-    const train5_real_t _t135 = _t10*_t64;
-    const train5_real_t _t136 = _t65*_t82;
-    const train5_real_t _t137 = _t25*_t78;
-    const train5_real_t _t138 = _t135 + _t136 - _t137;
-    const train5_real_t _t139 = TRAIN5_LIT(0.2)*_t95;
-    const train5_real_t _t140 = _t11*_t64;
-    const train5_real_t _t141 = _t65*_t86;
-    const train5_real_t _t142 = _t25*_t80;
-    const train5_real_t _t143 = _t140 + _t141 - _t142;
-    const train5_real_t _t144 = TRAIN5_LIT(0.2)*_t100;
-    const train5_real_t _t145 = _t10*_t66;
-    const train5_real_t _t146 = _t67*_t82;
-    const train5_real_t _t147 = _t68*_t90;
-    const train5_real_t _t148 = _t34*_t78;
-    const train5_real_t _t149 = _t145 + _t146 + _t147 - _t148;
-    const train5_real_t _t150 = TRAIN5_LIT(0.2)*_t106;
-    const train5_real_t _t151 = _t11*_t66;
-    const train5_real_t _t152 = _t67*_t86;
-    const train5_real_t _t153 = _t68*_t95;
-    const train5_real_t _t154 = _t34*_t80;
-    const train5_real_t _t155 = _t151 + _t152 + _t153 - _t154;
-    const train5_real_t _t156 = TRAIN5_LIT(0.2)*_t112;
-    const train5_real_t _t157 = _t10*_t69;
-    const train5_real_t _t158 = _t70*_t82;
-    const train5_real_t _t159 = _t71*_t90;
-    const train5_real_t _t160 = _t100*_t72;
-    const train5_real_t _t161 = _t44*_t78;
-    const train5_real_t _t162 = _t157 + _t158 + _t159 + _t160 - _t161;
-    const train5_real_t _t163 = TRAIN5_LIT(0.2)*_t119;
-    const train5_real_t _t164 = _t11*_t69;
-    const train5_real_t _t165 = _t70*_t86;
-    const train5_real_t _t166 = _t71*_t95;
-    const train5_real_t _t167 = _t106*_t72;
-    const train5_real_t _t168 = _t44*_t80;
-    const train5_real_t _t169 = _t164 + _t165 + _t166 + _t167 - _t168;
-    const train5_real_t _t170 = TRAIN5_LIT(1.6666666666666667)*_t118;
-    const train5_real_t _t171 = TRAIN5_LIT(0.2)*_t170;
-    const train5_real_t _t172 = _t10*_t73;
-    const train5_real_t _t173 = _t74*_t82;
-    const train5_real_t _t174 = _t75*_t90;
-    const train5_real_t _t175 = _t100*_t76;
-    const train5_real_t _t176 = _t112*_t77;
-    const train5_real_t _t177 = _t55*_t78;
-    const train5_real_t _t178 = _t172 + _t173 + _t174 + _t175 + _t176 - _t177;
-    const train5_real_t _t179 = TRAIN5_LIT(1.6666666666666667)*_t125;
-    const train5_real_t _t180 = TRAIN5_LIT(0.2)*_t179;
-    const train5_real_t _t181 = _t11*_t73;
-    const train5_real_t _t182 = _t74*_t86;
-    const train5_real_t _t183 = _t75*_t95;
-    const train5_real_t _t184 = _t106*_t76;
-    const train5_real_t _t185 = _t119*_t77;
-    const train5_real_t _t186 = _t55*_t80;
-    const train5_real_t _t187 = _t181 + _t182 + _t183 + _t184 + _t185 - _t186;
-    const train5_real_t _t188 = -TRAIN5_LIT(1.6666666666666667)*_t132;
-    const train5_real_t _t189 = _t188*_t30;
-    const train5_real_t _t190 = -TRAIN5_LIT(1.6666666666666667)*_t133;
-    const train5_real_t _t191 = _t190*_t30;
-    const train5_real_t _t192 = _t188*_t37;
-    const train5_real_t _t193 = _t190*_t37;
-    const train5_real_t _t194 = _t188*_t47;
-    const train5_real_t _t195 = _t190*_t47;
-    const train5_real_t _t196 = _t188*_t58;
-    const train5_real_t _t197 = _t190*_t58;
-    const train5_real_t _t198 = TRAIN5_LIT(0.2)*_t188;
-    const train5_real_t _t199 = TRAIN5_LIT(0.2)*_t190;
-    const train5_real_t _t200 = _t135 - _t137 - _t189;
-    const train5_real_t _t201 = -TRAIN5_LIT(1.6666666666666667)*_t200;
-    const train5_real_t _t202 = TRAIN5_LIT(0.2)*_t201;
-    const train5_real_t _t203 = _t188*_t65;
-    const train5_real_t _t204 = _t203 + _t84;
-    const train5_real_t _t205 = _t140 - _t142 - _t191;
-    const train5_real_t _t206 = -TRAIN5_LIT(1.6666666666666667)*_t205;
-    const train5_real_t _t207 = TRAIN5_LIT(0.2)*_t206;
-    const train5_real_t _t208 = _t190*_t65;
-    const train5_real_t _t209 = _t208 + _t88;
-    const train5_real_t _t210 = _t136 + _t189;
-    const train5_real_t _t211 = -TRAIN5_LIT(1.6666666666666667)*_t210;
-    const train5_real_t _t212 = TRAIN5_LIT(0.2)*_t211;
-    const train5_real_t _t213 = _t141 + _t191;
-    const train5_real_t _t214 = -TRAIN5_LIT(1.6666666666666667)*_t213;
-    const train5_real_t _t215 = TRAIN5_LIT(0.2)*_t214;
-    const train5_real_t _t216 = TRAIN5_LIT(1.6666666666666667)*_t138;
-    const train5_real_t _t217 = TRAIN5_LIT(0.2)*_t216;
-    const train5_real_t _t218 = TRAIN5_LIT(1.6666666666666667)*_t143;
-    const train5_real_t _t219 = TRAIN5_LIT(0.2)*_t218;
-    const train5_real_t _t220 = _t145 - _t148 - _t192 - _t201*_t40;
-    const train5_real_t _t221 = -TRAIN5_LIT(1.6666666666666667)*_t220;
-    const train5_real_t _t222 = TRAIN5_LIT(0.2)*_t221;
-    const train5_real_t _t223 = _t188*_t67;
-    const train5_real_t _t224 = _t201*_t68 + _t223 + _t93;
-    const train5_real_t _t225 = _t151 - _t154 - _t193 - _t206*_t40;
-    const train5_real_t _t226 = -TRAIN5_LIT(1.6666666666666667)*_t225;
-    const train5_real_t _t227 = TRAIN5_LIT(0.2)*_t226;
-    const train5_real_t _t228 = _t190*_t67;
-    const train5_real_t _t229 = _t206*_t68 + _t228 + _t98;
-    const train5_real_t _t230 = _t146 + _t192 - _t211*_t40;
-    const train5_real_t _t231 = -TRAIN5_LIT(1.6666666666666667)*_t230;
-    const train5_real_t _t232 = TRAIN5_LIT(0.2)*_t231;
-    const train5_real_t _t233 = _t211*_t68 - _t223 + _t92;
-    const train5_real_t _t234 = _t152 + _t193 - _t214*_t40;
-    const train5_real_t _t235 = -TRAIN5_LIT(1.6666666666666667)*_t234;
-    const train5_real_t _t236 = TRAIN5_LIT(0.2)*_t235;
-    const train5_real_t _t237 = _t214*_t68 - _t228 + _t97;
-    const train5_real_t _t238 = _t147 - _t216*_t40;
-    const train5_real_t _t239 = -TRAIN5_LIT(1.6666666666666667)*_t238;
-    const train5_real_t _t240 = TRAIN5_LIT(0.2)*_t239;
-    const train5_real_t _t241 = _t216*_t68 + _t91;
-    const train5_real_t _t242 = _t153 - _t218*_t40;
-    const train5_real_t _t243 = -TRAIN5_LIT(1.6666666666666667)*_t242;
-    const train5_real_t _t244 = TRAIN5_LIT(0.2)*_t243;
-    const train5_real_t _t245 = _t218*_t68 + _t96;
-    const train5_real_t _t246 = TRAIN5_LIT(1.6666666666666667)*_t149;
-    const train5_real_t _t247 = TRAIN5_LIT(0.2)*_t246;
-    const train5_real_t _t248 = TRAIN5_LIT(1.6666666666666667)*_t155;
-    const train5_real_t _t249 = TRAIN5_LIT(0.2)*_t248;
-    const train5_real_t _t250 = _t157 - _t161 - _t194 - _t201*_t48 - _t221*_t51;
-    const train5_real_t _t251 = -TRAIN5_LIT(1.6666666666666667)*_t250;
-    const train5_real_t _t252 = TRAIN5_LIT(0.2)*_t251;
-    const train5_real_t _t253 = _t188*_t70;
-    const train5_real_t _t254 = _t104 + _t201*_t71 + _t221*_t72 + _t253;
-    const train5_real_t _t255 = _t164 - _t168 - _t195 - _t206*_t48 - _t226*_t51;
-    const train5_real_t _t256 = -TRAIN5_LIT(1.6666666666666667)*_t255;
-    const train5_real_t _t257 = TRAIN5_LIT(0.2)*_t256;
-    const train5_real_t _t258 = _t190*_t70;
-    const train5_real_t _t259 = _t110 + _t206*_t71 + _t226*_t72 + _t258;
-    const train5_real_t _t260 = _t158 + _t194 - _t211*_t48 - _t231*_t51;
-    const train5_real_t _t261 = -TRAIN5_LIT(1.6666666666666667)*_t260;
-    const train5_real_t _t262 = TRAIN5_LIT(0.2)*_t261;
-    const train5_real_t _t263 = _t103 + _t211*_t71 + _t231*_t72 - _t253;
-    const train5_real_t _t264 = _t165 + _t195 - _t214*_t48 - _t235*_t51;
-    const train5_real_t _t265 = -TRAIN5_LIT(1.6666666666666667)*_t264;
-    const train5_real_t _t266 = TRAIN5_LIT(0.2)*_t265;
-    const train5_real_t _t267 = _t109 + _t214*_t71 + _t235*_t72 - _t258;
-    const train5_real_t _t268 = _t159 - _t216*_t48 - _t239*_t51;
-    const train5_real_t _t269 = -TRAIN5_LIT(1.6666666666666667)*_t268;
-    const train5_real_t _t270 = TRAIN5_LIT(0.2)*_t269;
-    const train5_real_t _t271 = _t102 + _t216*_t71 + _t239*_t72;
-    const train5_real_t _t272 = _t166 - _t218*_t48 - _t243*_t51;
-    const train5_real_t _t273 = -TRAIN5_LIT(1.6666666666666667)*_t272;
-    const train5_real_t _t274 = TRAIN5_LIT(0.2)*_t273;
-    const train5_real_t _t275 = _t108 + _t218*_t71 + _t243*_t72;
-    const train5_real_t _t276 = _t160 - _t246*_t51;
-    const train5_real_t _t277 = -TRAIN5_LIT(1.6666666666666667)*_t276;
-    const train5_real_t _t278 = TRAIN5_LIT(0.2)*_t277;
-    const train5_real_t _t279 = _t101 + _t246*_t72;
-    const train5_real_t _t280 = _t167 - _t248*_t51;
-    const train5_real_t _t281 = -TRAIN5_LIT(1.6666666666666667)*_t280;
-    const train5_real_t _t282 = TRAIN5_LIT(0.2)*_t281;
-    const train5_real_t _t283 = _t107 + _t248*_t72;
-    const train5_real_t _t284 = TRAIN5_LIT(1.6666666666666667)*_t162;
-    const train5_real_t _t285 = TRAIN5_LIT(0.2)*_t284;
-    const train5_real_t _t286 = TRAIN5_LIT(1.6666666666666667)*_t169;
-    const train5_real_t _t287 = TRAIN5_LIT(0.2)*_t286;
-    const train5_real_t _t288 = _t172 - _t177 - _t196 - _t201*_t59 - _t221*_t60 - _t251*_t62;
-    const train5_real_t _t289 = -TRAIN5_LIT(1.6666666666666667)*_t288;
-    const train5_real_t _t290 = TRAIN5_LIT(0.2)*_t289;
-    const train5_real_t _t291 = _t188*_t74;
-    const train5_real_t _t292 = _t117 + _t201*_t75 + _t221*_t76 + _t251*_t77 + _t291;
-    const train5_real_t _t293 = _t181 - _t186 - _t197 - _t206*_t59 - _t226*_t60 - _t256*_t62;
-    const train5_real_t _t294 = -TRAIN5_LIT(1.6666666666666667)*_t293;
-    const train5_real_t _t295 = TRAIN5_LIT(0.2)*_t294;
-    const train5_real_t _t296 = _t190*_t74;
-    const train5_real_t _t297 = _t124 + _t206*_t75 + _t226*_t76 + _t256*_t77 + _t296;
-    const train5_real_t _t298 = _t173 + _t196 - _t211*_t59 - _t231*_t60 - _t261*_t62;
-    const train5_real_t _t299 = -TRAIN5_LIT(1.6666666666666667)*_t298;
-    const train5_real_t _t300 = TRAIN5_LIT(0.2)*_t299;
-    const train5_real_t _t301 = _t116 + _t211*_t75 + _t231*_t76 + _t261*_t77 - _t291;
-    const train5_real_t _t302 = _t182 + _t197 - _t214*_t59 - _t235*_t60 - _t265*_t62;
-    const train5_real_t _t303 = -TRAIN5_LIT(1.6666666666666667)*_t302;
-    const train5_real_t _t304 = TRAIN5_LIT(0.2)*_t303;
-    const train5_real_t _t305 = _t123 + _t214*_t75 + _t235*_t76 + _t265*_t77 - _t296;
-    const train5_real_t _t306 = _t174 - _t216*_t59 - _t239*_t60 - _t269*_t62;
-    const train5_real_t _t307 = -TRAIN5_LIT(1.6666666666666667)*_t306;
-    const train5_real_t _t308 = TRAIN5_LIT(0.2)*_t307;
-    const train5_real_t _t309 = _t115 + _t216*_t75 + _t239*_t76 + _t269*_t77;
-    const train5_real_t _t310 = _t183 - _t218*_t59 - _t243*_t60 - _t273*_t62;
-    const train5_real_t _t311 = -TRAIN5_LIT(1.6666666666666667)*_t310;
-    const train5_real_t _t312 = TRAIN5_LIT(0.2)*_t311;
-    const train5_real_t _t313 = _t122 + _t218*_t75 + _t243*_t76 + _t273*_t77;
-    const train5_real_t _t314 = _t175 - _t246*_t60 - _t277*_t62;
-    const train5_real_t _t315 = -TRAIN5_LIT(1.6666666666666667)*_t314;
-    const train5_real_t _t316 = TRAIN5_LIT(0.2)*_t315;
-    const train5_real_t _t317 = _t114 + _t246*_t76 + _t277*_t77;
-    const train5_real_t _t318 = _t184 - _t248*_t60 - _t281*_t62;
-    const train5_real_t _t319 = -TRAIN5_LIT(1.6666666666666667)*_t318;
-    const train5_real_t _t320 = TRAIN5_LIT(0.2)*_t319;
-    const train5_real_t _t321 = _t121 + _t248*_t76 + _t281*_t77;
-    const train5_real_t _t322 = _t176 - _t284*_t62;
-    const train5_real_t _t323 = -TRAIN5_LIT(1.6666666666666667)*_t322;
-    const train5_real_t _t324 = TRAIN5_LIT(0.2)*_t323;
-    const train5_real_t _t325 = _t113 + _t284*_t77;
-    const train5_real_t _t326 = _t185 - _t286*_t62;
-    const train5_real_t _t327 = -TRAIN5_LIT(1.6666666666666667)*_t326;
-    const train5_real_t _t328 = TRAIN5_LIT(0.2)*_t327;
-    const train5_real_t _t329 = _t120 + _t286*_t77;
-    const train5_real_t _t330 = TRAIN5_LIT(1.6666666666666667)*_t178;
-    const train5_real_t _t331 = TRAIN5_LIT(0.2)*_t330;
-    const train5_real_t _t332 = TRAIN5_LIT(1.6666666666666667)*_t187;
-    const train5_real_t _t333 = TRAIN5_LIT(0.2)*_t332;
-    const train5_real_t _t334 = K_theta_cart_x_tractor*_t17;
-    const train5_real_t _t335 = K_theta_cart_x_tractor_2*_t19;
-    const train5_real_t _t336 = _t334 + _t335;
-    const train5_real_t _t337 = K_theta_cart2_x_tractor*_t23;
-    const train5_real_t _t338 = K_theta_cart2_x_tractor_2*_t25;
-    const train5_real_t _t339 = _t337 + _t338;
-    const train5_real_t _t340 = K_theta_cart3_x_tractor*_t32;
-    const train5_real_t _t341 = K_theta_cart3_x_tractor_2*_t34;
-    const train5_real_t _t342 = _t340 + _t341;
-    const train5_real_t _t343 = K_theta_cart4_x_tractor*_t42;
-    const train5_real_t _t344 = K_theta_cart4_x_tractor_2*_t44;
-    const train5_real_t _t345 = _t343 + _t344;
-    const train5_real_t _t346 = K_theta_cart5_x_tractor*_t53;
-    const train5_real_t _t347 = K_theta_cart5_x_tractor_2*_t55;
-    const train5_real_t _t348 = _t346 + _t347;
-    const train5_real_t _t349 = K_theta_cart_x_tractor*_t19;
-    const train5_real_t _t350 = K_theta_cart2_x_tractor*_t25;
-    const train5_real_t _t351 = K_theta_cart3_x_tractor*_t34;
-    const train5_real_t _t352 = K_theta_cart4_x_tractor*_t44;
-    const train5_real_t _t353 = K_theta_cart5_x_tractor*_t55;
-    const train5_real_t _t354 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t63;
-    const train5_real_t _t355 = K_theta_cart2_x_tractor*_t26 - K_theta_cart2_x_tractor_2*_t64;
-    const train5_real_t _t356 = K_theta_cart3_x_tractor*_t35 - K_theta_cart3_x_tractor_2*_t66;
-    const train5_real_t _t357 = K_theta_cart4_x_tractor*_t45 - K_theta_cart4_x_tractor_2*_t69;
-    const train5_real_t _t358 = K_theta_cart5_x_tractor*_t56 - K_theta_cart5_x_tractor_2*_t73;
-    const train5_real_t _t359 = K_theta_cart2_x_tractor_2*_t23;
-    const train5_real_t _t360 = _t28*_t337 + _t28*_t338 + _t29*_t350 - _t29*_t359;
-    const train5_real_t _t361 = K_theta_cart3_x_tractor_2*_t32;
-    const train5_real_t _t362 = _t28*_t340 + _t28*_t341 + _t29*_t351 - _t29*_t361;
-    const train5_real_t _t363 = K_theta_cart4_x_tractor_2*_t42;
-    const train5_real_t _t364 = _t28*_t343 + _t28*_t344 + _t29*_t352 - _t29*_t363;
-    const train5_real_t _t365 = K_theta_cart5_x_tractor_2*_t53;
-    const train5_real_t _t366 = _t28*_t346 + _t28*_t347 + _t29*_t353 - _t29*_t365;
-    const train5_real_t _t367 = _t340*_t38 + _t341*_t38 + _t351*_t39 - _t361*_t39;
-    const train5_real_t _t368 = _t343*_t38 + _t344*_t38 + _t352*_t39 - _t363*_t39;
-    const train5_real_t _t369 = _t346*_t38 + _t347*_t38 + _t353*_t39 - _t365*_t39;
-    const train5_real_t _t370 = _t343*_t49 + _t344*_t49 + _t352*_t50 - _t363*_t50;
-    const train5_real_t _t371 = _t346*_t49 + _t347*_t49 + _t353*_t50 - _t365*_t50;
-    const train5_real_t _t372 = TRAIN5_LIT(0.85)*_t42;
-    const train5_real_t _t373 = TRAIN5_LIT(0.85)*_t44;
-    const train5_real_t _t374 = _t346*_t372 + _t347*_t372 + _t353*_t373 - _t365*_t373;
-    const train5_real_t _t375 = _t12*_t12;
-    const train5_real_t _t376 = _t90*thetadot_right + _t95*thetadot_left;
-    const train5_real_t _t377 = _t376*_t376;
-    const train5_real_t _t378 = _t100*thetadot_right + _t106*thetadot_left;
-    const train5_real_t _t379 = _t378*_t378;
-    const train5_real_t _t380 = _t112*thetadot_right + _t119*thetadot_left;
-    const train5_real_t _t381 = _t380*_t380;
-    const train5_real_t _t382 = _t352*_t381;
-    const train5_real_t _t383 = _t170*thetadot_right + _t179*thetadot_left;
-    const train5_real_t _t384 = _t383*_t383;
-    const train5_real_t _t385 = _t353*_t384;
-    const train5_real_t _t386 = _t82*thetadot_right + _t86*thetadot_left;
-    const train5_real_t _t387 = _t386*_t386;
-    const train5_real_t _t388 = _t359*_t377;
-    const train5_real_t _t389 = _t361*_t379;
-    const train5_real_t _t390 = _t363*_t381;
-    const train5_real_t _t391 = _t365*_t384;
-    const train5_real_t _t392 = _t337*_t377;
-    const train5_real_t _t393 = _t338*_t377;
-    const train5_real_t _t394 = _t340*_t379;
-    const train5_real_t _t395 = _t341*_t379;
-    const train5_real_t _t396 = _t343*_t381;
-    const train5_real_t _t397 = _t344*_t381;
-    const train5_real_t _t398 = _t346*_t384;
-    const train5_real_t _t399 = _t347*_t384;
-    const train5_real_t _t400 = K_theta_cart3_x_tractor*_t66;
-    const train5_real_t _t401 = K_theta_cart3_x_tractor_2*_t35;
-    const train5_real_t _t402 = K_theta_cart4_x_tractor*_t69;
-    const train5_real_t _t403 = K_theta_cart4_x_tractor_2*_t45;
-    const train5_real_t _t404 = K_theta_cart5_x_tractor*_t73;
-    const train5_real_t _t405 = K_theta_cart5_x_tractor_2*_t56;
-    const train5_real_t _t406 = _t28*_t387;
-    const train5_real_t _t407 = _t29*_t387;
-    const train5_real_t _t408 = _t377*_t38;
-    const train5_real_t _t409 = _t377*_t39;
-    const train5_real_t _t410 = _t379*_t49;
-    const train5_real_t _t411 = _t379*_t50;
-    const train5_real_t _t412 = _t372*_t381;
-    const train5_real_t _t413 = _t373*_t381;
-    const train5_real_t _t414 = _t386*thetadot_right;
-    const train5_real_t _t415 = _t386*thetadot_left;
-    const train5_real_t _t416 = _t126 + _t127 - _t128;
-    const train5_real_t _t417 = _t0*_t416;
-    const train5_real_t _t418 = J_theta_cart_right*_t417;
-    const train5_real_t _t419 = _t129 + _t130 - _t131;
-    const train5_real_t _t420 = _t0*_t419;
-    const train5_real_t _t421 = J_theta_cart_right*_t420;
-    const train5_real_t _t422 = -_t126 - _t132;
-    const train5_real_t _t423 = _t1*_t422;
-    const train5_real_t _t424 = J_theta_cart_left*_t423;
-    const train5_real_t _t425 = -_t129 - _t133;
-    const train5_real_t _t426 = _t1*_t425;
-    const train5_real_t _t427 = J_theta_cart_left*_t426;
-    const train5_real_t _t428 = _t134 - _t138;
-    const train5_real_t _t429 = _t2*_t428;
-    const train5_real_t _t430 = J_theta_cart2_right*_t429;
-    const train5_real_t _t431 = _t139 - _t143;
-    const train5_real_t _t432 = _t2*_t431;
-    const train5_real_t _t433 = J_theta_cart2_right*_t432;
-    const train5_real_t _t434 = -_t134 - _t138;
-    const train5_real_t _t435 = _t3*_t434;
-    const train5_real_t _t436 = J_theta_cart2_left*_t435;
-    const train5_real_t _t437 = -_t139 - _t143;
-    const train5_real_t _t438 = _t3*_t437;
-    const train5_real_t _t439 = J_theta_cart2_left*_t438;
-    const train5_real_t _t440 = _t144 - _t149;
-    const train5_real_t _t441 = _t4*_t440;
-    const train5_real_t _t442 = J_theta_cart3_right*_t441;
-    const train5_real_t _t443 = _t150 - _t155;
-    const train5_real_t _t444 = _t4*_t443;
-    const train5_real_t _t445 = J_theta_cart3_right*_t444;
-    const train5_real_t _t446 = -_t144 - _t149;
-    const train5_real_t _t447 = _t446*_t5;
-    const train5_real_t _t448 = J_theta_cart3_left*_t447;
-    const train5_real_t _t449 = -_t150 - _t155;
-    const train5_real_t _t450 = _t449*_t5;
-    const train5_real_t _t451 = J_theta_cart3_left*_t450;
-    const train5_real_t _t452 = _t156 - _t162;
-    const train5_real_t _t453 = _t452*_t6;
-    const train5_real_t _t454 = J_theta_cart4_right*_t453;
-    const train5_real_t _t455 = _t163 - _t169;
-    const train5_real_t _t456 = _t455*_t6;
-    const train5_real_t _t457 = J_theta_cart4_right*_t456;
-    const train5_real_t _t458 = -_t156 - _t162;
-    const train5_real_t _t459 = _t458*_t7;
-    const train5_real_t _t460 = J_theta_cart4_left*_t459;
-    const train5_real_t _t461 = -_t163 - _t169;
-    const train5_real_t _t462 = _t461*_t7;
-    const train5_real_t _t463 = J_theta_cart4_left*_t462;
-    const train5_real_t _t464 = _t171 - _t178;
-    const train5_real_t _t465 = _t464*_t8;
-    const train5_real_t _t466 = J_theta_cart5_right*_t465;
-    const train5_real_t _t467 = _t180 - _t187;
-    const train5_real_t _t468 = _t467*_t8;
-    const train5_real_t _t469 = J_theta_cart5_right*_t468;
-    const train5_real_t _t470 = -_t171 - _t178;
-    const train5_real_t _t471 = _t470*_t9;
-    const train5_real_t _t472 = J_theta_cart5_left*_t471;
-    const train5_real_t _t473 = -_t180 - _t187;
-    const train5_real_t _t474 = _t473*_t9;
-    const train5_real_t _t475 = J_theta_cart5_left*_t474;
-    const train5_real_t _t476 = -K_theta_cart_x_tractor_2*_t17*_t387
-            + K_theta_tractor_x_tractor*_t375 + _t349*_t387 + _t350*_t377 + _t351*_t379 + _t382
-            + _t385 - _t388 - _t389 - _t390 - _t391;
-    const train5_real_t _t477 = _t13 - _t414;
-    const train5_real_t _t478 = _t14 - _t415;
-    const train5_real_t _t479 = _t188*_t477 + _t190*_t478;
-    const train5_real_t _t480 = _t376*thetadot_right;
-    const train5_real_t _t481 = _t376*thetadot_left;
-    const train5_real_t _t482 = _t13*_t201 + _t14*_t206 + _t211*_t414 + _t214*_t415 + _t216*_t480
-            + _t218*_t481;
-    const train5_real_t _t483 = _t378*thetadot_right;
-    const train5_real_t _t484 = _t378*thetadot_left;
-    const train5_real_t _t485 = _t13*_t221 + _t14*_t226 + _t231*_t414 + _t235*_t415 + _t239*_t480
-            + _t243*_t481 + _t246*_t483 + _t248*_t484;
-    const train5_real_t _t486 = _t380*thetadot_right;
-    const train5_real_t _t487 = _t380*thetadot_left;
-    const train5_real_t _t488 = _t13*_t251 + _t14*_t256 + _t261*_t414 + _t265*_t415 + _t269*_t480
-            + _t273*_t481 + _t277*_t483 + _t281*_t484 + _t284*_t486 + _t286*_t487;
-    const train5_real_t _t489 = _t383*thetadot_right;
-    const train5_real_t _t490 = _t383*thetadot_left;
-    const train5_real_t _t491 = _t13*_t289 + _t14*_t294 + _t299*_t414 + _t303*_t415 + _t307*_t480
-            + _t311*_t481 + _t315*_t483 + _t319*_t484 + _t323*_t486 + _t327*_t487 + _t330*_t489
-            + _t332*_t490;
-    const train5_real_t _t492 = _t336*_t479 + _t339*_t482 + _t342*_t485 + _t345*_t488 + _t348*_t491
-            + _t476;
-    const train5_real_t _t493 = K_theta_cart_x_tractor_2*_t17 - _t349;
-    const train5_real_t _t494 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t17*_t25*_t377
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t17*_t34*_t379
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t17*_t381*_t44
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t17*_t384*_t55
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor*_t17*_t375
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor_2*_t19*_t375 - _t28*_t388 - _t28*_t389
-            - _t28*_t390 - _t28*_t391 - _t29*_t392 - _t29*_t393 - _t29*_t394 - _t29*_t395
-            - _t29*_t396 - _t29*_t397 - _t29*_t398 - _t29*_t399;
-    const train5_real_t _t495 = _t13*_t78 + _t14*_t80;
-    const train5_real_t _t496 = _t493*_t495 + _t494;
-    const train5_real_t _t497 = J_theta_cart*_t479 + _t360*_t482 + _t362*_t485 + _t364*_t488
-            + _t366*_t491 + _t496;
-    const train5_real_t _t498 = K_theta_cart2_x_tractor_2*_t23 - _t350;
-    const train5_real_t _t499 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t19*_t23*_t387
-            + TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor*_t23*_t375
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t17*_t23*_t387
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t19*_t25*_t387
-            + TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor_2*_t25*_t375
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t23*_t34*_t379
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t23*_t381*_t44
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t23*_t384*_t55 - _t350*_t406 - _t38*_t389
-            - _t38*_t390 - _t38*_t391 - _t39*_t394 - _t39*_t395 - _t39*_t396 - _t39*_t397
-            - _t39*_t398 - _t39*_t399;
-    const train5_real_t _t500 = _t495*_t498 + _t499;
-    const train5_real_t _t501 = J_theta_cart2*_t482 + _t360*_t479 + _t367*_t485 + _t368*_t488
-            + _t369*_t491 + _t500;
-    const train5_real_t _t502 = K_theta_cart3_x_tractor_2*_t32 - _t351;
-    const train5_real_t _t503 = _t340*_t407 + _t340*_t409 + _t341*_t407 + _t341*_t409 - _t351*_t406
-            - _t351*_t408 + _t361*_t406 + _t361*_t408 + _t375*_t400 + _t375*_t401 + _t382*_t49
-            + _t385*_t49 - _t390*_t49 - _t391*_t49 - _t396*_t50 - _t397*_t50 - _t398*_t50
-            - _t399*_t50;
-    const train5_real_t _t504 = _t495*_t502 + _t503;
-    const train5_real_t _t505 = J_theta_cart3*_t485 + _t362*_t479 + _t367*_t482 + _t370*_t488
-            + _t371*_t491 + _t504;
-    const train5_real_t _t506 = K_theta_cart4_x_tractor_2*_t42 - _t352;
-    const train5_real_t _t507 = _t343*_t407 + _t343*_t409 + _t343*_t411 + _t344*_t407 + _t344*_t409
-            + _t344*_t411 - _t352*_t406 - _t352*_t408 - _t352*_t410 + _t363*_t406 + _t363*_t408
-            + _t363*_t410 + _t372*_t385 - _t372*_t391 - _t373*_t398 - _t373*_t399 + _t375*_t402
-            + _t375*_t403;
-    const train5_real_t _t508 = _t495*_t506 + _t507;
-    const train5_real_t _t509 = J_theta_cart4*_t488 + _t364*_t479 + _t368*_t482 + _t370*_t485
-            + _t374*_t491 + _t508;
-    const train5_real_t _t510 = K_theta_cart5_x_tractor_2*_t53 - _t353;
-    const train5_real_t _t511 = _t346*_t407 + _t346*_t409 + _t346*_t411 + _t346*_t413 + _t347*_t407
-            + _t347*_t409 + _t347*_t411 + _t347*_t413 - _t353*_t406 - _t353*_t408 - _t353*_t410
-            - _t353*_t412 + _t365*_t406 + _t365*_t408 + _t365*_t410 + _t365*_t412 + _t375*_t404
-            + _t375*_t405;
-    const train5_real_t _t512 = _t495*_t510 + _t511;
-    const train5_real_t _t513 = J_theta_cart5*_t491 + _t366*_t479 + _t369*_t482 + _t371*_t485
-            + _t374*_t488 + _t512;
-    const train5_real_t _t514 = -K_theta_cart2_x_tractor*_t377*_t64
-            - K_theta_cart2_x_tractor_2*_t26*_t377 - K_theta_cart_x_tractor*_t387*_t63
-            - K_theta_cart_x_tractor_2*_t20*_t387 - _t379*_t400 - _t379*_t401 - _t381*_t402
-            - _t381*_t403 - _t384*_t404 - _t384*_t405;
-    const train5_real_t _t515 = -K_theta_tractor_x_tractor*_t495 + _t514;
-    const train5_real_t _t516 = _t354*_t479 + _t355*_t482 + _t356*_t485 + _t357*_t488 + _t358*_t491
-            + _t515;
-    const train5_real_t _t517 = J_x_tractor*_t80 + K_theta_tractor_x_tractor_2*_t11 + _t106*_t342
-            + _t119*_t345 + _t179*_t348 + _t336*_t86 + _t339*_t95;
-    const train5_real_t _t518 = J_theta_tractor*_t11 + K_theta_tractor_x_tractor_2*_t80
-            + _t106*_t356 + _t119*_t357 + _t179*_t358 + _t354*_t86 + _t355*_t95;
-    const train5_real_t _t519 = J_theta_cart*_t86 + _t106*_t362 + _t11*_t354 + _t119*_t364
-            + _t179*_t366 + _t336*_t80 + _t360*_t95;
-    const train5_real_t _t520 = J_theta_cart2*_t95 + _t106*_t367 + _t11*_t355 + _t119*_t368
-            + _t179*_t369 + _t339*_t80 + _t360*_t86;
-    const train5_real_t _t521 = J_theta_cart3*_t106 + _t11*_t356 + _t119*_t370 + _t179*_t371
-            + _t342*_t80 + _t362*_t86 + _t367*_t95;
-    const train5_real_t _t522 = J_theta_cart4*_t119 + _t106*_t370 + _t11*_t357 + _t179*_t374
-            + _t345*_t80 + _t364*_t86 + _t368*_t95;
-    const train5_real_t _t523 = J_theta_cart5*_t179 + _t106*_t371 + _t11*_t358 + _t119*_t374
-            + _t348*_t80 + _t366*_t86 + _t369*_t95;
-    const train5_real_t _t524 = _t10*_t518 + _t100*_t521 + _t112*_t522 + _t170*_t523 + _t417*_t421
-            + _t423*_t427 + _t429*_t433 + _t435*_t439 + _t441*_t445 + _t447*_t451 + _t453*_t457
-            + _t459*_t463 + _t465*_t469 + _t471*_t475 + _t517*_t78 + _t519*_t82 + _t520*_t90;
-    const train5_real_t _t525 = J_theta_left + _t106*_t521 + _t11*_t518 + _t119*_t522 + _t179*_t523
-            + _t420*_t421 + _t426*_t427 + _t432*_t433 + _t438*_t439 + _t444*_t445 + _t450*_t451
-            + _t456*_t457 + _t462*_t463 + _t468*_t469 + _t474*_t475 + _t517*_t80 + _t519*_t86
-            + _t520*_t95;
-    const train5_real_t _t526 = _t198 - _t79;
-    const train5_real_t _t527 = _t0*_t526;
-    const train5_real_t _t528 = _t199 - _t81;
-    const train5_real_t _t529 = _t0*_t528;
-    const train5_real_t _t530 = _t477*_t527 + _t478*_t529;
-    const train5_real_t _t531 = -_t198 - _t79;
-    const train5_real_t _t532 = _t1*_t531;
-    const train5_real_t _t533 = -_t199 - _t81;
-    const train5_real_t _t534 = _t1*_t533;
-    const train5_real_t _t535 = _t477*_t532 + _t478*_t534;
-    const train5_real_t _t536 = _t202 - _t204;
-    const train5_real_t _t537 = _t2*_t536;
-    const train5_real_t _t538 = _t207 - _t209;
-    const train5_real_t _t539 = _t2*_t538;
-    const train5_real_t _t540 = _t203 + _t212 - _t83;
-    const train5_real_t _t541 = _t2*_t540;
-    const train5_real_t _t542 = _t208 + _t215 - _t87;
-    const train5_real_t _t543 = _t2*_t542;
-    const train5_real_t _t544 = _t217 + _t85;
-    const train5_real_t _t545 = _t2*_t544;
-    const train5_real_t _t546 = _t219 + _t89;
-    const train5_real_t _t547 = _t2*_t546;
-    const train5_real_t _t548 = _t13*_t537 + _t14*_t539 + _t414*_t541 + _t415*_t543 + _t480*_t545
-            + _t481*_t547;
-    const train5_real_t _t549 = -_t202 - _t204;
-    const train5_real_t _t550 = _t3*_t549;
-    const train5_real_t _t551 = -_t207 - _t209;
-    const train5_real_t _t552 = _t3*_t551;
-    const train5_real_t _t553 = _t203 - _t212 - _t83;
-    const train5_real_t _t554 = _t3*_t553;
-    const train5_real_t _t555 = _t208 - _t215 - _t87;
-    const train5_real_t _t556 = _t3*_t555;
-    const train5_real_t _t557 = -_t217 + _t85;
-    const train5_real_t _t558 = _t3*_t557;
-    const train5_real_t _t559 = -_t219 + _t89;
-    const train5_real_t _t560 = _t3*_t559;
-    const train5_real_t _t561 = _t13*_t550 + _t14*_t552 + _t414*_t554 + _t415*_t556 + _t480*_t558
-            + _t481*_t560;
-    const train5_real_t _t562 = _t222 - _t224;
-    const train5_real_t _t563 = _t4*_t562;
-    const train5_real_t _t564 = _t227 - _t229;
-    const train5_real_t _t565 = _t4*_t564;
-    const train5_real_t _t566 = _t232 - _t233;
-    const train5_real_t _t567 = _t4*_t566;
-    const train5_real_t _t568 = _t236 - _t237;
-    const train5_real_t _t569 = _t4*_t568;
-    const train5_real_t _t570 = _t240 - _t241;
-    const train5_real_t _t571 = _t4*_t570;
-    const train5_real_t _t572 = _t244 - _t245;
-    const train5_real_t _t573 = _t4*_t572;
-    const train5_real_t _t574 = _t247 + _t94;
-    const train5_real_t _t575 = _t4*_t574;
-    const train5_real_t _t576 = _t249 + _t99;
-    const train5_real_t _t577 = _t4*_t576;
-    const train5_real_t _t578 = _t13*_t563 + _t14*_t565 + _t414*_t567 + _t415*_t569 + _t480*_t571
-            + _t481*_t573 + _t483*_t575 + _t484*_t577;
-    const train5_real_t _t579 = -_t222 - _t224;
-    const train5_real_t _t580 = _t5*_t579;
-    const train5_real_t _t581 = -_t227 - _t229;
-    const train5_real_t _t582 = _t5*_t581;
-    const train5_real_t _t583 = -_t232 - _t233;
-    const train5_real_t _t584 = _t5*_t583;
-    const train5_real_t _t585 = -_t236 - _t237;
-    const train5_real_t _t586 = _t5*_t585;
-    const train5_real_t _t587 = -_t240 - _t241;
-    const train5_real_t _t588 = _t5*_t587;
-    const train5_real_t _t589 = -_t244 - _t245;
-    const train5_real_t _t590 = _t5*_t589;
-    const train5_real_t _t591 = -_t247 + _t94;
-    const train5_real_t _t592 = _t5*_t591;
-    const train5_real_t _t593 = -_t249 + _t99;
-    const train5_real_t _t594 = _t5*_t593;
-    const train5_real_t _t595 = _t13*_t580 + _t14*_t582 + _t414*_t584 + _t415*_t586 + _t480*_t588
-            + _t481*_t590 + _t483*_t592 + _t484*_t594;
-    const train5_real_t _t596 = _t252 - _t254;
-    const train5_real_t _t597 = _t596*_t6;
-    const train5_real_t _t598 = _t257 - _t259;
-    const train5_real_t _t599 = _t598*_t6;
-    const train5_real_t _t600 = _t262 - _t263;
-    const train5_real_t _t601 = _t6*_t600;
-    const train5_real_t _t602 = _t266 - _t267;
-    const train5_real_t _t603 = _t6*_t602;
-    const train5_real_t _t604 = _t270 - _t271;
-    const train5_real_t _t605 = _t6*_t604;
-    const train5_real_t _t606 = _t274 - _t275;
-    const train5_real_t _t607 = _t6*_t606;
-    const train5_real_t _t608 = _t278 - _t279;
-    const train5_real_t _t609 = _t6*_t608;
-    const train5_real_t _t610 = _t282 - _t283;
-    const train5_real_t _t611 = _t6*_t610;
-    const train5_real_t _t612 = _t105 + _t285;
-    const train5_real_t _t613 = _t6*_t612;
-    const train5_real_t _t614 = _t111 + _t287;
-    const train5_real_t _t615 = _t6*_t614;
-    const train5_real_t _t616 = _t13*_t597 + _t14*_t599 + _t414*_t601 + _t415*_t603 + _t480*_t605
-            + _t481*_t607 + _t483*_t609 + _t484*_t611 + _t486*_t613 + _t487*_t615;
-    const train5_real_t _t617 = -_t252 - _t254;
-    const train5_real_t _t618 = _t617*_t7;
-    const train5_real_t _t619 = -_t257 - _t259;
-    const train5_real_t _t620 = _t619*_t7;
-    const train5_real_t _t621 = -_t262 - _t263;
-    const train5_real_t _t622 = _t621*_t7;
-    const train5_real_t _t623 = -_t266 - _t267;
-    const train5_real_t _t624 = _t623*_t7;
-    const train5_real_t _t625 = -_t270 - _t271;
-    const train5_real_t _t626 = _t625*_t7;
-    const train5_real_t _t627 = -_t274 - _t275;
-    const train5_real_t _t628 = _t627*_t7;
-    const train5_real_t _t629 = -_t278 - _t279;
-    const train5_real_t _t630 = _t629*_t7;
-    const train5_real_t _t631 = -_t282 - _t283;
-    const train5_real_t _t632 = _t631*_t7;
-    const train5_real_t _t633 = _t105 - _t285;
-    const train5_real_t _t634 = _t633*_t7;
-    const train5_real_t _t635 = _t111 - _t287;
-    const train5_real_t _t636 = _t635*_t7;
-    const train5_real_t _t637 = _t13*_t618 + _t14*_t620 + _t414*_t622 + _t415*_t624 + _t480*_t626
-            + _t481*_t628 + _t483*_t630 + _t484*_t632 + _t486*_t634 + _t487*_t636;
-    const train5_real_t _t638 = _t290 - _t292;
-    const train5_real_t _t639 = _t638*_t8;
-    const train5_real_t _t640 = _t295 - _t297;
-    const train5_real_t _t641 = _t640*_t8;
-    const train5_real_t _t642 = _t300 - _t301;
-    const train5_real_t _t643 = _t642*_t8;
-    const train5_real_t _t644 = _t304 - _t305;
-    const train5_real_t _t645 = _t644*_t8;
-    const train5_real_t _t646 = _t308 - _t309;
-    const train5_real_t _t647 = _t646*_t8;
-    const train5_real_t _t648 = _t312 - _t313;
-    const train5_real_t _t649 = _t648*_t8;
-    const train5_real_t _t650 = _t316 - _t317;
-    const train5_real_t _t651 = _t650*_t8;
-    const train5_real_t _t652 = _t320 - _t321;
-    const train5_real_t _t653 = _t652*_t8;
-    const train5_real_t _t654 = _t324 - _t325;
-    const train5_real_t _t655 = _t654*_t8;
-    const train5_real_t _t656 = _t328 - _t329;
-    const train5_real_t _t657 = _t656*_t8;
-    const train5_real_t _t658 = _t118 + _t331;
-    const train5_real_t _t659 = _t658*_t8;
-    const train5_real_t _t660 = _t125 + _t333;
-    const train5_real_t _t661 = _t660*_t8;
-    const train5_real_t _t662 = _t13*_t639 + _t14*_t641 + _t414*_t643 + _t415*_t645 + _t480*_t647
-            + _t481*_t649 + _t483*_t651 + _t484*_t653 + _t486*_t655 + _t487*_t657 + _t489*_t659
-            + _t490*_t661;
-    const train5_real_t _t663 = -_t290 - _t292;
-    const train5_real_t _t664 = _t663*_t9;
-    const train5_real_t _t665 = -_t295 - _t297;
-    const train5_real_t _t666 = _t665*_t9;
-    const train5_real_t _t667 = -_t300 - _t301;
-    const train5_real_t _t668 = _t667*_t9;
-    const train5_real_t _t669 = -_t304 - _t305;
-    const train5_real_t _t670 = _t669*_t9;
-    const train5_real_t _t671 = -_t308 - _t309;
-    const train5_real_t _t672 = _t671*_t9;
-    const train5_real_t _t673 = -_t312 - _t313;
-    const train5_real_t _t674 = _t673*_t9;
-    const train5_real_t _t675 = -_t316 - _t317;
-    const train5_real_t _t676 = _t675*_t9;
-    const train5_real_t _t677 = -_t320 - _t321;
-    const train5_real_t _t678 = _t677*_t9;
-    const train5_real_t _t679 = -_t324 - _t325;
-    const train5_real_t _t680 = _t679*_t9;
-    const train5_real_t _t681 = -_t328 - _t329;
-    const train5_real_t _t682 = _t681*_t9;
-    const train5_real_t _t683 = _t118 - _t331;
-    const train5_real_t _t684 = _t683*_t9;
-    const train5_real_t _t685 = _t125 - _t333;
-    const train5_real_t _t686 = _t685*_t9;
-    const train5_real_t _t687 = _t13*_t664 + _t14*_t666 + _t414*_t668 + _t415*_t670 + _t480*_t672
-            + _t481*_t674 + _t483*_t676 + _t484*_t678 + _t486*_t680 + _t487*_t682 + _t489*_t684
-            + _t490*_t686;
-    const train5_real_t _t688 = _t10*_t516 + _t100*_t505 + _t112*_t509 + _t170*_t513 + _t418*_t530
-            + _t424*_t535 + _t430*_t548 + _t436*_t561 + _t442*_t578 + _t448*_t595 + _t454*_t616
-            + _t460*_t637 + _t466*_t662 + _t472*_t687 + _t492*_t78 + _t497*_t82 + _t501*_t90;
-    const train5_real_t _t689 = -_t688 + tau_right;
-    const train5_real_t _t690 = _t106*_t505 + _t11*_t516 + _t119*_t509 + _t179*_t513 + _t421*_t530
-            + _t427*_t535 + _t433*_t548 + _t439*_t561 + _t445*_t578 + _t451*_t595 + _t457*_t616
-            + _t463*_t637 + _t469*_t662 + _t475*_t687 + _t492*_t80 + _t497*_t86 + _t501*_t95;
-    const train5_real_t _t691 = -_t690 + tau_left;
-    const train5_real_t _t692 = J_x_tractor*_t78 + K_theta_tractor_x_tractor_2*_t10 + _t100*_t342
-            + _t112*_t345 + _t170*_t348 + _t336*_t82 + _t339*_t90;
-    const train5_real_t _t693 = J_theta_tractor*_t10 + K_theta_tractor_x_tractor_2*_t78
-            + _t100*_t356 + _t112*_t357 + _t170*_t358 + _t354*_t82 + _t355*_t90;
-    const train5_real_t _t694 = J_theta_cart*_t82 + _t10*_t354 + _t100*_t362 + _t112*_t364
-            + _t170*_t366 + _t336*_t78 + _t360*_t90;
-    const train5_real_t _t695 = J_theta_cart2*_t90 + _t10*_t355 + _t100*_t367 + _t112*_t368
-            + _t170*_t369 + _t339*_t78 + _t360*_t82;
-    const train5_real_t _t696 = J_theta_cart3*_t100 + _t10*_t356 + _t112*_t370 + _t170*_t371
-            + _t342*_t78 + _t362*_t82 + _t367*_t90;
-    const train5_real_t _t697 = J_theta_cart4*_t112 + _t10*_t357 + _t100*_t370 + _t170*_t374
-            + _t345*_t78 + _t364*_t82 + _t368*_t90;
-    const train5_real_t _t698 = J_theta_cart5*_t170 + _t10*_t358 + _t100*_t371 + _t112*_t374
-            + _t348*_t78 + _t366*_t82 + _t369*_t90;
-    const train5_real_t _t699 = J_theta_right + _t10*_t693 + _t100*_t696 + _t112*_t697 + _t170*_t698
-            + _t417*_t418 + _t423*_t424 + _t429*_t430 + _t435*_t436 + _t441*_t442 + _t447*_t448
-            + _t453*_t454 + _t459*_t460 + _t465*_t466 + _t471*_t472 + _t692*_t78 + _t694*_t82
-            + _t695*_t90;
-    const train5_real_t _t700 = -_t524*_t524 + _t525*_t699;
-    const train5_real_t _t701 = TRAIN5_LIT(1.0)/_t700;
-    const train5_real_t _t702 = _t701*(-_t524*_t691 + _t525*_t689);
-    const train5_real_t _t703 = _t701*(-_t524*_t689 + _t691*_t699);
-    const train5_real_t _t704 = _t702*_t78 + _t703*_t80;
-    const train5_real_t _t705 = _t10*_t702 + _t11*_t703;
-    const train5_real_t _t706 = _t479 + _t702*_t82 + _t703*_t86;
-    const train5_real_t _t707 = _t482 + _t702*_t90 + _t703*_t95;
-    const train5_real_t _t708 = _t100*_t702 + _t106*_t703 + _t485;
-    const train5_real_t _t709 = _t112*_t702 + _t119*_t703 + _t488;
-    const train5_real_t _t710 = _t170*_t702 + _t179*_t703 + _t491;
-    const train5_real_t _t711 = -J_x_tractor*_t704 - K_theta_tractor_x_tractor_2*_t705 - _t336*_t706
-            - _t339*_t707 - _t342*_t708 - _t345*_t709 - _t348*_t710 - _t476;
-    const train5_real_t _t712 = _t465*_t702 + _t468*_t703 + _t662;
-    const train5_real_t _t713 = -J_theta_cart5_right*_t712;
-    const train5_real_t _t714 = _t713*_t8;
-    const train5_real_t _t715 = _t471*_t702 + _t474*_t703 + _t687;
-    const train5_real_t _t716 = -J_theta_cart5_left*_t715;
-    const train5_real_t _t717 = _t716*_t9;
-    const train5_real_t _t718 = -J_theta_cart5*_t710 - _t348*_t704 - _t358*_t705 - _t366*_t706
-            - _t369*_t707 - _t371*_t708 - _t374*_t709 - _t512;
-    const train5_real_t _t719 = TRAIN5_LIT(0.2)*_t714 - TRAIN5_LIT(0.2)*_t717 + _t718;
-    const train5_real_t _t720 = -TRAIN5_LIT(1.6666666666666667)*_t719;
-    const train5_real_t _t721 = _t453*_t702 + _t456*_t703 + _t616;
-    const train5_real_t _t722 = -J_theta_cart4_right*_t721;
-    const train5_real_t _t723 = _t6*_t722;
-    const train5_real_t _t724 = _t459*_t702 + _t462*_t703 + _t637;
-    const train5_real_t _t725 = -J_theta_cart4_left*_t724;
-    const train5_real_t _t726 = _t7*_t725;
-    const train5_real_t _t727 = -J_theta_cart4*_t709 - _t345*_t704 - _t357*_t705 - _t364*_t706
-            - _t368*_t707 - _t370*_t708 - _t374*_t710 - _t508;
-    const train5_real_t _t728 = -_t62*_t720 - _t714*_t77 - _t717*_t77 + TRAIN5_LIT(0.2)*_t723
-            - TRAIN5_LIT(0.2)*_t726 + _t727;
-    const train5_real_t _t729 = -TRAIN5_LIT(1.6666666666666667)*_t728;
-    const train5_real_t _t730 = _t441*_t702 + _t444*_t703 + _t578;
-    const train5_real_t _t731 = -J_theta_cart3_right*_t730;
-    const train5_real_t _t732 = _t4*_t731;
-    const train5_real_t _t733 = _t447*_t702 + _t450*_t703 + _t595;
-    const train5_real_t _t734 = -J_theta_cart3_left*_t733;
-    const train5_real_t _t735 = _t5*_t734;
-    const train5_real_t _t736 = -J_theta_cart3*_t708 - _t342*_t704 - _t356*_t705 - _t362*_t706
-            - _t367*_t707 - _t370*_t709 - _t371*_t710 - _t504;
-    const train5_real_t _t737 = -_t51*_t729 - _t60*_t720 - _t714*_t76 - _t717*_t76 - _t72*_t723
-            - _t72*_t726 + TRAIN5_LIT(0.2)*_t732 - TRAIN5_LIT(0.2)*_t735 + _t736;
-    const train5_real_t _t738 = -TRAIN5_LIT(1.6666666666666667)*_t737;
-    const train5_real_t _t739 = _t429*_t702 + _t432*_t703 + _t548;
-    const train5_real_t _t740 = -J_theta_cart2_right*_t739;
-    const train5_real_t _t741 = _t2*_t740;
-    const train5_real_t _t742 = _t435*_t702 + _t438*_t703 + _t561;
-    const train5_real_t _t743 = -J_theta_cart2_left*_t742;
-    const train5_real_t _t744 = _t3*_t743;
-    const train5_real_t _t745 = -J_theta_cart2*_t707 - _t339*_t704 - _t355*_t705 - _t360*_t706
-            - _t367*_t708 - _t368*_t709 - _t369*_t710 - _t500;
-    const train5_real_t _t746 = -_t40*_t738 - _t48*_t729 - _t59*_t720 - _t68*_t732 - _t68*_t735
-            - _t71*_t723 - _t71*_t726 - _t714*_t75 - _t717*_t75 + TRAIN5_LIT(0.2)*_t741
-            - TRAIN5_LIT(0.2)*_t744 + _t745;
-    const train5_real_t _t747 = -TRAIN5_LIT(1.6666666666666667)*_t746;
-    const train5_real_t _t748 = _t417*_t702 + _t420*_t703 + _t530;
-    const train5_real_t _t749 = -J_theta_cart_right*_t748;
-    const train5_real_t _t750 = _t0*_t749;
-    const train5_real_t _t751 = _t423*_t702 + _t426*_t703 + _t535;
-    const train5_real_t _t752 = -J_theta_cart_left*_t751;
-    const train5_real_t _t753 = _t1*_t752;
-    const train5_real_t _t754 = -J_theta_cart*_t706 - _t336*_t704 - _t354*_t705 - _t360*_t707
-            - _t362*_t708 - _t364*_t709 - _t366*_t710 - _t496;
-    const train5_real_t _t755 = -_t30*_t747 - _t37*_t738 - _t47*_t729 - _t58*_t720 - _t65*_t741
-            - _t65*_t744 - _t67*_t732 - _t67*_t735 - _t70*_t723 - _t70*_t726 - _t714*_t74
-            - _t717*_t74 + TRAIN5_LIT(0.2)*_t750 - TRAIN5_LIT(0.2)*_t753 + _t754;
-    const train5_real_t _t756 = -TRAIN5_LIT(1.6666666666666667)*_t755;
-    const train5_real_t _t757 = _t17*_t756 + _t19*_t750 + _t19*_t753 + _t23*_t747 + _t25*_t741
-            + _t25*_t744 + _t32*_t738 + _t34*_t732 + _t34*_t735 + _t42*_t729 + _t44*_t723
-            + _t44*_t726 + _t53*_t720 + _t55*_t714 + _t55*_t717 + _t711;
-    const train5_real_t _t758 = TRAIN5_LIT(0.5)*_t757;
-    const train5_real_t _t759 = -J_theta_tractor*_t705 - K_theta_tractor_x_tractor_2*_t704
-            - _t354*_t706 - _t355*_t707 - _t356*_t708 - _t357*_t709 - _t358*_t710 - _t515;
-    const train5_real_t _t760 = TRAIN5_LIT(0.3)*_t19*_t756 + TRAIN5_LIT(0.3)*_t25*_t747
-            + TRAIN5_LIT(0.3)*_t34*_t738 + TRAIN5_LIT(0.3)*_t44*_t729 + TRAIN5_LIT(0.3)*_t55*_t720
-            - _t63*_t750 - _t63*_t753 - _t64*_t741 - _t64*_t744 - _t66*_t732 - _t66*_t735
-            - _t69*_t723 - _t69*_t726 - _t714*_t73 - _t717*_t73 + _t759;
-    const train5_real_t _t761 = TRAIN5_LIT(2.4154589371980677)*_t760;
-    const train5_real_t _t762 = TRAIN5_LIT(1.6666666666666667)*_t18;
-    const train5_real_t _t763 = TRAIN5_LIT(0.2)*_t762;
-    const train5_real_t _t764 = TRAIN5_LIT(1.6666666666666667)*_t21;
-    const train5_real_t _t765 = TRAIN5_LIT(0.2)*_t764;
-    const train5_real_t _t766 = -_t24 - _t30*_t762;
-    const train5_real_t _t767 = -TRAIN5_LIT(1.6666666666666667)*_t766;
-    const train5_real_t _t768 = TRAIN5_LIT(0.2)*_t767;
-    const train5_real_t _t769 = _t65*_t762;
-    const train5_real_t _t770 = -_t27 - _t30*_t764;
-    const train5_real_t _t771 = -TRAIN5_LIT(1.6666666666666667)*_t770;
-    const train5_real_t _t772 = TRAIN5_LIT(0.2)*_t771;
-    const train5_real_t _t773 = _t64 + _t65*_t764;
-    const train5_real_t _t774 = -_t33 - _t37*_t762 - _t40*_t767;
-    const train5_real_t _t775 = -TRAIN5_LIT(1.6666666666666667)*_t774;
-    const train5_real_t _t776 = TRAIN5_LIT(0.2)*_t775;
-    const train5_real_t _t777 = _t67*_t762;
-    const train5_real_t _t778 = _t68*_t767;
-    const train5_real_t _t779 = -_t36 - _t37*_t764 - _t40*_t771;
-    const train5_real_t _t780 = -TRAIN5_LIT(1.6666666666666667)*_t779;
-    const train5_real_t _t781 = TRAIN5_LIT(0.2)*_t780;
-    const train5_real_t _t782 = _t66 + _t67*_t764 + _t68*_t771;
-    const train5_real_t _t783 = -_t43 - _t47*_t762 - _t48*_t767 - _t51*_t775;
-    const train5_real_t _t784 = -TRAIN5_LIT(1.6666666666666667)*_t783;
-    const train5_real_t _t785 = TRAIN5_LIT(0.2)*_t784;
-    const train5_real_t _t786 = -_t44 + _t70*_t762 + _t71*_t767 + _t72*_t775;
-    const train5_real_t _t787 = -_t46 - _t47*_t764 - _t48*_t771 - _t51*_t780;
-    const train5_real_t _t788 = -TRAIN5_LIT(1.6666666666666667)*_t787;
-    const train5_real_t _t789 = TRAIN5_LIT(0.2)*_t788;
-    const train5_real_t _t790 = _t69 + _t70*_t764 + _t71*_t771 + _t72*_t780;
-    const train5_real_t _t791 = -_t54 - _t58*_t762 - _t59*_t767 - _t60*_t775 - _t62*_t784;
-    const train5_real_t _t792 = -TRAIN5_LIT(1.6666666666666667)*_t791;
-    const train5_real_t _t793 = TRAIN5_LIT(0.2)*_t792;
-    const train5_real_t _t794 = -_t55 + _t74*_t762 + _t75*_t767 + _t76*_t775 + _t77*_t784;
-    const train5_real_t _t795 = -_t57 - _t58*_t764 - _t59*_t771 - _t60*_t780 - _t62*_t788;
-    const train5_real_t _t796 = -TRAIN5_LIT(1.6666666666666667)*_t795;
-    const train5_real_t _t797 = TRAIN5_LIT(0.2)*_t796;
-    const train5_real_t _t798 = _t73 + _t74*_t764 + _t75*_t771 + _t76*_t780 + _t77*_t788;
-    const train5_real_t _t799 = K_theta_tractor_x_tractor_2*_t375 + _t334*_t387 + _t335*_t387
-            + _t392 + _t393 + _t394 + _t395 + _t396 + _t397 + _t398 + _t399;
-    const train5_real_t _t800 = -J_x_tractor*_t495 + K_theta_tractor_x_tractor*_t705 - _t493*_t706
-            - _t498*_t707 - _t502*_t708 - _t506*_t709 - _t510*_t710 - _t799;
-    const train5_real_t _t801 = _t17*_t750 + _t17*_t753 - _t19*_t756 + _t23*_t741 + _t23*_t744
-            - _t25*_t747 + _t32*_t732 + _t32*_t735 - _t34*_t738 + _t42*_t723 + _t42*_t726
-            - _t44*_t729 + _t53*_t714 + _t53*_t717 - _t55*_t720 + _t800;
-    const train5_real_t _t802 = -_t758 + _t761;
-    const train5_real_t _t803 = -_t758 - _t761;
-    const train5_real_t _t804 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t805 = TRAIN5_LIT(0.207)*_t804;
-    const train5_real_t _t806 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t807 = -TRAIN5_LIT(0.207)*_t806;
-    const train5_real_t _t808 = _t19 + _t763;
-    const train5_real_t _t809 = -_t63 + _t765;
-    const train5_real_t _t810 = _t0*_t808;
-    const train5_real_t _t811 = _t0*_t809;
-    const train5_real_t _t812 = _t19 - _t763;
-    const train5_real_t _t813 = -_t63 - _t765;
-    const train5_real_t _t814 = _t1*_t812;
-    const train5_real_t _t815 = _t1*_t813;
-    const train5_real_t _t816 = _t25 + _t768 - _t769;
-    const train5_real_t _t817 = _t772 - _t773;
-    const train5_real_t _t818 = _t2*_t816;
-    const train5_real_t _t819 = _t2*_t817;
-    const train5_real_t _t820 = _t25 - _t768 - _t769;
-    const train5_real_t _t821 = -_t772 - _t773;
-    const train5_real_t _t822 = _t3*_t820;
-    const train5_real_t _t823 = _t3*_t821;
-    const train5_real_t _t824 = _t34 + _t776 - _t777 - _t778;
-    const train5_real_t _t825 = _t781 - _t782;
-    const train5_real_t _t826 = _t4*_t824;
-    const train5_real_t _t827 = _t4*_t825;
-    const train5_real_t _t828 = _t34 - _t776 - _t777 - _t778;
-    const train5_real_t _t829 = -_t781 - _t782;
-    const train5_real_t _t830 = _t5*_t828;
-    const train5_real_t _t831 = _t5*_t829;
-    const train5_real_t _t832 = _t785 - _t786;
-    const train5_real_t _t833 = _t789 - _t790;
-    const train5_real_t _t834 = _t6*_t832;
-    const train5_real_t _t835 = _t6*_t833;
-    const train5_real_t _t836 = -_t785 - _t786;
-    const train5_real_t _t837 = -_t789 - _t790;
-    const train5_real_t _t838 = _t7*_t836;
-    const train5_real_t _t839 = _t7*_t837;
-    const train5_real_t _t840 = _t793 - _t794;
-    const train5_real_t _t841 = _t797 - _t798;
-    const train5_real_t _t842 = _t8*_t840;
-    const train5_real_t _t843 = _t8*_t841;
-    const train5_real_t _t844 = -_t793 - _t794;
-    const train5_real_t _t845 = -_t797 - _t798;
-    const train5_real_t _t846 = _t844*_t9;
-    const train5_real_t _t847 = _t845*_t9;
-    const train5_real_t _t848 = J_x_tractor + _t336*_t762 + _t339*_t767 + _t342*_t775 + _t345*_t784
-            + _t348*_t792;
-    const train5_real_t _t849 = K_theta_tractor_x_tractor_2 + _t336*_t764 + _t339*_t771
-            + _t342*_t780 + _t345*_t788 + _t348*_t796;
-    const train5_real_t _t850 = J_theta_tractor + _t354*_t764 + _t355*_t771 + _t356*_t780
-            + _t357*_t788 + _t358*_t796;
-    const train5_real_t _t851 = J_theta_cart*_t762 + _t336 + _t360*_t767 + _t362*_t775 + _t364*_t784
-            + _t366*_t792;
-    const train5_real_t _t852 = J_theta_cart*_t764 + _t354 + _t360*_t771 + _t362*_t780 + _t364*_t788
-            + _t366*_t796;
-    const train5_real_t _t853 = J_theta_cart2*_t767 + _t339 + _t360*_t762 + _t367*_t775
-            + _t368*_t784 + _t369*_t792;
-    const train5_real_t _t854 = J_theta_cart2*_t771 + _t355 + _t360*_t764 + _t367*_t780
-            + _t368*_t788 + _t369*_t796;
-    const train5_real_t _t855 = J_theta_cart3*_t775 + _t342 + _t362*_t762 + _t367*_t767
-            + _t370*_t784 + _t371*_t792;
-    const train5_real_t _t856 = J_theta_cart3*_t780 + _t356 + _t362*_t764 + _t367*_t771
-            + _t370*_t788 + _t371*_t796;
-    const train5_real_t _t857 = J_theta_cart4*_t784 + _t345 + _t364*_t762 + _t368*_t767
-            + _t370*_t775 + _t374*_t792;
-    const train5_real_t _t858 = J_theta_cart4*_t788 + _t357 + _t364*_t764 + _t368*_t771
-            + _t370*_t780 + _t374*_t796;
-    const train5_real_t _t859 = J_theta_cart5*_t792 + _t348 + _t366*_t762 + _t369*_t767
-            + _t371*_t775 + _t374*_t784;
-    const train5_real_t _t860 = J_theta_cart5*_t796 + _t358 + _t366*_t764 + _t369*_t771
-            + _t371*_t780 + _t374*_t788;
-    const train5_real_t _t861 = J_theta_right*_t804;
-    const train5_real_t _t862 = J_theta_right*_t805;
-    const train5_real_t _t863 = J_theta_left*_t806;
-    const train5_real_t _t864 = J_theta_left*_t807;
-    const train5_real_t _t865 = J_theta_cart_right*_t810;
-    const train5_real_t _t866 = J_theta_cart_right*_t811;
-    const train5_real_t _t867 = J_theta_cart_left*_t814;
-    const train5_real_t _t868 = J_theta_cart_left*_t815;
-    const train5_real_t _t869 = J_theta_cart2_right*_t818;
-    const train5_real_t _t870 = J_theta_cart2_right*_t819;
-    const train5_real_t _t871 = J_theta_cart2_left*_t822;
-    const train5_real_t _t872 = J_theta_cart2_left*_t823;
-    const train5_real_t _t873 = J_theta_cart3_right*_t826;
-    const train5_real_t _t874 = J_theta_cart3_right*_t827;
-    const train5_real_t _t875 = J_theta_cart3_left*_t830;
-    const train5_real_t _t876 = J_theta_cart3_left*_t831;
-    const train5_real_t _t877 = J_theta_cart4_right*_t834;
-    const train5_real_t _t878 = J_theta_cart4_right*_t835;
-    const train5_real_t _t879 = J_theta_cart4_left*_t838;
-    const train5_real_t _t880 = J_theta_cart4_left*_t839;
-    const train5_real_t _t881 = J_theta_cart5_right*_t842;
-    const train5_real_t _t882 = J_theta_cart5_right*_t843;
-    const train5_real_t _t883 = J_theta_cart5_left*_t846;
-    const train5_real_t _t884 = J_theta_cart5_left*_t847;
-    const train5_real_t _t885 = _t762*_t851 + _t767*_t853 + _t775*_t855 + _t784*_t857 + _t792*_t859
-            + _t804*_t861 + _t806*_t863 + _t810*_t865 + _t814*_t867 + _t818*_t869 + _t822*_t871
-            + _t826*_t873 + _t830*_t875 + _t834*_t877 + _t838*_t879 + _t842*_t881 + _t846*_t883
-            + _t848;
-    const train5_real_t _t886 = _t762*_t852 + _t767*_t854 + _t775*_t856 + _t784*_t858 + _t792*_t860
-            + _t804*_t862 + _t806*_t864 + _t810*_t866 + _t814*_t868 + _t818*_t870 + _t822*_t872
-            + _t826*_t874 + _t830*_t876 + _t834*_t878 + _t838*_t880 + _t842*_t882 + _t846*_t884
-            + _t849;
-    const train5_real_t _t887 = _t764*_t852 + _t771*_t854 + _t780*_t856 + _t788*_t858 + _t796*_t860
-            + _t805*_t862 + _t807*_t864 + _t811*_t866 + _t815*_t868 + _t819*_t870 + _t823*_t872
-            + _t827*_t874 + _t831*_t876 + _t835*_t878 + _t839*_t880 + _t843*_t882 + _t847*_t884
-            + _t850;
+    (void)thetadot_left;
+    (void)thetadot_right;
+    train5_real_t _shared[408];
+    train5_staged_quantities(p, q, wheel_rates, _shared);
+    const train5_real_t _ms74 = _shared[2];
+    const train5_real_t _ms79 = _shared[3];
+    const train5_real_t _ms84 = _shared[4];
+    const train5_real_t _ms89 = _shared[5];
+    const train5_real_t _ms94 = _shared[6];
+    const train5_real_t _ms99 = _shared[7];
+    const train5_real_t _ms104 = _shared[8];
+    const train5_real_t _ms109 = _shared[9];
+    const train5_real_t _ms114 = _shared[10];
+    const train5_real_t _ms119 = _shared[11];
+    const train5_real_t _ms224 = _shared[54];
+    const train5_real_t _ms225 = _shared[55];
+    const train5_real_t _ms228 = _shared[58];
+    const train5_real_t _ms229 = _shared[59];
+    const train5_real_t _ms232 = _shared[62];
+    const train5_real_t _ms233 = _shared[63];
+    const train5_real_t _ms236 = _shared[66];
+    const train5_real_t _ms237 = _shared[67];
+    const train5_real_t _ms240 = _shared[70];
+    const train5_real_t _ms241 = _shared[71];
+    const train5_real_t _ms248 = _shared[74];
+    const train5_real_t _ms249 = _shared[75];
+    const train5_real_t _ms252 = _shared[78];
+    const train5_real_t _ms253 = _shared[79];
+    const train5_real_t _ms256 = _shared[82];
+    const train5_real_t _ms257 = _shared[83];
+    const train5_real_t _ms260 = _shared[86];
+    const train5_real_t _ms261 = _shared[87];
+    const train5_real_t _ms264 = _shared[90];
+    const train5_real_t _ms265 = _shared[91];
+    const train5_real_t _ms268 = _shared[94];
+    const train5_real_t _ms269 = _shared[95];
+    const train5_real_t _ms272 = _shared[98];
+    const train5_real_t _ms273 = _shared[99];
+    const train5_real_t _ms276 = _shared[102];
+    const train5_real_t _ms277 = _shared[103];
+    const train5_real_t _ms280 = _shared[106];
+    const train5_real_t _ms281 = _shared[107];
+    const train5_real_t _ms284 = _shared[110];
+    const train5_real_t _ms285 = _shared[111];
+    const train5_real_t _ms287 = _shared[113];
+    const train5_real_t _ms288 = _shared[114];
+    const train5_real_t _ms289 = _shared[115];
+    const train5_real_t _ms290 = _shared[116];
+    const train5_real_t _ms291 = _shared[117];
+    const train5_real_t _ms292 = _shared[118];
+    const train5_real_t _ms305 = _shared[119];
+    const train5_real_t _ms306 = _shared[120];
+    const train5_real_t _ms307 = _shared[121];
+    const train5_real_t _ms308 = _shared[122];
+    const train5_real_t _ms309 = _shared[123];
+    const train5_real_t _ms310 = _shared[124];
+    const train5_real_t _ms311 = _shared[125];
+    const train5_real_t _ms312 = _shared[126];
+    const train5_real_t _ms313 = _shared[127];
+    const train5_real_t _ms314 = _shared[128];
+    const train5_real_t _ms315 = _shared[129];
+    const train5_real_t _ms316 = _shared[130];
+    const train5_real_t _ms317 = _shared[131];
+    const train5_real_t _ms318 = _shared[132];
+    const train5_real_t _ms319 = _shared[133];
+    const train5_real_t _ms320 = _shared[134];
+    const train5_real_t _ms321 = _shared[135];
+    const train5_real_t _ms322 = _shared[136];
+    const train5_real_t _ms323 = _shared[137];
+    const train5_real_t _ms324 = _shared[138];
+    const train5_real_t _ms325 = _shared[139];
+    const train5_real_t _ms326 = _shared[140];
+    const train5_real_t _ms327 = _shared[141];
+    const train5_real_t _ms328 = _shared[142];
+    const train5_real_t _ms329 = _shared[143];
+    const train5_real_t _ms330 = _shared[144];
+    const train5_real_t _ms332 = _shared[145];
+    const train5_real_t _ms333 = _shared[146];
+    const train5_real_t _ms334 = _shared[147];
+    const train5_real_t _ms335 = _shared[148];
+    const train5_real_t _ms336 = _shared[149];
+    const train5_real_t _ms337 = _shared[150];
+    const train5_real_t _ms566 = _shared[379];
+    const train5_real_t _ms567 = _shared[380];
+    const train5_real_t _ms573 = _shared[386];
+    const train5_real_t _ms576 = _shared[389];
+    const train5_real_t _ms579 = _shared[392];
+    const train5_real_t _ms582 = _shared[395];
+    const train5_real_t _ms583 = _shared[396];
+    const train5_real_t _ms584 = _shared[397];
+    const train5_real_t _ms585 = _shared[398];
+    const train5_real_t _ms586 = _shared[399];
+    const train5_real_t _ms587 = _shared[400];
+    const train5_real_t _ms588 = _shared[401];
+    const train5_real_t _ms589 = _shared[402];
+    const train5_real_t _ms590 = _shared[403];
+    const train5_real_t _ms591 = _shared[404];
+    const train5_real_t _ms592 = _shared[405];
+    const train5_real_t _ms636 = _shared[406];
+    const train5_real_t _ms637 = _shared[407];
+    const train5_real_t _t0 = _ms289*_ms289;
+    const train5_real_t _t1 = -theta_tractor;
+    const train5_real_t _t2 = _t1 + theta_cart2;
+    const train5_real_t _t3 = TRAIN5_SIN(_t2);
+    const train5_real_t _t4 = TRAIN5_COS(_t2);
+    const train5_real_t _t5 = _ms290*_ms290;
+    const train5_real_t _t6 = _t1 + theta_cart3;
+    const train5_real_t _t7 = TRAIN5_SIN(_t6);
+    const train5_real_t _t8 = TRAIN5_COS(_t6);
+    const train5_real_t _t9 = _ms291*_ms291;
+    const train5_real_t _t10 = _t1 + theta_cart4;
+    const train5_real_t _t11 = TRAIN5_SIN(_t10);
+    const train5_real_t _t12 = TRAIN5_COS(_t10);
+    const train5_real_t _t13 = _ms292*_ms292;
+    const train5_real_t _t14 = _t1 + theta_cart5;
+    const train5_real_t _t15 = TRAIN5_SIN(_t14);
+    const train5_real_t _t16 = TRAIN5_COS(_t14);
+    const train5_real_t _t17 = _ms288*_ms288;
+    const train5_real_t _t18 = _t1 + theta_cart;
+    const train5_real_t _t19 = TRAIN5_SIN(_t18);
+    const train5_real_t _t20 = TRAIN5_COS(_t18);
+    const train5_real_t _t21 = TRAIN5_LIT(1.0)/radius_right;
+    const train5_real_t _t22 = TRAIN5_LIT(1.0)/radius_left;
+    const train5_real_t _t23 = J_x_tractor + _ms224*_ms305 + _ms228*_ms306 + _ms232*_ms307
+            + _ms236*_ms308 + _ms240*_ms309;
+    const train5_real_t _t24 = J_theta_cart*_ms224 + _ms228*_ms320 + _ms232*_ms321 + _ms236*_ms322
+            + _ms240*_ms323 + _ms305;
+    const train5_real_t _t25 = J_theta_cart2*_ms228 + _ms224*_ms320 + _ms232*_ms324 + _ms236*_ms325
+            + _ms240*_ms326 + _ms306;
+    const train5_real_t _t26 = J_theta_cart3*_ms232 + _ms224*_ms321 + _ms228*_ms324 + _ms236*_ms327
+            + _ms240*_ms328 + _ms307;
+    const train5_real_t _t27 = J_theta_cart4*_ms236 + _ms224*_ms322 + _ms228*_ms325 + _ms232*_ms327
+            + _ms240*_ms329 + _ms308;
+    const train5_real_t _t28 = J_theta_cart5*_ms240 + _ms224*_ms323 + _ms228*_ms326 + _ms232*_ms328
+            + _ms236*_ms329 + _ms309;
+    const train5_real_t _t29 = J_theta_right*_t21;
+    const train5_real_t _t30 = J_theta_left*_t22;
+    const train5_real_t _t31 = J_theta_cart_right*_ms248;
+    const train5_real_t _t32 = J_theta_cart_left*_ms252;
+    const train5_real_t _t33 = J_theta_cart2_right*_ms256;
+    const train5_real_t _t34 = J_theta_cart2_left*_ms260;
+    const train5_real_t _t35 = J_theta_cart3_right*_ms264;
+    const train5_real_t _t36 = J_theta_cart3_left*_ms268;
+    const train5_real_t _t37 = J_theta_cart4_right*_ms272;
+    const train5_real_t _t38 = J_theta_cart4_left*_ms276;
+    const train5_real_t _t39 = J_theta_cart5_right*_ms280;
+    const train5_real_t _t40 = J_theta_cart5_left*_ms284;
+    const train5_real_t _t41 = _ms224*_t24 + _ms228*_t25 + _ms232*_t26 + _ms236*_t27 + _ms240*_t28
+            + _ms248*_t31 + _ms252*_t32 + _ms256*_t33 + _ms260*_t34 + _ms264*_t35 + _ms268*_t36
+            + _ms272*_t37 + _ms276*_t38 + _ms280*_t39 + _ms284*_t40 + _t21*_t29 + _t22*_t30 + _t23;
+    const train5_real_t _t42 = K_theta_tractor_x_tractor_2 + _ms225*_ms305 + _ms229*_ms306
+            + _ms233*_ms307 + _ms237*_ms308 + _ms241*_ms309;
+    const train5_real_t _t43 = J_theta_cart*_ms225 + _ms229*_ms320 + _ms233*_ms321 + _ms237*_ms322
+            + _ms241*_ms323 + _ms315;
+    const train5_real_t _t44 = J_theta_cart2*_ms229 + _ms225*_ms320 + _ms233*_ms324 + _ms237*_ms325
+            + _ms241*_ms326 + _ms316;
+    const train5_real_t _t45 = J_theta_cart3*_ms233 + _ms225*_ms321 + _ms229*_ms324 + _ms237*_ms327
+            + _ms241*_ms328 + _ms317;
+    const train5_real_t _t46 = J_theta_cart4*_ms237 + _ms225*_ms322 + _ms229*_ms325 + _ms233*_ms327
+            + _ms241*_ms329 + _ms318;
+    const train5_real_t _t47 = J_theta_cart5*_ms241 + _ms225*_ms323 + _ms229*_ms326 + _ms233*_ms328
+            + _ms237*_ms329 + _ms319;
+    const train5_real_t _t48 = TRAIN5_LIT(0.207)*_t21;
+    const train5_real_t _t49 = J_theta_right*_t48;
+    const train5_real_t _t50 = -TRAIN5_LIT(0.207)*_t22;
+    const train5_real_t _t51 = J_theta_left*_t50;
+    const train5_real_t _t52 = J_theta_cart_right*_ms249;
+    const train5_real_t _t53 = J_theta_cart_left*_ms253;
+    const train5_real_t _t54 = J_theta_cart2_right*_ms257;
+    const train5_real_t _t55 = J_theta_cart2_left*_ms261;
+    const train5_real_t _t56 = J_theta_cart3_right*_ms265;
+    const train5_real_t _t57 = J_theta_cart3_left*_ms269;
+    const train5_real_t _t58 = J_theta_cart4_right*_ms273;
+    const train5_real_t _t59 = J_theta_cart4_left*_ms277;
+    const train5_real_t _t60 = J_theta_cart5_right*_ms281;
+    const train5_real_t _t61 = J_theta_cart5_left*_ms285;
+    const train5_real_t _t62 = _ms224*_t43 + _ms228*_t44 + _ms232*_t45 + _ms236*_t46 + _ms240*_t47
+            + _ms248*_t52 + _ms252*_t53 + _ms256*_t54 + _ms260*_t55 + _ms264*_t56 + _ms268*_t57
+            + _ms272*_t58 + _ms276*_t59 + _ms280*_t60 + _ms284*_t61 + _t21*_t49 + _t22*_t51 + _t42;
+    const train5_real_t _t63 = J_theta_tractor + _ms225*_ms315 + _ms229*_ms316 + _ms233*_ms317
+            + _ms237*_ms318 + _ms241*_ms319;
+    const train5_real_t _t64 = _ms225*_t43 + _ms229*_t44 + _ms233*_t45 + _ms237*_t46 + _ms241*_t47
+            + _ms249*_t52 + _ms253*_t53 + _ms257*_t54 + _ms261*_t55 + _ms265*_t56 + _ms269*_t57
+            + _ms273*_t58 + _ms277*_t59 + _ms281*_t60 + _ms285*_t61 + _t48*_t49 + _t50*_t51 + _t63;
+    const train5_real_t _t65 = _t41*_t64 - _t62*_t62;
+    const train5_real_t _t66 = TRAIN5_LIT(0.85)*_t16;
+    const train5_real_t _t67 = -_t11*_t66 + TRAIN5_LIT(0.85)*_t12*_t15;
+    const train5_real_t _t68 = TRAIN5_LIT(0.85)*_t15;
+    const train5_real_t _t69 = TRAIN5_LIT(0.85)*_t15*_t8 - _t66*_t7;
+    const train5_real_t _t70 = TRAIN5_LIT(0.85)*_t12;
+    const train5_real_t _t71 = TRAIN5_LIT(0.85)*_t11*_t8 - _t7*_t70;
+    const train5_real_t _t72 = TRAIN5_LIT(0.85)*_t11;
+    const train5_real_t _t73 = TRAIN5_LIT(0.85)*_t15*_t4 - _t3*_t66;
+    const train5_real_t _t74 = TRAIN5_LIT(0.85)*_t11*_t4 - _t3*_t70;
+    const train5_real_t _t75 = TRAIN5_LIT(0.85)*_t8;
+    const train5_real_t _t76 = -_t3*_t75 + TRAIN5_LIT(0.85)*_t4*_t7;
+    const train5_real_t _t77 = TRAIN5_LIT(0.85)*_t7;
+    const train5_real_t _t78 = TRAIN5_LIT(0.85)*_t15*_t20 - _t19*_t66;
+    const train5_real_t _t79 = TRAIN5_LIT(0.85)*_t11*_t20 - _t19*_t70;
+    const train5_real_t _t80 = -_t19*_t75 + TRAIN5_LIT(0.85)*_t20*_t7;
+    const train5_real_t _t81 = TRAIN5_LIT(0.85)*_t4;
+    const train5_real_t _t82 = -_t19*_t81 + TRAIN5_LIT(0.85)*_t20*_t3;
+    const train5_real_t _t83 = -_ms636 + _t21*tau_right + _t22*tau_left;
+    const train5_real_t _t84 = -_ms637 + _t48*tau_right + _t50*tau_left;
+    const train5_real_t _t85 = TRAIN5_LIT(1.0)/_t65;
+    const train5_real_t _t86 = _t85*(-_t62*_t84 + _t64*_t83);
+    const train5_real_t _t87 = _t85*(_t41*_t84 - _t62*_t83);
+    const train5_real_t _t88 = _ms280*_t86 + _ms281*_t87 + _ms591;
+    const train5_real_t _t89 = -J_theta_cart5_right*_t88;
+    const train5_real_t _t90 = _ms114*_t89;
+    const train5_real_t _t91 = _t15*_t90;
+    const train5_real_t _t92 = _ms284*_t86 + _ms285*_t87 + _ms592;
+    const train5_real_t _t93 = -J_theta_cart5_left*_t92;
+    const train5_real_t _t94 = _ms119*_t93;
+    const train5_real_t _t95 = _t15*_t94;
+    const train5_real_t _t96 = _ms272*_t86 + _ms273*_t87 + _ms589;
+    const train5_real_t _t97 = -J_theta_cart4_right*_t96;
+    const train5_real_t _t98 = _ms104*_t97;
+    const train5_real_t _t99 = _t11*_t98;
+    const train5_real_t _t100 = _ms276*_t86 + _ms277*_t87 + _ms590;
+    const train5_real_t _t101 = -J_theta_cart4_left*_t100;
+    const train5_real_t _t102 = _ms109*_t101;
+    const train5_real_t _t103 = _t102*_t11;
+    const train5_real_t _t104 = _ms264*_t86 + _ms265*_t87 + _ms587;
+    const train5_real_t _t105 = -J_theta_cart3_right*_t104;
+    const train5_real_t _t106 = _ms94*_t105;
+    const train5_real_t _t107 = _t106*_t7;
+    const train5_real_t _t108 = _ms268*_t86 + _ms269*_t87 + _ms588;
+    const train5_real_t _t109 = -J_theta_cart3_left*_t108;
+    const train5_real_t _t110 = _ms99*_t109;
+    const train5_real_t _t111 = _t110*_t7;
+    const train5_real_t _t112 = _ms256*_t86 + _ms257*_t87 + _ms585;
+    const train5_real_t _t113 = -J_theta_cart2_right*_t112;
+    const train5_real_t _t114 = _ms84*_t113;
+    const train5_real_t _t115 = _t114*_t3;
+    const train5_real_t _t116 = _ms260*_t86 + _ms261*_t87 + _ms586;
+    const train5_real_t _t117 = -J_theta_cart2_left*_t116;
+    const train5_real_t _t118 = _ms89*_t117;
+    const train5_real_t _t119 = _t118*_t3;
+    const train5_real_t _t120 = _ms248*_t86 + _ms249*_t87 + _ms583;
+    const train5_real_t _t121 = -J_theta_cart_right*_t120;
+    const train5_real_t _t122 = _ms74*_t121;
+    const train5_real_t _t123 = _t122*_t19;
+    const train5_real_t _t124 = _ms252*_t86 + _ms253*_t87 + _ms584;
+    const train5_real_t _t125 = -J_theta_cart_left*_t124;
+    const train5_real_t _t126 = _ms79*_t125;
+    const train5_real_t _t127 = _t126*_t19;
+    const train5_real_t _t128 = _ms224*_t86 + _ms225*_t87 + _ms566;
+    const train5_real_t _t129 = _ms228*_t86 + _ms229*_t87 + _ms573;
+    const train5_real_t _t130 = _ms232*_t86 + _ms233*_t87 + _ms576;
+    const train5_real_t _t131 = _ms236*_t86 + _ms237*_t87 + _ms579;
+    const train5_real_t _t132 = _ms240*_t86 + _ms241*_t87 + _ms582;
+    const train5_real_t _t133 = -J_x_tractor*_t86 - K_theta_tractor_x_tractor_2*_t87 - _ms305*_t128
+            - _ms306*_t129 - _ms307*_t130 - _ms308*_t131 - _ms309*_t132 - _ms330;
+    const train5_real_t _t134 = -J_theta_cart5*_t132 - _ms309*_t86 - _ms314*_ms567 - _ms319*_t87
+            - _ms323*_t128 - _ms326*_t129 - _ms328*_t130 - _ms329*_t131 - _ms337;
+    const train5_real_t _t135 = _t134 + TRAIN5_LIT(0.2)*_t90 - TRAIN5_LIT(0.2)*_t94;
+    const train5_real_t _t136 = -TRAIN5_LIT(1.6666666666666667)*_t135;
+    const train5_real_t _t137 = -J_theta_cart4*_t131 - _ms308*_t86 - _ms313*_ms567 - _ms318*_t87
+            - _ms322*_t128 - _ms325*_t129 - _ms327*_t130 - _ms329*_t132 - _ms336;
+    const train5_real_t _t138 = -TRAIN5_LIT(0.2)*_t102 - _t136*(-_t11*_t68 - _t12*_t66) + _t137
+            - _t67*_t90 - _t67*_t94 + TRAIN5_LIT(0.2)*_t98;
+    const train5_real_t _t139 = -TRAIN5_LIT(1.6666666666666667)*_t138;
+    const train5_real_t _t140 = -J_theta_cart3*_t130 - _ms307*_t86 - _ms312*_ms567 - _ms317*_t87
+            - _ms321*_t128 - _ms324*_t129 - _ms327*_t131 - _ms328*_t132 - _ms335;
+    const train5_real_t _t141 = -_t102*_t71 + TRAIN5_LIT(0.2)*_t106 - TRAIN5_LIT(0.2)*_t110
+            - _t136*(-_t66*_t8 - _t68*_t7) - _t139*(-_t7*_t72 - _t70*_t8) + _t140 - _t69*_t90
+            - _t69*_t94 - _t71*_t98;
+    const train5_real_t _t142 = -TRAIN5_LIT(1.6666666666666667)*_t141;
+    const train5_real_t _t143 = -J_theta_cart2*_t129 - _ms306*_t86 - _ms311*_ms567 - _ms316*_t87
+            - _ms320*_t128 - _ms324*_t130 - _ms325*_t131 - _ms326*_t132 - _ms334;
+    const train5_real_t _t144 = -_t102*_t74 - _t106*_t76 - _t110*_t76 + TRAIN5_LIT(0.2)*_t114
+            - TRAIN5_LIT(0.2)*_t118 - _t136*(-_t3*_t68 - _t4*_t66) - _t139*(-_t3*_t72 - _t4*_t70)
+            - _t142*(-_t3*_t77 - _t4*_t75) + _t143 - _t73*_t90 - _t73*_t94 - _t74*_t98;
+    const train5_real_t _t145 = -TRAIN5_LIT(1.6666666666666667)*_t144;
+    const train5_real_t _t146 = -J_theta_cart*_t128 - _ms305*_t86 - _ms310*_ms567 - _ms315*_t87
+            - _ms320*_t129 - _ms321*_t130 - _ms322*_t131 - _ms323*_t132 - _ms333;
+    const train5_real_t _t147 = -_t102*_t79 - _t106*_t80 - _t110*_t80 - _t114*_t82 - _t118*_t82
+            + TRAIN5_LIT(0.2)*_t122 - TRAIN5_LIT(0.2)*_t126 - _t136*(-_t19*_t68 - _t20*_t66)
+            - _t139*(-_t19*_t72 - _t20*_t70) - _t142*(-_t19*_t77 - _t20*_t75)
+            - _t145*(-TRAIN5_LIT(0.85)*_t19*_t3 - _t20*_t81) + _t146 - _t78*_t90 - _t78*_t94
+            - _t79*_t98;
+    const train5_real_t _t148 = -TRAIN5_LIT(1.6666666666666667)*_t147;
+    const train5_real_t _t149 = _t102*_t12 + _t106*_t8 + _t11*_t139 + _t110*_t8 + _t114*_t4
+            + _t118*_t4 + _t12*_t98 + _t122*_t20 + _t126*_t20 + _t133 + _t136*_t15 + _t142*_t7
+            + _t145*_t3 + _t148*_t19 + _t16*_t90 + _t16*_t94;
+    const train5_real_t _t150 = TRAIN5_LIT(0.5)*_t149;
+    const train5_real_t _t151 = -J_theta_tractor*_t87 + K_theta_tractor_x_tractor*_ms567
+            - K_theta_tractor_x_tractor_2*_t86 - _ms315*_t128 - _ms316*_t129 - _ms317*_t130
+            - _ms318*_t131 - _ms319*_t132 - _ms332;
+    const train5_real_t _t152 = -TRAIN5_LIT(0.3)*_t103 - TRAIN5_LIT(0.3)*_t107
+            - TRAIN5_LIT(0.3)*_t111 - TRAIN5_LIT(0.3)*_t115 - TRAIN5_LIT(0.3)*_t119
+            + TRAIN5_LIT(0.3)*_t12*_t139 - TRAIN5_LIT(0.3)*_t123 - TRAIN5_LIT(0.3)*_t127
+            + TRAIN5_LIT(0.3)*_t136*_t16 + TRAIN5_LIT(0.3)*_t142*_t8 + TRAIN5_LIT(0.3)*_t145*_t4
+            + TRAIN5_LIT(0.3)*_t148*_t20 + _t151 - TRAIN5_LIT(0.3)*_t91 - TRAIN5_LIT(0.3)*_t95
+            - TRAIN5_LIT(0.3)*_t99;
+    const train5_real_t _t153 = TRAIN5_LIT(2.4154589371980677)*_t152;
+    const train5_real_t _t154 = K_theta_cart2_x_tractor*_t0*_t3 + K_theta_cart2_x_tractor_2*_t0*_t4
+            + K_theta_cart3_x_tractor*_t5*_t7 + K_theta_cart3_x_tractor_2*_t5*_t8
+            + K_theta_cart4_x_tractor*_t11*_t9 + K_theta_cart4_x_tractor_2*_t12*_t9
+            + K_theta_cart5_x_tractor*_t13*_t15 + K_theta_cart5_x_tractor_2*_t13*_t16
+            + K_theta_cart_x_tractor*_t17*_t19 + K_theta_cart_x_tractor_2*_t17*_t20
+            + K_theta_tractor_x_tractor_2*_ms287*_ms287;
+    const train5_real_t _t155 = -J_x_tractor*_ms567 + K_theta_tractor_x_tractor*_t87 - _ms310*_t128
+            - _ms311*_t129 - _ms312*_t130 - _ms313*_t131 - _ms314*_t132 - _t154;
+    const train5_real_t _t156 = -_t150 + _t153;
+    const train5_real_t _t157 = -_t150 - _t153;
+    const train5_real_t _t158 = _t103 + _t107 + _t111 + _t115 + _t119 - _t12*_t139 + _t123 + _t127
+            - _t136*_t16 - _t142*_t8 - _t145*_t4 - _t148*_t20 + _t155 + _t91 + _t95 + _t99;
     if (!(radius_cart2_left > TRAIN5_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
@@ -9001,21 +6839,20 @@ train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const trai
     if (!(J_x_tractor > TRAIN5_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    if (!(_t885 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t41 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    if (!(_t885*_t887 - _t886*_t886 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite
-                                                             model */
+    if (!(_t65 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    const train5_real_t r_0 = _t803;
-    const train5_real_t r_1 = _t802;
-    const train5_real_t r_2 = -_t801;
-    const train5_real_t r_3 = -_t756;
-    const train5_real_t r_4 = -_t747;
-    const train5_real_t r_5 = -_t738;
-    const train5_real_t r_6 = -_t729;
-    const train5_real_t r_7 = -_t720;
+    const train5_real_t r_0 = _t157;
+    const train5_real_t r_1 = _t156;
+    const train5_real_t r_2 = -_t158;
+    const train5_real_t r_3 = -_t148;
+    const train5_real_t r_4 = -_t145;
+    const train5_real_t r_5 = -_t142;
+    const train5_real_t r_6 = -_t139;
+    const train5_real_t r_7 = -_t136;
     if (((train5_exp_carry(r_0) | train5_exp_carry(r_1) | train5_exp_carry(r_2)
             | train5_exp_carry(r_3) | train5_exp_carry(r_4) | train5_exp_carry(r_5)
             | train5_exp_carry(r_6) | train5_exp_carry(r_7)) & TRAIN5_EXP_CARRY_TOP) != 0u) {

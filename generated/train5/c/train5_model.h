@@ -354,7 +354,7 @@ void train5_minimal_bias_forces(const train5_params_t *p, const train5_real_t *q
  *         TRAIN5_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAIN5_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 739 add, 1036 mul, 13 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 739 add, 1046 mul, 13 div, 10 sin/cos, 0 sqrt
  */
 train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *wheel_accels);
@@ -392,7 +392,7 @@ train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const 
  * @param[out] A [22x22] row-major (TRAIN5_LINEARIZATION_A_SIZE) -- 22x22 row-major
  * @param[out] B [22x2] row-major (TRAIN5_LINEARIZATION_B_SIZE) -- 22x2 row-major
  *
- * operations after CSE: 3930 add, 4803 mul, 13 div, 12 sin/cos, 0 sqrt
+ * operations after CSE: 4085 add, 5081 mul, 13 div, 22 sin/cos, 0 sqrt
  */
 void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *A, train5_real_t *B);
@@ -475,7 +475,7 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
  *         TRAIN5_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAIN5_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 1147 add, 1532 mul, 13 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 951 add, 1336 mul, 13 div, 20 sin/cos, 0 sqrt
  */
 train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *longitudinal,
