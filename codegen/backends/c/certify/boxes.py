@@ -30,9 +30,11 @@ Interval = tuple[float, float]
 DERIVED: Mapping[str, tuple[str, Sequence[str]]] = {
     "p12": ("lyapunov_p", ("P[1]",)),
     "p22": ("lyapunov_p", ("P[2]",)),
-    # M-hat (minimal form, evaluated once a step where it depends on q): any entry
-    "mhat": ("minimal_mhat", ("M[0]", "M[1]", "M[2]", "M[3]")),
-    "mhat_prev": ("minimal_mhat", ("M[0]", "M[1]", "M[2]", "M[3]")),
+    # M-hat (minimal form, evaluated once a step where it depends on q): each entry its
+    # own output's enclosure (independently of the others: such a box still holds
+    # singular matrices, see docs/FLOAT32.md)
+    **{f"{arg}[{i}]": ("minimal_mhat", (f"M[{i}]",)) for arg in ("mhat", "mhat_prev")
+       for i in range(4)},
 }
 
 
