@@ -13,7 +13,7 @@ from codegen.backend import FunctionIR, function_ir
 from codegen.backends.c.backend import config_for
 from codegen.backends.c.certify.analysis import Analysis
 from codegen.backends.c.certify.bound import Certificate, certify
-from codegen.backends.c.certify.boxes import ENVELOPE, box_of
+from codegen.backends.c.certify.boxes import ENVELOPE, box_of, input_errors
 from codegen.backends.c.certify.divisors import dependencies, derivatives, divisor_enclosures
 from codegen.backends.c.certify.program import ExpressionParser, Program, parse_only, program_of
 from codegen.backends.c.certify.robot import certify_robot, programs, robot_angles, robot_params
@@ -233,8 +233,9 @@ def _drishti_program(name: str) -> tuple[FunctionIR, Program, dict[sp.Symbol, tu
 def test_divisor_enclosure_holds_where_the_box_enclosure_fails() -> None:
     """wheel_contact_forces divides by det(S^T M S) in rotated entries: over two turns of
     theta and ±10 % parameters the whole box's enclosure contains 0; the branch and bound
-    over the determinant's own 8 inputs (mean value in the parameters) excludes it, and the
-    determinant at random points of the box (double) lies inside the proved enclosure."""
+    over the determinant's own 8 inputs (mean value in the parameters) excludes it, the
+    determinant at random points of the box (double) lies inside the proved enclosure, and
+    the certificate is proved with it."""
     _, prog, box = _drishti_program("wheel_contact_forces")
     lo = {prog.inputs[s]: b[0] for s, b in box.items()}
     hi = {prog.inputs[s]: b[1] for s, b in box.items()}
@@ -247,6 +248,9 @@ def test_divisor_enclosure_holds_where_the_box_enclosure_fails() -> None:
     det = node_values(prog, pts, np.float64)[node]
     assert dlo <= det.min() and det.max() <= dhi, (dlo, det.min(), det.max(), dhi)
     assert det.min() < 4 * dlo  # a bound that means something
+    # and the certificate, which proves it when its subdivision alone does not
+    cert = certify(prog, box, input_errors(prog), seconds=600.0, max_boxes=BOXES)
+    assert cert.proved and cert.divisors, cert.reason
 
 
 def test_derivative_enclosures_contain_the_slopes() -> None:

@@ -67,9 +67,10 @@ def affine_bounds(program: Program, lo: Mapping[int, Array], hi: Mapping[int, Ar
                   known: Mapping[int, tuple[float, float]] | None = None
                   ) -> list[tuple[Array, Array] | None]:
     """Per node, an enclosure of its exact value over each box (None: a condition).
-    ``known``: proved enclosures of some nodes over the whole box; where a node's form is
-    wider than that (or unbounded), its form restarts from the intersection (a new affine
-    form with no dependency: sound, and it keeps a divisor's 1/y finite)."""
+    ``known``: proved enclosures of some nodes over the whole box; where a node's form
+    does not exclude 0 (or is unbounded) and the proved one does, its form restarts from
+    the intersection (a new affine form with no dependency: sound, and it keeps a
+    divisor's 1/y finite)."""
     known = known or {}
     inputs = sorted(lo)
     col = {n: k for k, n in enumerate(inputs)}
@@ -176,12 +177,9 @@ def affine_bounds(program: Program, lo: Mapping[int, Array], hi: Mapping[int, Ar
                 flo, fhi = f.bounds()
                 klo = np.maximum(np.where(np.isfinite(flo), flo, -np.inf), known[idx][0])
                 khi = np.minimum(np.where(np.isfinite(fhi), fhi, np.inf), known[idx][1])
-                # a form whose range comes nearer 0 than half the proved one's: 1/y's
-                # Taylor remainder (2/|y|^3) would blow up
-                kmig = min(abs(known[idx][0]), abs(known[idx][1])) * (
-                    known[idx][0] > 0 or known[idx][1] < 0)
-                fmig = np.where((flo > 0) | (fhi < 0), np.minimum(np.abs(flo), np.abs(fhi)), 0.0)
-                wider = (fmig < 0.5 * kmig) | ~np.isfinite(f.r)
+                # a form whose range contains 0 (1/y's Taylor expansion would fail): it
+                # restarts; one that excludes 0 keeps its dependencies
+                wider = ~((flo > 0) | (fhi < 0)) | ~np.isfinite(f.r)
                 h = _from_interval(klo, khi, d)
                 f = Affine(np.where(wider, h.c, f.c), np.where(wider[:, None], h.a, f.a),
                            np.where(wider, h.r, f.r))

@@ -42,9 +42,8 @@ DERIVED: Mapping[str, tuple[str, Sequence[str]]] = {
 class Envelope:
     """The operating envelope the certificates are stated for (SI units)."""
 
-    # parameters: the robot file's value x [1 - u, 1 + u]. At ±20 % (the cross-checks') the
-    # enclosures of the forward dynamics' divisors (mass-matrix determinants) still contain 0
-    # within the subdivision budget: not proved there, though they never vanish.
+    # parameters: the robot file's value x [1 - u, 1 + u]. At ±20 % (the cross-checks')
+    # Drishti's forward dynamics are proved only with the divisors' enclosures (.divisors).
     uncertainty: float = 0.1
     angle: float = 2 * math.pi  # |q| of an angle, rad (two turns either way)
     position: float = 100.0  # |q| of a position, m

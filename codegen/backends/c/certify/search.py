@@ -3,7 +3,8 @@ float32 (IEEE round to nearest, operation by operation in the printed order) aga
 function's own expressions evaluated by mpmath at 113 bits (SymPy's CSE of the spec's
 outputs without the printer's shared reciprocals: the same mathematics, another route).
 
-Random points of the box, then a coordinate search from the worst ones: each coordinate
+Random points of the box, corners, and points on the robust laws' boundary layer
+(:func:`boundary_points`), then a coordinate search from the worst ones: each coordinate
 moved by a shrinking step while the error of the output being maximised grows.
 """
 
@@ -132,8 +133,9 @@ def boundary_points(program: Program, symbols: Sequence[sp.Symbol],
     """Points of the box where a boundary layer's norm is within 5 % of its width
     (||s|| = eps (1 + d), |d| <= 0.05): there the switching term s/max(||s||, eps) turns
     s's rounding into gain/eps times as much torque, and a uniform sample of a box of
-    tens of dimensions almost never lands. Each starts at a random point (the width c at
-    the low tenth of its range when it is an input: the largest amplification) and moves
+    tens of dimensions almost never lands. Each starts at a random point (for half of
+    them the inputs N does not read at an end of their range, and the width c at the low
+    tenth of its range when it is an input: the largest amplification) and moves
     N's inputs, one at a time (coordinate descent on |N - (1 + d) c| over nested grids, in
     double), until N = (1 + d) c within 1 % of c."""
     deps = dependencies(program)
@@ -145,6 +147,13 @@ def boundary_points(program: Program, symbols: Sequence[sp.Symbol],
         if not movable:
             continue
         base = lo + (hi - lo) * rng.random((count, len(symbols)))
+        # the inputs N does not read (gains, parameters, estimates) at an end of their
+        # range for half the points: the largest amplification sits at a corner
+        ends = np.where(rng.random((count, len(symbols))) < 0.5, lo, hi)
+        fixed = np.ones(len(symbols), dtype=bool)
+        fixed[movable] = False
+        corner = (rng.random(count) < 0.5)[:, None] & fixed[None, :]
+        base = np.where(corner, ends, base)
         if c in col:
             k = col[c]
             base[:, k] = lo[k] + 0.1 * (hi[k] - lo[k]) * rng.random(count)
@@ -223,7 +232,7 @@ def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float
     corners = rng.integers(0, 2, size=(random_points // 4, len(symbols)))
     pts = np.concatenate([lo + (hi - lo) * rng.random((random_points, len(symbols))),
                           np.where(corners == 1, hi, lo),
-                          boundary_points(program, symbols, lo, hi, random_points // 2, rng)])
+                          boundary_points(program, symbols, lo, hi, random_points, rng)])
     pts32 = inside(pts)
     err = errors_at(program, exact, pts32)
     evaluated = len(pts32)
