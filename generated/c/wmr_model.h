@@ -349,8 +349,8 @@ void wmr_linearization(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  * operations after CSE: 61 add, 96 mul, 2 div, 2 sin/cos, 0 sqrt
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * NOT proved over its declared box (node 134 (div): divisor may be 0); |float32 - exact|
- * <= longitudinal 0, lateral 0 (largest entry).
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * longitudinal 73, lateral 48 (largest entry).
  */
 wmr_status_t wmr_wheel_contact_forces(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *wheel_rates, const wmr_real_t *tau, wmr_real_t *longitudinal,

@@ -11,10 +11,21 @@ import sympy as sp
 
 from codegen.backend import FunctionIR, function_ir
 from codegen.backends.c.backend import config_for
+from codegen.backends.c.certify.analysis import Analysis
 from codegen.backends.c.certify.bound import Certificate, certify
+from codegen.backends.c.certify.boxes import ENVELOPE, box_of, input_errors
+from codegen.backends.c.certify.divisors import dependencies, derivatives, divisor_enclosures
 from codegen.backends.c.certify.program import ExpressionParser, Program, parse_only, program_of
-from codegen.backends.c.certify.robot import certify_robot
-from codegen.backends.c.certify.search import float32_eval, search
+from codegen.backends.c.certify.robot import certify_robot, programs, robot_angles, robot_params
+from codegen.backends.c.certify.search import (
+    Exact,
+    boundary_layers,
+    boundary_points,
+    errors_at,
+    float32_eval,
+    node_values,
+    search,
+)
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.lowering import function_context
 from codegen.certify import header
@@ -207,3 +218,84 @@ def test_committed_results_are_current_and_hold() -> None:
         row = rows[ir.name]
         assert row["hash"] == body_hash(function_context(ir, config, "")["body"]), ir.name
         assert not row["found_above_bound"], ir.name
+
+
+def _drishti_program(name: str) -> tuple[FunctionIR, Program, dict[sp.Symbol, tuple[float, float]]]:
+    model, robot = load_robot_model(None)
+    target = robot_target(model, robot)
+    angles, params = robot_angles(target), robot_params(target, ENVELOPE)
+    for ir, prog in programs(target):
+        if ir.name == name:
+            return ir, prog, box_of(prog, angles, params, {}, ENVELOPE)
+    raise AssertionError(name)
+
+
+def test_divisor_enclosure_holds_where_the_box_enclosure_fails() -> None:
+    """wheel_contact_forces divides by det(S^T M S) in rotated entries: over two turns of
+    theta and ±10 % parameters the whole box's enclosure contains 0; the branch and bound
+    over the determinant's own 8 inputs (mean value in the parameters) excludes it, the
+    determinant at random points of the box (double) lies inside the proved enclosure, and
+    the certificate is proved with it."""
+    _, prog, box = _drishti_program("wheel_contact_forces")
+    lo = {prog.inputs[s]: b[0] for s, b in box.items()}
+    hi = {prog.inputs[s]: b[1] for s, b in box.items()}
+    known, failed = divisor_enclosures(prog, lo, hi, seconds=120.0)
+    assert not failed and len(known) == 1
+    (node, (dlo, dhi)), = known.items()
+    assert dlo > 0 and len(dependencies(prog)[node]) == 8
+    rng = np.random.default_rng(3)
+    pts = {s: rng.uniform(b[0], b[1], 2000) for s, b in box.items()}
+    det = node_values(prog, pts, np.float64)[node]
+    assert dlo <= det.min() and det.max() <= dhi, (dlo, det.min(), det.max(), dhi)
+    assert det.min() < 4 * dlo  # a bound that means something
+    # and the certificate, which proves it when its subdivision alone does not
+    cert = certify(prog, box, input_errors(prog), seconds=600.0, max_boxes=BOXES)
+    assert cert.proved and cert.divisors, cert.reason
+
+
+def test_derivative_enclosures_contain_the_slopes() -> None:
+    """The forward-mode interval derivatives the mean-value form rests on: over a small box
+    around random points they contain the finite-difference slope of the determinant."""
+    _, prog, box = _drishti_program("wheel_contact_forces")
+    node = next(n.args[1] for n in prog.nodes if n.op == "div"
+                and len(dependencies(prog)[n.args[1]]) == 8)
+    sub = Program(prog.function, prog.nodes[:node + 1],
+                  {s: n for s, n in prog.inputs.items() if n <= node})
+    sub.outputs.append(("d", node))
+    syms = sorted(sub.inputs, key=lambda s: sub.inputs[s])
+    wrt = [sub.inputs[s] for s in syms]
+    rng = np.random.default_rng(4)
+    centre = {s: rng.uniform(box[s][0], box[s][1], 50) for s in syms}
+    half = {s: 1e-3 * (box[s][1] - box[s][0]) for s in syms}
+    analysis = Analysis(sub)
+    analysis.run({sub.inputs[s]: centre[s] - half[s] for s in syms},
+                 {sub.inputs[s]: centre[s] + half[s] for s in syms})
+    glo, ghi = derivatives(sub, analysis.values, wrt)
+    for k, s in enumerate(syms):
+        step = {t: centre[t] + (half[s] if t == s else 0.0) for t in syms}
+        back = {t: centre[t] - (half[s] if t == s else 0.0) for t in syms}
+        slope = (node_values(sub, step, np.float64)[node]
+                 - node_values(sub, back, np.float64)[node]) / (2 * half[s])
+        assert np.all(glo[:, k] - 1e-9 <= slope) and np.all(slope <= ghi[:, k] + 1e-9), s
+
+
+def test_search_reaches_the_boundary_layer() -> None:
+    """The search's boundary points put ||s|| within 1 % of (1 + d) eps (|d| <= 5 %), and
+    there the law's float32 error is above what as many uniform points of the box find."""
+    model, robot = load_robot_model(None)
+    ((ir, prog, box, _),) = certify_robot(robot_target(model, robot), seconds=600.0,
+                                          only=("minimal_tdroc_law",), max_boxes=BOXES)
+    symbols = sorted(prog.inputs, key=lambda s: prog.inputs[s])
+    lo = np.array([box[s][0] for s in symbols])
+    hi = np.array([box[s][1] for s in symbols])
+    rng = np.random.default_rng(5)
+    pts = boundary_points(prog, symbols, lo, hi, 40, rng)
+    assert len(pts) >= 30
+    (n, c), = boundary_layers(prog)
+    v = node_values(prog, {s: pts[:, k] for k, s in enumerate(symbols)}, np.float64)
+    assert np.all(np.abs(v[n] / v[c] - 1) <= 0.07)
+    exact = Exact(ir, symbols)
+    near = errors_at(prog, exact, pts.astype(np.float32)).max()
+    uniform = errors_at(prog, exact, (lo + (hi - lo) * rng.random((40, len(symbols))))
+                        .astype(np.float32)).max()
+    assert near > uniform, (near, uniform)

@@ -34,8 +34,8 @@ extern "C" {
  * operations after CSE: 68 add, 122 mul, 5 div, 4 sin/cos, 0 sqrt
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
- * NOT proved over its declared box (node 235 (div): divisor may be 0); |float32 - exact|
- * <= xdot inf (largest entry).
+ * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
+ * xdot 6.4 (largest entry).
  */
 void trailer_plant_state_derivative(const trailer_plant_params_t *pp, const trailer_real_t *x,
     const trailer_real_t *tau, trailer_real_t *xdot);

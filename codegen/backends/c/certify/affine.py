@@ -63,9 +63,15 @@ def _taylor(x: Affine, f0: Array, f1: Array, f2max: Array) -> Affine:
     return Affine(f0, f1[:, None] * x.a, r)
 
 
-def affine_bounds(program: Program, lo: Mapping[int, Array], hi: Mapping[int, Array]
+def affine_bounds(program: Program, lo: Mapping[int, Array], hi: Mapping[int, Array],
+                  known: Mapping[int, tuple[float, float]] | None = None
                   ) -> list[tuple[Array, Array] | None]:
-    """Per node, an enclosure of its exact value over each box (None: a condition)."""
+    """Per node, an enclosure of its exact value over each box (None: a condition).
+    ``known``: proved enclosures of some nodes over the whole box; where a node's form
+    does not exclude 0 (or is unbounded) and the proved one does, its form restarts from
+    the intersection (a new affine form with no dependency: sound, and it keeps a
+    divisor's 1/y finite)."""
+    known = known or {}
     inputs = sorted(lo)
     col = {n: k for k, n in enumerate(inputs)}
     d = len(inputs)
@@ -167,6 +173,16 @@ def affine_bounds(program: Program, lo: Mapping[int, Array], hi: Mapping[int, Ar
                     g = np.maximum if node.name == "fmax" else np.minimum
                     f = _from_interval(g(al, bl), g(ah, bh), d)
             # and, or, not: conditions with no value
+            if f is not None and idx in known:
+                flo, fhi = f.bounds()
+                klo = np.maximum(np.where(np.isfinite(flo), flo, -np.inf), known[idx][0])
+                khi = np.minimum(np.where(np.isfinite(fhi), fhi, np.inf), known[idx][1])
+                # a form whose range contains 0 (1/y's Taylor expansion would fail): it
+                # restarts; one that excludes 0 keeps its dependencies
+                wider = ~((flo > 0) | (fhi < 0)) | ~np.isfinite(f.r)
+                h = _from_interval(klo, khi, d)
+                f = Affine(np.where(wider, h.c, f.c), np.where(wider[:, None], h.a, f.a),
+                           np.where(wider, h.r, f.r))
             forms.append(f)
             if f is None:
                 out.append(None)

@@ -128,12 +128,17 @@ class Analysis:
     """Evaluates a program over a batch of boxes. ``unsafe[k]`` collects, per box, whether
     any node might be non-finite, and ``why`` the first such node's description."""
 
-    def __init__(self, program: Program, affine: bool = True) -> None:
+    def __init__(self, program: Program, affine: bool = True,
+                 known: Mapping[int, tuple[float, float]] | None = None) -> None:
         self.program = program
         self.affine = affine
+        # proved enclosures of exact values over the whole declared box (per node; see
+        # :mod:`.divisors`): they hold in every sub-box, intersected with the box's own
+        self.known = dict(known or {})
         self._tight: tuple[Array, Array] | None = None
         self._norm_parts: dict[int, tuple[Array, float]] = {}
         self.open_guards: list[str] = []  # statuses of guards the last run did not prove
+        self.values: list[Value | Truth | None] = []
 
     def run(self, lo: Mapping[int, Array], hi: Mapping[int, Array],
             in_err: Mapping[int, Array] | None = None,
@@ -163,15 +168,20 @@ class Analysis:
             return v
 
         self._norm_parts = {}
-        tight = affine_bounds(self.program, lo, hi) if self.affine else []
+        tight = affine_bounds(self.program, lo, hi, self.known) if self.affine else []
         for idx, node in enumerate(self.program.nodes):
             self._tight = tight[idx] if tight else None
+            if idx in self.known:
+                klo, khi = self.known[idx]
+                self._tight = ((np.maximum(self._tight[0], klo), np.minimum(self._tight[1], khi))
+                               if self._tight is not None else (zero + klo, zero + khi))
             values.append(self._node(idx, node, val, truth, lo, hi, in_err, zero, flag))
         out = [val(i) for _, i in self.program.outputs]
         # a guard that may fail is no overflow: the function then returns its status and
         # writes nothing; the certificate holds for the calls that return OK
         self.open_guards = sorted({status for g, status in self.program.guards
                                    if not np.all(val(g).flo > 0)})
+        self.values = values  # every node's, for :mod:`.divisors`' derivatives
         return out, unsafe, why
 
     def _rounded(self, rlo: Array, rhi: Array, prop: Array, xlo: Array, xhi: Array,

@@ -12,16 +12,20 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
 from codegen.backends.c.certify.analysis import Analysis
+from codegen.backends.c.certify.divisors import divisor_enclosures
 from codegen.backends.c.certify.program import Program
 
 Box = Mapping[sp.Symbol, tuple[float, float]]
+# the divisors' branch and bound: at least this much processor time (it stops earlier once
+# the proved bound is within 2x of the smallest value seen)
+DIVISOR_SECONDS = 40.0
 
 
 @dataclass(frozen=True)
@@ -39,6 +43,9 @@ class Certificate:
     # guards that may fail somewhere in the box (the function then returns that status
     # and writes nothing): the bounds hold for the calls that return OK
     open_guards: tuple[str, ...] = ()
+    # divisors proved nonzero over the whole box by subdivision in their own inputs
+    # (:mod:`.divisors`): "node i in [lo, hi]"
+    divisors: tuple[str, ...] = ()
 
 
 def _arrays(program: Program, symbols: list[sp.Symbol], lo: npt.NDArray[np.float64],
@@ -53,8 +60,11 @@ def certify(program: Program, box: Box, in_err: Mapping[sp.Symbol, float] | None
             *, seconds: float = 4.0, max_boxes: int = 4096, batch: int = 8) -> Certificate:
     """The certificate of ``program`` over ``box`` (every input symbol it reads must be in
     it; ``in_err``: inputs' own float32 error bounds). ``seconds``: the subdivision budget
-    in processor time (not wall time: the same result on a loaded machine, more slowly)."""
-    start = time.process_time()
+    in processor time (not wall time: the same result on a loaded machine, more slowly).
+    When the subdivision leaves a divisor that may be 0, the divisors' enclosures
+    (:mod:`.divisors`, a budget of their own) are proved and the subdivision runs again
+    with them."""
+    t0 = time.process_time()
     missing = [str(s) for s in program.inputs if s not in box]
     if missing:
         raise ValueError(f"{program.function}: no box for {', '.join(missing)}")
@@ -63,9 +73,30 @@ def certify(program: Program, box: Box, in_err: Mapping[sp.Symbol, float] | None
     hi = np.array([[float(box[s][1]) for s in symbols]])
     if np.any(lo > hi):
         raise ValueError(f"{program.function}: an empty box")
-    analysis = Analysis(program)
     errs = {program.inputs[s]: float(e) for s, e in (in_err or {}).items()
             if s in program.inputs}
+    cert = _subdivide(program, symbols, lo, hi, errs, {}, seconds, max_boxes, batch)
+    if cert.proved or "divisor may be 0" not in cert.reason:
+        return replace(cert, seconds=time.process_time() - t0)
+    # a divisor the subdivision did not prove nonzero: a branch and bound over its own
+    # inputs, then the subdivision again with the proved enclosures
+    known, _ = divisor_enclosures(
+        program, {program.inputs[s]: lo[0, k] for k, s in enumerate(symbols)},
+        {program.inputs[s]: hi[0, k] for k, s in enumerate(symbols)},
+        seconds=max(2 * seconds, DIVISOR_SECONDS))
+    if not known:
+        return replace(cert, seconds=time.process_time() - t0)
+    cert = _subdivide(program, symbols, lo, hi, errs, known, seconds, max_boxes, batch)
+    return replace(cert, seconds=time.process_time() - t0)
+
+
+def _subdivide(program: Program, symbols: list[sp.Symbol], lo: npt.NDArray[np.float64],
+               hi: npt.NDArray[np.float64], errs: Mapping[int, float],
+               known: Mapping[int, tuple[float, float]], seconds: float, max_boxes: int,
+               batch: int) -> Certificate:
+    """The box subdivision of :func:`certify` (``known``: proved enclosures of nodes)."""
+    start = time.process_time()
+    analysis = Analysis(program, known=known)
 
     def run(lo: npt.NDArray[np.float64], hi: npt.NDArray[np.float64]
             ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.bool_], list[str],
@@ -124,4 +155,5 @@ def certify(program: Program, box: Box, in_err: Mapping[sp.Symbol, float] | None
         tuple(float(e) for e in err.max(axis=0)),
         tuple((float(a), float(b)) for a, b in zip(xlo.min(axis=0), xhi.max(axis=0),
                                                       strict=True)),
-        proved, reason, len(lo), time.process_time() - start, tuple(analysis.open_guards))
+        proved, reason, len(lo), time.process_time() - start, tuple(analysis.open_guards),
+        tuple(f"node {n} in [{a:.4g}, {b:.4g}]" for n, (a, b) in sorted(known.items())))

@@ -30,9 +30,11 @@ Interval = tuple[float, float]
 DERIVED: Mapping[str, tuple[str, Sequence[str]]] = {
     "p12": ("lyapunov_p", ("P[1]",)),
     "p22": ("lyapunov_p", ("P[2]",)),
-    # M-hat (minimal form, evaluated once a step where it depends on q): any entry
-    "mhat": ("minimal_mhat", ("M[0]", "M[1]", "M[2]", "M[3]")),
-    "mhat_prev": ("minimal_mhat", ("M[0]", "M[1]", "M[2]", "M[3]")),
+    # M-hat (minimal form, evaluated once a step where it depends on q): each entry its
+    # own output's enclosure (independently of the others: such a box still holds
+    # singular matrices, see docs/FLOAT32.md)
+    **{f"{arg}[{i}]": ("minimal_mhat", (f"M[{i}]",)) for arg in ("mhat", "mhat_prev")
+       for i in range(4)},
 }
 
 
@@ -40,9 +42,8 @@ DERIVED: Mapping[str, tuple[str, Sequence[str]]] = {
 class Envelope:
     """The operating envelope the certificates are stated for (SI units)."""
 
-    # parameters: the robot file's value x [1 - u, 1 + u]. At ±20 % (the cross-checks') the
-    # enclosures of the forward dynamics' divisors (mass-matrix determinants) still contain 0
-    # within the subdivision budget: not proved there, though they never vanish.
+    # parameters: the robot file's value x [1 - u, 1 + u]. At ±20 % (the cross-checks')
+    # Drishti's forward dynamics are proved only with the divisors' enclosures (.divisors).
     uncertainty: float = 0.1
     angle: float = 2 * math.pi  # |q| of an angle, rad (two turns either way)
     position: float = 100.0  # |q| of a position, m

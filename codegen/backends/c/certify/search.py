@@ -3,7 +3,8 @@ float32 (IEEE round to nearest, operation by operation in the printed order) aga
 function's own expressions evaluated by mpmath at 113 bits (SymPy's CSE of the spec's
 outputs without the printer's shared reciprocals: the same mathematics, another route).
 
-Random points of the box, then a coordinate search from the worst ones: each coordinate
+Random points of the box, corners, and points on the robust laws' boundary layer
+(:func:`boundary_points`), then a coordinate search from the worst ones: each coordinate
 moved by a shrinking step while the error of the output being maximised grows.
 """
 
@@ -19,6 +20,7 @@ import numpy.typing as npt
 import sympy as sp
 
 from codegen.backend import FunctionIR
+from codegen.backends.c.certify.divisors import dependencies
 from codegen.backends.c.certify.program import Program
 
 F32 = npt.NDArray[np.float32]
@@ -28,8 +30,15 @@ EXACT_BITS = 113
 def float32_eval(program: Program, inputs: Mapping[sp.Symbol, F32]) -> list[F32]:
     """The outputs of ``program`` in float32 for arrays of inputs (one entry per point).
     sin and cos: the double result rounded once (within the helpers' stated 2 ulp)."""
-    vals: list[Any] = []  # float32 values, or booleans of comparisons
-    by_node = {program.inputs[s]: np.asarray(v, dtype=np.float32) for s, v in inputs.items()}
+    vals = node_values(program, inputs, np.float32)
+    return [np.asarray(vals[i], dtype=np.float32) for _, i in program.outputs]
+
+
+def node_values(program: Program, inputs: Mapping[sp.Symbol, npt.NDArray[np.generic]],
+                dtype: type[np.floating[Any]] = np.float32) -> list[Any]:
+    """Every node's value (``dtype`` arithmetic; booleans for comparisons)."""
+    vals: list[Any] = []  # values, or booleans of comparisons
+    by_node = {program.inputs[s]: np.asarray(v, dtype=dtype) for s, v in inputs.items()}
     n = len(next(iter(by_node.values())))
     with np.errstate(all="ignore"):
         for idx, node in enumerate(program.nodes):
@@ -38,7 +47,7 @@ def float32_eval(program: Program, inputs: Mapping[sp.Symbol, F32]) -> list[F32]
             if op == "in":
                 r: Any = by_node[idx]
             elif op == "lit":
-                r = np.full(n, node.value, dtype=np.float32)
+                r = np.full(n, node.value, dtype=dtype)
             elif op == "neg":
                 r = -a[0]
             elif op in _ARITH:
@@ -58,7 +67,7 @@ def float32_eval(program: Program, inputs: Mapping[sp.Symbol, F32]) -> list[F32]
             else:
                 raise ValueError(f"cannot evaluate {op}")
             vals.append(r)
-    return [np.asarray(vals[i], dtype=np.float32) for _, i in program.outputs]
+    return vals
 
 
 _ARITH: dict[str, Callable[[npt.NDArray[np.generic], npt.NDArray[np.generic]],
@@ -72,7 +81,7 @@ def _call(name: str, a: Sequence[npt.NDArray[np.generic]]) -> npt.NDArray[np.gen
     base = name.removesuffix("_bounded")
     if base in ("sin", "cos"):
         f = np.sin if base == "sin" else np.cos
-        return f(a[0].astype(np.float64)).astype(np.float32)
+        return f(a[0].astype(np.float64)).astype(a[0].dtype)
     if name == "sqrt":
         return np.sqrt(a[0])
     if name == "fabs":
@@ -106,6 +115,78 @@ class Exact:
             return [mpmath.mpf(f(*vals)) for f in self._outs]
 
 
+def boundary_layers(program: Program) -> list[tuple[int, int]]:
+    """The (2-norm N, width c) of every fmax(N, c) (the robust laws' s/max(||s||, eps))."""
+    out: list[tuple[int, int]] = []
+    for node in program.nodes:
+        if node.op == "call" and node.name == "fmax":
+            a, b = node.args
+            for n, c in ((a, b), (b, a)):
+                if program.nodes[n].op == "call" and program.nodes[n].name == "sqrt":
+                    out.append((n, c))
+    return out
+
+
+def boundary_points(program: Program, symbols: Sequence[sp.Symbol],
+                    lo: npt.NDArray[np.float64], hi: npt.NDArray[np.float64], count: int,
+                    rng: np.random.Generator) -> npt.NDArray[np.float64]:
+    """Points of the box where a boundary layer's norm is within 5 % of its width
+    (||s|| = eps (1 + d), |d| <= 0.05): there the switching term s/max(||s||, eps) turns
+    s's rounding into gain/eps times as much torque, and a uniform sample of a box of
+    tens of dimensions almost never lands. Each starts at a random point (for half of
+    them the inputs N does not read at an end of their range, and the width c at the low
+    tenth of its range when it is an input: the largest amplification) and moves
+    N's inputs, one at a time (coordinate descent on |N - (1 + d) c| over nested grids, in
+    double), until N = (1 + d) c within 1 % of c."""
+    deps = dependencies(program)
+    col = {program.inputs[s]: k for k, s in enumerate(symbols)}
+    found: list[npt.NDArray[np.float64]] = []
+    grid = 64
+    for n, c in boundary_layers(program):
+        movable = [col[i] for i in sorted(deps[n]) if i in col and hi[col[i]] > lo[col[i]]]
+        if not movable:
+            continue
+        base = lo + (hi - lo) * rng.random((count, len(symbols)))
+        # the inputs N does not read (gains, parameters, estimates) at an end of their
+        # range for half the points: the largest amplification sits at a corner
+        ends = np.where(rng.random((count, len(symbols))) < 0.5, lo, hi)
+        fixed = np.ones(len(symbols), dtype=bool)
+        fixed[movable] = False
+        corner = (rng.random(count) < 0.5)[:, None] & fixed[None, :]
+        base = np.where(corner, ends, base)
+        if c in col:
+            k = col[c]
+            base[:, k] = lo[k] + 0.1 * (hi[k] - lo[k]) * rng.random(count)
+        target = 1.0 + 0.1 * (rng.random(count) - 0.5)
+        rows = np.arange(count)
+
+        def gap(p: npt.NDArray[np.float64], n: int = n, c: int = c,
+                target: npt.NDArray[np.float64] = target) -> npt.NDArray[np.float64]:
+            v = node_values(program, {s: p[:, k] for k, s in enumerate(symbols)}, np.float64)
+            reps = len(p) // count
+            return np.asarray(v[n] - np.tile(target, reps) * v[c], dtype=np.float64)
+
+        p = base.copy()
+        for _ in range(3):  # coordinate descent on |N - (1 + d) c|: every input of N
+            for k in rng.permutation(movable):
+                span = hi[k] - lo[k]
+                centre = p[:, k].copy()
+                for width in (1.0, 1.0 / 16, 1.0 / 256):
+                    t = np.linspace(-0.5, 0.5, grid) * span * (1.0 if width == 1.0 else width)
+                    mid = centre if width < 1.0 else np.full(count, lo[k] + 0.5 * span)
+                    vals = np.clip(mid[None, :] + t[:, None], lo[k], hi[k])
+                    trial = np.tile(p, (grid, 1))
+                    trial[:, k] = vals.reshape(-1)
+                    g = np.abs(gap(trial)).reshape(grid, count)
+                    g = np.where(np.isfinite(g), g, np.inf)
+                    centre = vals[g.argmin(axis=0), rows]
+                p[:, k] = centre
+        v = node_values(program, {s: p[:, k] for k, s in enumerate(symbols)}, np.float64)
+        has = np.abs(v[n] - target * v[c]) <= 0.01 * np.abs(v[c])
+        found.append(p[has])
+    return np.concatenate(found) if found else np.empty((0, len(symbols)))
+
+
 @dataclass(frozen=True)
 class Found:
     """The largest error found per output, where, and how many points were tried."""
@@ -134,7 +215,8 @@ def errors_at(program: Program, exact: Exact, pts: npt.NDArray[np.float32]
 def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float, float]],
            *, random_points: int = 200, climbs: int = 4, rounds: int = 3,
            seed: int = 0) -> Found:
-    """Random then coordinate search over ``box`` for each output's largest error."""
+    """Random points, corners and points on the boundary layers (:func:`boundary_points`),
+    then a coordinate search over ``box`` for each output's largest error."""
     rng = np.random.default_rng(seed)
     symbols = sorted(program.inputs, key=lambda s: program.inputs[s])
     exact = Exact(ir, symbols)
@@ -149,7 +231,8 @@ def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float
 
     corners = rng.integers(0, 2, size=(random_points // 4, len(symbols)))
     pts = np.concatenate([lo + (hi - lo) * rng.random((random_points, len(symbols))),
-                          np.where(corners == 1, hi, lo)])
+                          np.where(corners == 1, hi, lo),
+                          boundary_points(program, symbols, lo, hi, random_points, rng)])
     pts32 = inside(pts)
     err = errors_at(program, exact, pts32)
     evaluated = len(pts32)
