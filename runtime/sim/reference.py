@@ -10,7 +10,9 @@ robot can make (docs/PAPER.md item 12); :mod:`runtime.sim.paths` builds the pape
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections import OrderedDict
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -62,10 +64,36 @@ class WheelProfile:
         return out
 
 
+# References already integrated in this process, by everything the integration reads (the
+# robot's generated code by its folder and prefix): the stability analysis, the saturation
+# verdict and the simulations ask for the same circle and lawn mower once per controller,
+# formulation and delay, at seconds each. Each caller gets its own copy of the arrays.
+MEMO_SIZE = 32
+_memo: OrderedDict[tuple[Any, ...], Reference] = OrderedDict()
+
+
 def integrate(code: RobotCode, name: str, profile: WheelProfile, start: Array,
               params: dict[str, float], h: float, duration: float,
               scale: float = math.nan) -> Reference:
-    """Integrate q̇ = S(q) η_d(t) from ``start`` (DOP853, rtol 1e-11) and sample every h."""
+    """Integrate q̇ = S(q) η_d(t) from ``start`` (DOP853, rtol 1e-11) and sample every h
+    (the same arguments in one process: the same reference, integrated once)."""
+    key = (str(code.folder.resolve()), code.prefix, name, profile,
+           np.asarray(start, dtype=np.float64).tobytes(),
+           tuple(sorted((k, float(v)) for k, v in params.items())), h, duration, scale)
+    ref = _memo.get(key)
+    if ref is None:
+        ref = _integrate(code, name, profile, start, params, h, duration, scale)
+        _memo[key] = ref
+        if len(_memo) > MEMO_SIZE:
+            _memo.popitem(last=False)
+    else:
+        _memo.move_to_end(key)
+    return replace(ref, t=ref.t.copy(), q=ref.q.copy(), qdot=ref.qdot.copy(),
+                   qddot=ref.qddot.copy())
+
+
+def _integrate(code: RobotCode, name: str, profile: WheelProfile, start: Array,
+               params: dict[str, float], h: float, duration: float, scale: float) -> Reference:
     n = round(duration / h) + 1
     ts: Array = np.arange(n, dtype=np.float64) * h
 

@@ -48,9 +48,12 @@ reason says whether that limit keeps grip.
 
 from __future__ import annotations
 
+import hashlib
 import inspect
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -172,15 +175,33 @@ def slip_monitor(code: RobotCode, exp: Experiment, nominal: dict[str, float]
         return None
 
 
+# grip_along's results in this process, by what they depend on (the robot's code, its
+# layout at ``nominal``, the experiment and the reference's samples), not by controller:
+# saturation_verdict asks for the same paths once per controller and formulation.
+GRIP_MEMO_SIZE = 16
+_grip_memo: OrderedDict[tuple[Any, ...], tuple[Array, Array]] = OrderedDict()
+
+
 def grip_along(monitor: SlipMonitor, nominal: dict[str, float], exp: Experiment,
                ref: Reference) -> tuple[Array, Array]:
     """(torque each driven wheel's ground force needs, r |F|; its grip μ N r) at each
     sample of ``ref`` (samples × driven wheels, N m) for a robot that tracks it, with the
     payload the schedule has on board (see the module docstring)."""
-    radius = {w.name: w.radius for w in monitor.robot.wheels}
-    r = np.array([radius[w] for w in monitor.driven])
-    fx, fy, n = monitor.along(ref, nominal, exp)
-    return r * np.hypot(fx, fy), exp.plant.friction * n * r
+    digest = hashlib.sha256()
+    for a in (ref.t, ref.q, ref.qdot, ref.qddot):
+        digest.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    key = (str(monitor.code.folder.resolve()), monitor.code.prefix, monitor.robot,
+           tuple(sorted((k, float(v)) for k, v in nominal.items())), exp, digest.digest())
+    hit = _grip_memo.get(key)
+    if hit is None:
+        radius = {w.name: w.radius for w in monitor.robot.wheels}
+        r = np.array([radius[w] for w in monitor.driven])
+        fx, fy, n = monitor.along(ref, nominal, exp)
+        hit = r * np.hypot(fx, fy), exp.plant.friction * n * r
+        _grip_memo[key] = hit
+        if len(_grip_memo) > GRIP_MEMO_SIZE:
+            _grip_memo.popitem(last=False)
+    return hit[0].copy(), hit[1].copy()
 
 
 def saturation_verdict(code: RobotCode, controller: str, formulation: str,
