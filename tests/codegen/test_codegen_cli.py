@@ -49,7 +49,7 @@ def codegen_runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         )
     results: dict[str, Any] = {"tmp": tmp}
     for key, proc in procs.items():
-        out, err = proc.communicate(timeout=300)
+        out, err = proc.communicate(timeout=900)
         results[key] = (proc.returncode, out, err)
     return results
 
