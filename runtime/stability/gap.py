@@ -44,8 +44,7 @@ on the dynamics); every row but the plant's is the same at every grid point (wit
 equal X(h_i, D_j) of A, B (central differences of the generated plant's state derivative at
 the operating point) within :data:`MODEL_TOL` — the mismatch m is stated and 2m added to δ
 (at the grid point and, assumed no larger, inside the cell); the modes the reduction
-removes are neutral at every timing, not only on the grid (wᵀ annihilates R₁ and R₂'s
-plant part on the left, R₁ v = R₂ v = 0 on the right).
+removes are neutral at every timing, not only on the grid (:func:`check_reduction`).
 """
 
 from __future__ import annotations
@@ -174,7 +173,7 @@ def zoh_rows(loop: ClosedLoop, states: list[int], hs: tuple[float, ...],
         raise NoGapBound("the command in flight is only partly a loop state")
     scale = max(1.0, max(float(np.abs(m).max()) for m in full))
     others = [i for i in range(len(states)) if i not in set(plant)]
-    moved = max(float(np.abs(m[others] - full[0][others]).max()) for m in full)
+    moved = max(float(np.abs(m[others] - full[0][others]).max(initial=0.0)) for m in full)
     if moved > ROW_TOL * scale:
         raise NoGapBound(f"rows other than the plant's change with the timing (by {moved:.2g}: "
                          "a sensing window read inside the period?), which the ZOH bound "
@@ -200,20 +199,28 @@ def zoh_rows(loop: ClosedLoop, states: list[int], hs: tuple[float, ...],
     return ZohRows(plant, old, a, b, z.k, mismatch)
 
 
-def check_reduction(z: ZohRows, left: Matrix, fixed: Matrix) -> None:
+def check_reduction(z: ZohRows, left: Matrix, inner: Matrix, fixed: Matrix, vary_h: bool
+                    ) -> None:
     """:class:`NoGapBound` unless the modes the reduction removes are neutral at every
-    timing: the common left invariants w (columns of ``left``, on the loop states) have
-    wᵀ E_p R = 0 for R = R₁, R₂ (so wᵀ J(h, D) = wᵀ everywhere), the common fixed vectors v
-    (``fixed``) have R₁ v = R₂ v = 0."""
-    r1, r2 = z.r1, z.r2
-    scale = max(1.0, float(np.abs(r1).max()), float(np.abs(r2).max()))
+    timing of the range, not only on the grid: J(h, D) − J(h_i, D_j) = E_p ∫ ∂X, and ∂X is
+    e^{As} R with R = R₂ (and R₁ where h varies), so it suffices that the common left
+    invariants w (columns of ``left``) have w_pᵀ A^k R = 0 and the fixed vectors v
+    (``fixed``, found in the coordinates ``inner`` after the first step) have
+    innerᵀ E_p A^k R v = 0 for k < dim A (then for every e^{As}, by Cayley–Hamilton)."""
+    rs = [z.r2, z.r1] if vary_h else [z.r2]
+    an = max(1.0, float(np.linalg.norm(z.a, 2)))
     worst = 0.0
-    if left.size:
-        wp = left[list(z.plant)]
-        worst = max(worst, float(np.abs(wp.T @ r1).max()), float(np.abs(wp.T @ r2).max()))
-    if fixed.size:
-        worst = max(worst, float(np.abs(r1 @ fixed).max()), float(np.abs(r2 @ fixed).max()))
-    if worst > NEUTRAL_TOL * scale:
+    ip = inner[list(z.plant)]
+    for r in rs:
+        m = r.copy()
+        scale = max(1.0, float(np.abs(r).max()))
+        for _ in range(len(z.a)):
+            if left.size:
+                worst = max(worst, float(np.abs(left[list(z.plant)].T @ m).max()) / scale)
+            if fixed.size:
+                worst = max(worst, float(np.abs(ip.T @ m @ fixed).max()) / scale)
+            m = z.a @ m / an
+    if worst > NEUTRAL_TOL:
         raise NoGapBound(f"a mode neutral on the grid is not neutral between its points "
                          f"(by {worst:.2g}), so the reduced family does not cover the range")
 
@@ -276,8 +283,9 @@ def gap_bounds(z: ZohRows, basis: Matrix, p: Matrix, c: Cells) -> list[float]:
     left = root @ basis.T @ ep
     right = basis @ inv
     r1, r2 = z.r1 @ right, z.r2 @ right
+    # a single timing has no cell: the computed J is the map itself there
     allowance = 2.0 * z.mismatch * float(np.linalg.norm(left, 2)) * float(
-        np.linalg.norm(right, 2))
+        np.linalg.norm(right, 2)) if c.half_h or c.half_d else 0.0
     out = []
     for i in range(len(c.h_lo)):
         on_s = sup_norm(z.a, left, r2, c.s_lo[i], c.s_hi[i], c.h_max)

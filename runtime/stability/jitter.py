@@ -136,6 +136,7 @@ class Reduction:
     basis: Matrix
     left: Matrix
     fixed: Matrix
+    inner: Matrix  # the coordinates after the first step, where ``fixed`` is found
 
 
 def reduction(mats: list[Matrix]) -> Reduction:
@@ -148,8 +149,8 @@ def reduction(mats: list[Matrix]) -> Reduction:
     k = len(inner[0])
     fixed = null_space(np.vstack([m - np.eye(k) for m in inner]), rcond=NEUTRAL)
     if fixed.size:
-        return Reduction(basis @ null_space(fixed.T), left, basis @ fixed)
-    return Reduction(basis, left, np.zeros((n, 0)))
+        return Reduction(basis @ null_space(fixed.T), left, basis @ fixed, basis)
+    return Reduction(basis, left, np.zeros((n, 0)), basis)
 
 
 def reduce(mats: list[Matrix]) -> list[Matrix]:
@@ -177,7 +178,8 @@ def family(loop: ClosedLoop, gain: float, timing: Timing) -> Family:
     why = ""
     try:
         zoh = zoh_rows(loop, states, hs, ds, full)
-        check_reduction(zoh, red.left, red.fixed)
+        if len(mats) > 1:  # a single timing has no gaps to cover
+            check_reduction(zoh, red.left, red.inner, red.fixed, len(hs) > 1)
     except NoGapBound as exc:
         zoh, why = None, f"no derived gap bound: {exc}"
     return Family(timing, hs, ds, tuple(mats), radius, red.basis, zoh, why)

@@ -10,7 +10,10 @@ Drishti, TDC in the minimal formulation, sample-instant rates, h = 0.1 s:
   with ‖J_i‖_P < 1 but that margin does not cover the derived gap: "not proved", with the
   reason (an analysis that ignored the gaps would call it proved);
 * with motor-encoder rates the window's start is read inside the varying period, a row the
-  ZOH bound does not cover: no derived bound, so "not proved" with that reason.
+  ZOH bound does not cover: no derived bound, so "not proved" with that reason;
+* a single timing (no jitter) has no gap to cover: proved for a loop with no law state
+  (ROC in the minimal formulation, a plant-only loop) and for one whose reduction removes
+  a neutral mode (the PI's), which a gap check run without a gap refused.
 """
 
 from __future__ import annotations
@@ -30,10 +33,10 @@ CODE = load_robot_code("")
 
 
 @cache
-def loop(velocity: str = "sample-instant") -> ClosedLoop:
+def loop(velocity: str = "sample-instant", controller: str = "tdc") -> ClosedLoop:
     exp = Experiment()
     exp = replace(exp, sensing=replace(exp.sensing, velocity=velocity))
-    return jt.loop_for(setting(CODE, "tdc", "minimal", dict(CODE.params), exp))
+    return jt.loop_for(setting(CODE, controller, "minimal", dict(CODE.params), exp))
 
 
 def finer(fam: jt.Family, i: int) -> float:
@@ -79,3 +82,9 @@ def test_no_derived_bound_where_a_row_reads_the_plant_inside_the_period() -> Non
     v = jt.verdict(loop("motor-encoder"), 0.0, jt.delay_jitter(0.1, 0.0, 0.01))
     assert v.verdict == "not proved (necessary condition holds)", v
     assert "no derived gap bound: rows other than the plant's change" in v.reason, v.reason
+
+
+def test_a_single_timing_is_proved_without_a_gap() -> None:
+    for controller in ("roc", "pi"):
+        v = jt.verdict(loop(controller=controller), 0.0, jt.delay_jitter(0.1, 0.0, 0.0))
+        assert v.verdict == "proved" and v.delta == 0.0, (controller, v)
