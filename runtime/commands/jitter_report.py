@@ -107,8 +107,9 @@ def report(rows: list[Analysis], code: RobotCode, robot: dict[str, float], exp: 
         row = RowReport(a.controller, a.formulation)
         out.rows.append(row)
         s = setting(code, a.controller, a.formulation, robot, exp, plant)
-        loop = loop_for(s)
+        loop = loop_for(s) if ranges else None
         for label, timing in ranges:
+            assert loop is not None
             try:
                 v = verdict(loop, a.gain_at_setting, timing, search=replay_on is not None)
             except ValueError as exc:
