@@ -77,7 +77,7 @@ class ZohRows:
     plant's loop states, the law's Jacobian K, and the mismatch m of the computed rows."""
 
     plant: tuple[int, ...]
-    old: tuple[int, ...]
+    old: tuple[int, ...]  # -1: that wheel's command in flight is not a loop state
     a: Matrix
     b: Matrix
     k: Matrix
@@ -94,8 +94,12 @@ class ZohRows:
 
     @property
     def s_old(self) -> Matrix:
-        """S_old (zero where the command in flight is not a loop state: no latency)."""
-        return self.selection(self.old) if self.old else np.zeros((self.b.shape[1], self.n))
+        """S_old (a zero row where the command in flight is not a loop state)."""
+        out = np.zeros((len(self.old), self.n))
+        for r, c in enumerate(self.old):
+            if c >= 0:
+                out[r, c] = 1.0
+        return out
 
     @property
     def r1(self) -> Matrix:
@@ -167,10 +171,9 @@ def zoh_rows(loop: ClosedLoop, states: list[int], hs: tuple[float, ...],
     plant_x = [i for i in range(sl["plant_q"].start, sl["plant_eta"].stop) if i in pos]
     plant = tuple(pos[i] for i in plant_x)
     flight = range(sl["in_flight0"].start, sl["in_flight0"].stop)
-    old = tuple(pos[i] for i in flight if i in pos)
-    # without latency the command in flight never acts (G_old = 0): not a loop state then
-    if len(old) != len(flight) and (old or max(ds) > 0.0):
-        raise NoGapBound("the command in flight is only partly a loop state")
+    # a command in flight that no loop state reads (no latency: G_old = 0; or its column
+    # below the loop states' threshold) is left out as the loop states leave it: -1
+    old = tuple(pos.get(i, -1) for i in flight)
     scale = max(1.0, max(float(np.abs(m).max()) for m in full))
     others = [i for i in range(len(states)) if i not in set(plant)]
     moved = max(float(np.abs(m[others] - full[0][others]).max(initial=0.0)) for m in full)
