@@ -98,13 +98,21 @@ def key(row: str) -> tuple[str, ...]:
     return tuple(c.strip() for c in row.strip().strip("|").split("|")[:3])
 
 
+STALE = " (not recomputed since the derived gap bound: the earlier estimate)"
+
+
+def stale(row: str) -> str:
+    """A row kept from the table, marked as computed before the derived gap bound."""
+    return row if STALE in row else row.rstrip().removesuffix("|").rstrip() + STALE + " |"
+
+
 def merge(table: list[str], logs: list[Path]) -> list[str]:
     """``table``'s rows with those printed into ``logs`` in place of the same (robot,
-    controller, formulation); new ones after their robot's, robots in :data:`ROBOTS`'
-    order."""
+    controller, formulation), a row not in them marked :data:`STALE`; new ones after their
+    robot's, robots in :data:`ROBOTS`' order."""
     new = {key(r): r for f in logs for r in f.read_text(encoding="utf-8").splitlines()
            if r.startswith("| ") and key(r)[0] in ROBOTS}
-    rows = [new.pop(key(r), r) for r in table]
+    rows = [new.pop(key(r), stale(r)) for r in table]
     rows += new.values()
     order = list(ROBOTS)
     return sorted(rows, key=lambda r: order.index(key(r)[0]) if key(r)[0] in order
