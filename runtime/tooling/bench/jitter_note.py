@@ -12,8 +12,8 @@ extreme latencies, greedy norm growth) found a growing sequence, and the time of
 budget. Run: ``python -m runtime.tooling.bench.jitter_note [--robots a,b] [--out FILE]``
 (several minutes per robot on one core); with ``--print`` the rows go to stdout only;
 ``--merge LOG ...`` puts the rows printed into those files (several runs, e.g. one per
-robot in parallel) into the table in place of the rows with the same robot, controller and
-formulation.
+robot in parallel; pass every run's file at once) into the table in place of the rows with
+the same robot, controller and formulation, and marks every row no file has as stale.
 """
 
 from __future__ import annotations
