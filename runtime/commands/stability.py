@@ -11,8 +11,10 @@ from dataclasses import replace
 
 from runtime.bindings.generated import RobotCode
 from runtime.bindings.robots import RobotSourceError
+from runtime.commands import jitter_report
 from runtime.commands.options import add_experiment_option, add_robot_options, loaded_setting
 from runtime.experiment.settings import (
+    PLANT_MODELS,
     VELOCITY_MODELS,
     Experiment,
     ExperimentFileError,
@@ -21,14 +23,20 @@ from runtime.experiment.settings import (
 )
 from runtime.stability.analysis import (
     Analysis,
+    analyse,
     analyse_all,
     as_json,
     not_analysed,
     table,
     tde_notes,
 )
-from runtime.stability.jitter import budget, delay_jitter, loop_for, measured, verdict
-from runtime.stability.sampled_loop import OPERATING_POINTS, covers, setting
+from runtime.stability.sampled_loop import (
+    FORMULATIONS,
+    OPERATING_POINTS,
+    NotLinearisable,
+    covers,
+    refusal,
+)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -75,6 +83,18 @@ def main(argv: list[str] | None = None) -> int:
         help="also the largest proved delay jitter beside the constant-delay (necessary) "
         "boundary, per row (about a minute a row)",
     )  # fmt: skip
+    parser.add_argument(
+        "--jitter-replay", nargs="?", const="", default=None, metavar="PLANT",
+        help="also replay the adversarial search's sequences (the worst in each stated "
+        "range; with --jitter-budget, the worst inside the proved budget and the growing one "
+        "at the smallest destabilising jitter) in the closed loop on PLANT (generated or "
+        "mujoco; default the experiment's [plant] model): bounded or diverged; a sequence "
+        "inside a proved range that diverges fails the command",
+    )  # fmt: skip
+    parser.add_argument(
+        "--only", default=None, metavar="CONTROLLER[/FORMULATION]",
+        help="analyse only this controller (registry name), or one of its formulations",
+    )  # fmt: skip
     parser.add_argument("--json", action="store_true", help="print JSON")
     args = parser.parse_args(argv)
     try:
@@ -90,6 +110,10 @@ def main(argv: list[str] | None = None) -> int:
                 "root's pose (x, y, θ) as the first coordinates and driven wheels. Simulate "
                 f"this robot with `wmr reproduce --robot {setup.source}`"
             )
+        only = None if args.only is None else selected(setup.code, args.only)
+        if args.jitter_replay and args.jitter_replay not in PLANT_MODELS:
+            raise ValueError(f"--jitter-replay: no plant {args.jitter_replay!r} (one of "
+                             f"{', '.join(PLANT_MODELS)})")
     except (ExperimentFileError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -97,11 +121,35 @@ def main(argv: list[str] | None = None) -> int:
     if (args.robot or exp.robot) is not None and not args.json:
         print(f"robot '{setup.name}' from {setup.source}:", *setting_.scaling, sep="\n  ")
     refused: list[str] = []
-    rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure,
-                       path=args.path, delays=not args.no_delay,
-                       saturation=not args.no_saturation, refused=refused)
+    if only is None:
+        rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure,
+                           path=args.path, delays=not args.no_delay,
+                           saturation=not args.no_saturation, refused=refused)
+    else:
+        rows = []
+        for name, form in only:
+            info = code.controller(name)
+            if refusal(info):
+                refused.append(f"* {info.label} {form}: no sampled-data verdict: "
+                               f"{refusal(info)}")
+                continue
+            try:
+                rows.append(analyse(code, name, form, robot, exp, args.plant,
+                                    not args.no_measure, args.path, not args.no_delay,
+                                    not args.no_saturation))
+            except NotLinearisable as exc:
+                refused.append(f"* {info.label} {form}: no sampled-data verdict: {exc}")
+    replay_on = (None if args.jitter_replay is None
+                 else args.jitter_replay or exp.plant.model)
+    timing = args.jitter or args.jitter_budget or replay_on is not None
+    rep = (jitter_report.report(rows, code, robot, exp, args.plant, args.jitter_budget,
+                                replay_on) if timing else None)
     if args.json:
-        print(json.dumps(as_json(rows, setup.name), indent=2))
+        out = as_json(rows, setup.name)
+        out["refused"] = [*not_analysed(code), *refused]
+        if rep is not None:
+            out["jitter"] = jitter_report.as_json(rep)
+        print(json.dumps(out, indent=2))
     else:
         print(
             f"robot {setup.name}, h = {exp.controller.h} s, sensing {exp.sensing.velocity}, "
@@ -109,47 +157,35 @@ def main(argv: list[str] | None = None) -> int:
         )
         print(table(rows, code), *tde_notes(code, robot, exp), *not_analysed(code), *refused,
               sep="\n")
-        if args.jitter or args.jitter_budget:
-            print(*jitter_lines(rows, code, robot, exp, args.plant, args.jitter_budget),
-                  sep="\n")
+        if rep is not None:
+            print(*jitter_report.lines(rep, args.jitter_budget), sep="\n")
+    if rep is not None and rep.contradictions:
+        print(f"error: {rep.contradictions} sequence(s) inside a proved jitter range diverged "
+              "in the closed loop", file=sys.stderr)
+        return 1
     return 0
 
 
 def jitter_lines(rows: list[Analysis], code: RobotCode, robot: dict[str, float],
                  exp: Experiment, plant: str, with_budget: bool) -> list[str]:
     """The jitter verdicts of every stable row (runtime.stability.jitter), one line each."""
-    c = exp.controller
-    ranges = []
-    if c.jitter_seconds() > 0:
-        ranges.append(("[controller] jitter", delay_jitter(c.h, c.delay_seconds(),
-                                                           c.jitter_seconds())))
-    if c.period_worst > 0 or c.latency_worst > 0:
-        ranges.append(("measured timing", measured(c.h, max(c.h, c.period_worst),
-                                                   c.latency_worst)))
-    out = ["", "Jitter (a common quadratic Lyapunov function over the range; "
-           "runtime/stability/jitter.py):"]
-    if not ranges and not with_budget:
-        out.append("* no jitter stated ([controller] jitter, period_worst, latency_worst)")
-    for r in rows:
-        if not r.stable:
-            continue
-        s = setting(code, r.controller, r.formulation, robot, exp, plant)
-        loop = loop_for(s)
-        for label, timing in ranges:
-            try:
-                v = verdict(loop, r.gain_at_setting, timing)
-                bound = "" if v.bound is None else f", ‖J‖_P ≤ {v.bound:.3f}"
-                out.append(f"* {r.controller} {r.formulation}, {label} ({timing.describe()}): "
-                           f"{v.verdict} (constant-timing radius ≤ {v.radius:.3f}{bound})")
-            except ValueError as exc:
-                out.append(f"* {r.controller} {r.formulation}, {label}: no verdict: {exc}")
-        if with_budget:
-            b = budget(s, r.gain_at_setting)
-            out.append(f"* {r.controller} {r.formulation}: delay jitter proved up to "
-                       f"±{b.proved * 1e3:.3g} ms, necessary boundary ±{b.necessary * 1e3:.3g} "
-                       f"ms, destabilising switching found from ±{b.destabilising * 1e3:.3g} ms "
-                       f"({b.seconds:.0f} s)")
-    return out
+    return jitter_report.lines(
+        jitter_report.report(rows, code, robot, exp, plant, with_budget), with_budget)
+
+
+def selected(code: RobotCode, only: str) -> list[tuple[str, str]]:
+    """The (controller, formulation) pairs ``--only`` names: a controller's registry name,
+    or name/formulation; ValueError naming what exists otherwise."""
+    name, _, form = only.partition("/")
+    names = [c.name for c in code.controller_infos]
+    if name not in names:
+        raise ValueError(f"--only: no controller {name!r} on robot '{code.name}' "
+                         f"(it has {', '.join(names)})")
+    forms = [f for f in code.controller(name).formulations if f in FORMULATIONS]
+    if form and form not in forms:
+        raise ValueError(f"--only: {name} has no formulation {form!r} the analysis takes "
+                         f"(it has {', '.join(forms)})")
+    return [(name, f) for f in forms if not form or f == form]
 
 
 if __name__ == "__main__":

@@ -16,24 +16,31 @@ to the loop states less the modes every J keeps at exactly 1 (a conserved odomet
 combination, a held gain: a constant offset, neither growing nor decaying, as the
 analysis reports apart). An SDP (cvxpy, Clarabel) finds P with I ⪯ P ⪯ κ I and
 J_iᵀ P J_i ⪯ γ² P at every grid point, γ < 1 as small as it goes, κ as small as it goes
-for that γ. Between grid points, J(h, D) = J_i + Δ with ‖Δ‖_P ≤ δ = SAFETY Σ_axes L ·
-(half a grid step), L the largest slope of J in the P-norm between neighbouring grid
-points per grid step (an estimate: the bound is stated, not derived; SAFETY = 2 covers
-a slope up to twice the largest seen between grid points), so ‖J‖_P ≤ γ + δ everywhere
-in the range. The verdict: "proved" when γ + δ < 1,
-"unstable" when some constant timing in the range has a spectral radius ≥ 1 (or a
-switching sequence found by :func:`adversarial` grows), else "not proved (necessary
-condition holds)".
+for that γ; the solver's P is checked against every inequality, not trusted. Between grid
+points J(h, D) = J_i + Δ with ‖Δ‖_P ≤ δ_i, a bound derived from the loop's structure
+(:mod:`runtime.stability.gap`: the plant's rows are the zero-order-hold flow of its
+continuous linearisation, e^{Ah} and ∫ e^{As} ds B, every other row independent of the
+timing; δ_i = L_h Δh/2 + L_D ΔD/2 with L_h, L_D sups of ‖e^{As} R‖ over the cell, at most
+E (a + b (k + 2)) and E b (k + 1), a = ‖A‖, b = ‖B‖, k = ‖K‖ the law's Jacobian,
+E = e^{a h_max}), so ‖J‖_P ≤ max_i (‖J_i‖_P + δ_i) everywhere in the range. The verdict:
+"proved" when that bound is < 1; "unstable" when some constant timing in the range has a
+spectral radius ≥ 1 (or a switching sequence found by :func:`adversarial` grows); else
+"not proved (necessary condition holds)", with the reason: no common P at the grid points,
+the margin not covering the gap bound, or a structure the gap bound cannot take (then no
+bound is derived and nothing is proved: :class:`runtime.stability.gap.NoGapBound`).
 
 Assumptions (stated with every verdict): the linearisation about the nominal steady
 motion (a period that differs from the law's h also forces the loop: the reference's
 time base; a bounded disturbance where the linear part is proved stable), the
-experiment's plant, sensing and configuration, D_max < h_min.
+experiment's plant, sensing and configuration, D_max < h_min; for the gap bound, the plant's
+flow and not its RK4 steps (the computed rows match the flow within the stated mismatch m,
+2m added to δ).
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import time
 import warnings
 from dataclasses import dataclass, replace
@@ -49,12 +56,12 @@ from runtime.plants import plant_for
 from runtime.sim import loop as closed_loop
 from runtime.sim import paths
 from runtime.sim.timing import GivenTiming
+from runtime.stability.gap import NoGapBound, ZohRows, cells, check_reduction, gap_bounds, zoh_rows
 from runtime.stability.sampled_loop import ClosedLoop, LoopSetting, loop_states, max_delay
 from runtime.stability.verification import diverged, linear_experiment
 
 Matrix = NDArray[np.float64]
 GRID = (9, 5)  # points on the varying axis of a range that varies in one, per axis in two
-SAFETY = 2.0  # the Lipschitz estimate's margin (stated in the verdict)
 NEUTRAL = 1e-7  # a mode every J keeps at 1 within this
 # Growth per sample within this of 1 is neutral, not divergence (as the analysis'
 # NEUTRAL_TOL: a mode that a finite-difference Jacobian puts at 1 ± 1e-7 is an offset)
@@ -93,23 +100,23 @@ def measured(mean_period: float, worst_period: float, worst_latency: float) -> T
 
 @dataclass(frozen=True)
 class Family:
-    """J on the grid of a timing range, reduced (see the module docstring)."""
+    """J on the grid of a timing range, reduced (see the module docstring), with the ZOH
+    structure the gap bound rests on (:mod:`runtime.stability.gap`), or why there is none."""
 
     timing: Timing
     hs: tuple[float, ...]
     ds: tuple[float, ...]
     mats: tuple[Matrix, ...]  # row-major over (h, D)
     radius: float  # the largest constant-timing spectral radius on the grid
-    # neighbouring grid points: (J_b − J_a, half the distance between them) per axis
-    steps: tuple[tuple[tuple[Matrix, float], ...], ...]
+    basis: Matrix  # the reduced coordinates: J_red = basisᵀ J basis on the loop states
+    zoh: ZohRows | None  # None: no derived gap bound, for the reason ``no_bound``
+    no_bound: str = ""
 
-    def delta(self, p: Matrix) -> float:
-        """The gap bound between grid points in the P-norm: SAFETY times the largest slope
-        of J between neighbours, times the half-step, summed over the axes."""
-        root = np.real(sqrtm(p))
-        inv = np.linalg.inv(root)
-        return SAFETY * sum(max((float(np.linalg.norm(root @ d @ inv, 2)) * half
-                                 for d, half in axis), default=0.0) for axis in self.steps)
+    def gaps(self, p: Matrix) -> list[float]:
+        """δ_i per grid point: the derived bound on ‖J − J_i‖_P over its cell
+        (:func:`runtime.stability.gap.gap_bounds`)."""
+        assert self.zoh is not None, self.no_bound
+        return gap_bounds(self.zoh, self.basis, p, cells(self.hs, self.ds))
 
 
 def grid(lo: float, hi: float, n: int) -> tuple[float, ...]:
@@ -121,19 +128,35 @@ def loop_for(s: LoopSetting, tail: int = 20) -> ClosedLoop:
     return ClosedLoop(replace(s, in_flight=max(1, s.in_flight)), tail)
 
 
-def reduce(mats: list[Matrix]) -> list[Matrix]:
+@dataclass(frozen=True)
+class Reduction:
+    """The quotient of :func:`reduce`: J_red = basisᵀ J basis; ``left`` the common left
+    invariants and ``fixed`` the common fixed vectors removed (columns, on the loop states)."""
+
+    basis: Matrix
+    left: Matrix
+    fixed: Matrix
+    inner: Matrix  # the coordinates after the first step, where ``fixed`` is found
+
+
+def reduction(mats: list[Matrix]) -> Reduction:
     """The maps on the quotient by every mode all of them keep at 1: restricted to the
     kernel of their common left invariants, then modulo their common fixed vectors."""
     n = len(mats[0])
     left = null_space(np.vstack([(m - np.eye(n)).T for m in mats]), rcond=NEUTRAL)
     basis = null_space(left.T) if left.size else np.eye(n)
-    mats = [basis.T @ m @ basis for m in mats]
-    n = len(mats[0])
-    fixed = null_space(np.vstack([m - np.eye(n) for m in mats]), rcond=NEUTRAL)
+    inner = [basis.T @ m @ basis for m in mats]
+    k = len(inner[0])
+    fixed = null_space(np.vstack([m - np.eye(k) for m in inner]), rcond=NEUTRAL)
     if fixed.size:
-        rest = null_space(fixed.T)
-        mats = [rest.T @ m @ rest for m in mats]
-    return mats
+        return Reduction(basis @ null_space(fixed.T), left, basis @ fixed, basis)
+    return Reduction(basis, left, np.zeros((n, 0)), basis)
+
+
+def reduce(mats: list[Matrix]) -> list[Matrix]:
+    """The maps on the quotient (:func:`reduction`)."""
+    w = reduction(mats).basis
+    return [w.T @ m @ w for m in mats]
 
 
 def family(loop: ClosedLoop, gain: float, timing: Timing) -> Family:
@@ -147,14 +170,19 @@ def family(loop: ClosedLoop, gain: float, timing: Timing) -> Family:
     eta = loop.sl["plant_eta"]
     states = loop_states(np.sum([np.abs(m) for m in full], axis=0), range(eta.start, eta.stop))
     ix = np.ix_(states, states)
-    mats = reduce([m[ix] for m in full])
+    on_states = [m[ix] for m in full]
+    red = reduction(on_states)
+    mats = [red.basis.T @ m @ red.basis for m in on_states]
     radius = max(float(np.abs(np.linalg.eigvals(m)).max()) for m in mats)
-    at = np.array(mats).reshape(len(hs), len(ds), *mats[0].shape)
-    along_h = tuple((at[i + 1, j] - at[i, j], 0.5) for i in range(len(hs) - 1)
-                    for j in range(len(ds)))
-    along_d = tuple((at[i, j + 1] - at[i, j], 0.5) for i in range(len(hs))
-                    for j in range(len(ds) - 1))
-    return Family(timing, hs, ds, tuple(mats), radius, (along_h, along_d))
+    zoh: ZohRows | None = None
+    why = ""
+    try:
+        zoh = zoh_rows(loop, states, hs, ds, full)
+        if len(mats) > 1:  # a single timing has no gaps to cover
+            check_reduction(zoh, red.left, red.inner, red.fixed, len(hs) > 1)
+    except NoGapBound as exc:
+        zoh, why = None, f"no derived gap bound: {exc}"
+    return Family(timing, hs, ds, tuple(mats), radius, red.basis, zoh, why)
 
 
 def lyapunov(mats: tuple[Matrix, ...], gamma: float) -> tuple[float, Matrix] | None:
@@ -186,20 +214,36 @@ def lyapunov(mats: tuple[Matrix, ...], gamma: float) -> tuple[float, Matrix] | N
 
 @dataclass(frozen=True)
 class Proof:
-    """What the SDP found: the decrease γ at the grid points, P's condition number κ, the
-    gap bound δ (P-norm) and the bound on ‖J‖_P over the whole range, γ + δ."""
+    """What the SDP found and what covers the gaps: the largest ‖J_i‖_P at the grid points
+    (exact, ≤ the SDP's γ), P's condition number κ, the largest derived gap bound δ_i
+    (P-norm, :mod:`runtime.stability.gap`) and the bound on ‖J‖_P over the whole range,
+    max_i (‖J_i‖_P + δ_i); ``delta`` and ``bound`` are inf where no gap bound is derived."""
 
     gamma: float
     kappa: float
-    delta: float  # in the P-norm
+    delta: float
+    bound: float
 
-    @property
-    def bound(self) -> float:
-        return self.gamma + self.delta
+
+def p_norm(a: Matrix, p: Matrix) -> float:
+    root = np.real(sqrtm(p))
+    return float(np.linalg.norm(root @ a @ np.linalg.inv(root), 2))
+
+
+def covered(fam: Family, p: Matrix, kappa: float) -> Proof:
+    """The bound on ‖J‖_P over the range with ``p``: each grid point's own ‖J_i‖_P plus
+    its cell's gap bound (inf without a derived bound)."""
+    norms = [p_norm(m, p) for m in fam.mats]
+    if fam.zoh is None:
+        return Proof(max(norms), kappa, math.inf, math.inf)
+    gaps = fam.gaps(p)
+    return Proof(max(norms), kappa, max(gaps),
+                 max(n + g for n, g in zip(norms, gaps, strict=True)))
 
 
 def prove(fam: Family) -> Proof | None:
-    """The best bound γ + δ over a few γ between the smallest feasible and 1."""
+    """The best bound over a few γ between the smallest feasible and 1 (None: no common
+    P at the grid points)."""
     lo, hi = 0.0, 1.0
     if lyapunov(fam.mats, hi - 1e-9) is None:
         return None
@@ -210,8 +254,8 @@ def prove(fam: Family) -> Proof | None:
     for gamma in np.linspace(hi, 1.0, 6)[:-1]:
         found = lyapunov(fam.mats, float(gamma) * (1 + 1e-6))
         if found is not None:
-            proof = Proof(float(gamma), found[0], fam.delta(found[1]))
-            if best is None or proof.bound < best.bound:
+            proof = covered(fam, found[1], found[0])
+            if best is None or (proof.bound, proof.gamma) < (best.bound, best.gamma):
                 best = proof
     return best
 
@@ -272,13 +316,27 @@ def adversarial(loop: ClosedLoop, gain: float, timing: Timing, length: int = 6,
 
 @dataclass(frozen=True)
 class JitterVerdict:
-    """The verdict for one timing range, with what it rests on."""
+    """The verdict for one timing range, with what it rests on: the constant-timing radius,
+    the bound on ‖J‖_P over the range (γ + δ; None: no common P at the grid points), the
+    derived gap bound δ (P-norm), and why a verdict that is not "proved" is not."""
 
     timing: Timing
     verdict: str  # "proved", "not proved (necessary condition holds)" or "unstable"
     radius: float  # the largest constant-timing spectral radius on the grid
-    bound: float | None  # γ + δ, the bound on ‖J‖_P over the range (None: no common P)
+    bound: float | None
     search: Search | None = None
+    delta: float | None = None
+    reason: str = ""
+    margin: float | None = None  # the largest ‖J_i‖_P at the grid points (the SDP's)
+    mismatch: float | None = None  # m: the computed plant rows against their ZOH flow
+
+    def describe(self) -> str:
+        """The verdict with what it rests on, one line."""
+        out = f"{self.verdict} (constant-timing radius ≤ {self.radius:.3f}"
+        if self.bound is not None and math.isfinite(self.bound):
+            out += (f", ‖J‖_P ≤ {self.bound:.3f} over the range, derived gap bound "
+                    f"δ ≤ {self.delta:.3g}, ZOH model mismatch m = {self.mismatch:.2g}")
+        return out + (f"; {self.reason})" if self.reason else ")")
 
 
 def verdict(loop: ClosedLoop, gain: float, timing: Timing, search: bool = False
@@ -286,24 +344,43 @@ def verdict(loop: ClosedLoop, gain: float, timing: Timing, search: bool = False
     fam = family(loop, gain, timing)
     found = adversarial(loop, gain, timing) if search else None
     if fam.radius >= 1.0 + GROWTH_TOL or (found is not None and found.rate >= 1.0 + GROWTH_TOL):
-        return JitterVerdict(timing, "unstable", fam.radius, None, found)
+        why = ("a constant timing in the range has spectral radius ≥ 1"
+               if fam.radius >= 1.0 + GROWTH_TOL
+               else "the adversarial search found a growing switching sequence")
+        return JitterVerdict(timing, "unstable", fam.radius, None, found, reason=why)
+    if fam.zoh is None:  # no derived gap bound: the grid points alone prove nothing
+        return JitterVerdict(timing, "not proved (necessary condition holds)", fam.radius,
+                             None, found, reason=fam.no_bound)
     proof = prove(fam)
     if proof is not None and proof.bound < 1.0:
-        return JitterVerdict(timing, "proved", fam.radius, proof.bound, found)
+        return JitterVerdict(timing, "proved", fam.radius, proof.bound, found, proof.delta,
+                             margin=proof.gamma, mismatch=fam.zoh.mismatch)
+    if proof is None:
+        why = "no common quadratic Lyapunov function at the grid points"
+    else:
+        why = (f"the margin at the grid points (‖J_i‖_P ≤ {proof.gamma:.3f}) does not cover "
+               f"the derived gap bound δ ≤ {proof.delta:.3g}")
     return JitterVerdict(timing, "not proved (necessary condition holds)", fam.radius,
-                         None if proof is None else proof.bound, found)
+                         None if proof is None else proof.bound, found,
+                         None if proof is None else proof.delta, why,
+                         None if proof is None else proof.gamma, fam.zoh.mismatch)
 
 
 @dataclass(frozen=True)
 class Budget:
     """The largest delay jitter proved, the constant-delay (necessary) boundary, the
     smallest jitter at which the adversarial search found a growing sequence, and the
-    time the analysis took (s)."""
+    time the analysis took (s); why the smallest jitter tried above the proved one is not
+    proved; the adversarial search's worst sequence inside the proved budget and the
+    growing one it found at the smallest destabilising jitter (None: none found)."""
 
     proved: float
     necessary: float
     destabilising: float
     seconds: float
+    reason: str = ""
+    inside: Search | None = None
+    growing: Search | None = None
 
 
 def largest(ok: object, hi: float, rel_tol: float = 0.05) -> float:
@@ -329,17 +406,32 @@ def budget(s: LoopSetting, gain: float, search_only: bool = False) -> Budget:
     loop = loop_for(s)
     limit = 0.999 * s.h - s.delay
     necessary = 0.0 if search_only else min(limit, max(0.0, max_delay(s, gain) - s.delay))
+    failed: dict[float, str] = {}  # jitter tried and not proved: why
+    grew: dict[float, Search] = {}  # jitter at which the search found a growing sequence
 
     def proved(j: float) -> bool:
-        return verdict(loop, gain, delay_jitter(s.h, s.delay, j)).verdict == "proved"
+        v = verdict(loop, gain, delay_jitter(s.h, s.delay, j))
+        if v.verdict != "proved":
+            failed[j] = v.reason
+        return v.verdict == "proved"
 
     def calm(j: float) -> bool:
-        return adversarial(loop, gain, delay_jitter(s.h, s.delay, j)).rate < 1.0 + GROWTH_TOL
+        found = adversarial(loop, gain, delay_jitter(s.h, s.delay, j))
+        if found.rate >= 1.0 + GROWTH_TOL:
+            grew[j] = found
+        return found.rate < 1.0 + GROWTH_TOL
 
+    worst = largest(calm, limit)
+    growing = grew[min(grew)] if grew else None
     if search_only:
-        return Budget(0.0, 0.0, largest(calm, limit), time.perf_counter() - start)
-    return Budget(largest(proved, necessary), necessary, largest(calm, limit),
-                  time.perf_counter() - start)
+        return Budget(0.0, 0.0, worst, time.perf_counter() - start, growing=growing)
+    if necessary <= 0.0:
+        failed[0.0] = "unstable at the setting (no constant latency in range is stable)"
+    good = largest(proved, necessary) if necessary > 0.0 else 0.0
+    inside = adversarial(loop, gain, delay_jitter(s.h, s.delay, good)) if good > 0 else None
+    above = [j for j in failed if j >= good]
+    return Budget(good, necessary, worst, time.perf_counter() - start,
+                  failed[min(above)] if above else "", inside, growing)
 
 
 def sequence_growth(loop: ClosedLoop, gain: float, sequence: tuple[tuple[float, float], ...],

@@ -2,8 +2,9 @@
 issue 46 item 4): Drishti, TDC, minimal formulation, sample-instant rates, h = 0.1 s, no
 nominal delay, a 10 s circle, the timing given sample by sample (``runtime.sim.timing``).
 
-* At the proved budget of docs/STABILITY.md's table (latencies in [0, 44 ms], "proved",
-  ‖J‖_P ≤ 0.981 over the range), on the MuJoCo engine: the adversarial search's worst
+* At the proved budget of docs/STABILITY.md's table (latencies in [0, 50 ms], "proved",
+  ‖J‖_P ≤ 0.987 over the range, the gaps covered by the derived bound), on the MuJoCo
+  engine: the adversarial search's worst
   sequence, the alternation of the smallest and largest latency and a random sequence of
   the two stay bounded (the last third's error no larger than the middle third's, and
   below 0.01);
@@ -33,7 +34,7 @@ from runtime.stability.sampled_loop import ClosedLoop, setting
 CODE = load_robot_code("")
 ROBOT = dict(CODE.params)
 H = 0.1
-BUDGET = 0.044  # s: the table's proved jitter for this loop
+BUDGET = 0.05  # s: the table's proved jitter for this loop
 BASE = replace(Experiment(), sensing=replace(Experiment().sensing, velocity="sample-instant"))
 MUJOCO = replace(BASE, plant=replace(BASE.plant, model="mujoco"))
 
