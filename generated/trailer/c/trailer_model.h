@@ -266,11 +266,11 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 64 add, 112 mul, 5 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 64 add, 114 mul, 5 div, 2 sin/cos, 0 sqrt
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * wheel_accels 0.92 (largest entry).
+ * wheel_accels 0.93 (largest entry).
  */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
@@ -305,7 +305,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
  * @param[out] A [10x10] row-major (TRAILER_LINEARIZATION_A_SIZE) -- 10x10 row-major
  * @param[out] B [10x2] row-major (TRAILER_LINEARIZATION_B_SIZE) -- 10x2 row-major
  *
- * operations after CSE: 201 add, 335 mul, 5 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 204 add, 349 mul, 5 div, 6 sin/cos, 0 sqrt
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
@@ -365,12 +365,11 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
  *         TRAILER_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 134 add, 207 mul, 5 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 98 add, 155 mul, 5 div, 4 sin/cos, 0 sqrt
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * longitudinal 5.3e+03, lateral 3.4e+03 (largest entry) when it returns OK (it may return
- * TRAILER_ERR_BAD_PARAMS there).
+ * longitudinal 9.6, lateral 6.1 (largest entry).
  */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,
