@@ -10,15 +10,14 @@ robot can make (docs/PAPER.md item 12); :mod:`runtime.sim.paths` builds the pape
 from __future__ import annotations
 
 import math
-from collections import OrderedDict
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
 from runtime.bindings.generated import RobotCode
+from runtime.sim.memo import Memo
 
 Array = NDArray[np.float64]
 RAMP = 0.3  # s, tanh time constant of every wheel-rate switch
@@ -68,8 +67,7 @@ class WheelProfile:
 # robot's generated code by its folder and prefix): the stability analysis, the saturation
 # verdict and the simulations ask for the same circle and lawn mower once per controller,
 # formulation and delay, at seconds each. Each caller gets its own copy of the arrays.
-MEMO_SIZE = 32
-_memo: OrderedDict[tuple[Any, ...], Reference] = OrderedDict()
+_memo: Memo[Reference] = Memo(32)
 
 
 def integrate(code: RobotCode, name: str, profile: WheelProfile, start: Array,
@@ -80,14 +78,8 @@ def integrate(code: RobotCode, name: str, profile: WheelProfile, start: Array,
     key = (str(code.folder.resolve()), code.prefix, name, profile,
            np.asarray(start, dtype=np.float64).tobytes(),
            tuple(sorted((k, float(v)) for k, v in params.items())), h, duration, scale)
-    ref = _memo.get(key)
-    if ref is None:
-        ref = _integrate(code, name, profile, start, params, h, duration, scale)
-        _memo[key] = ref
-        if len(_memo) > MEMO_SIZE:
-            _memo.popitem(last=False)
-    else:
-        _memo.move_to_end(key)
+    ref = _memo.get(key, lambda: _integrate(code, name, profile, start, params, h, duration,
+                                            scale))
     return replace(ref, t=ref.t.copy(), q=ref.q.copy(), qdot=ref.qdot.copy(),
                    qddot=ref.qddot.copy())
 

@@ -51,9 +51,7 @@ from __future__ import annotations
 import hashlib
 import inspect
 import math
-from collections import OrderedDict
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,6 +61,7 @@ from runtime.experiment.settings import Experiment
 from runtime.plants import plant_for
 from runtime.setting.layout import robot_layout, traction_torque_limit
 from runtime.sim import loop, paths
+from runtime.sim.memo import Memo
 from runtime.sim.reference import Reference
 from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
 from runtime.stability.sampled_loop import plant_parameters, roc_gain
@@ -178,8 +177,7 @@ def slip_monitor(code: RobotCode, exp: Experiment, nominal: dict[str, float]
 # grip_along's results in this process, by what they depend on (the robot's code, its
 # layout at ``nominal``, the experiment and the reference's samples), not by controller:
 # saturation_verdict asks for the same paths once per controller and formulation.
-GRIP_MEMO_SIZE = 16
-_grip_memo: OrderedDict[tuple[Any, ...], tuple[Array, Array]] = OrderedDict()
+_grip_memo: Memo[tuple[Array, Array]] = Memo(16)
 
 
 def grip_along(monitor: SlipMonitor, nominal: dict[str, float], exp: Experiment,
@@ -192,16 +190,15 @@ def grip_along(monitor: SlipMonitor, nominal: dict[str, float], exp: Experiment,
         digest.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
     key = (str(monitor.code.folder.resolve()), monitor.code.prefix, monitor.robot,
            tuple(sorted((k, float(v)) for k, v in nominal.items())), exp, digest.digest())
-    hit = _grip_memo.get(key)
-    if hit is None:
+
+    def grip() -> tuple[Array, Array]:
         radius = {w.name: w.radius for w in monitor.robot.wheels}
         r = np.array([radius[w] for w in monitor.driven])
         fx, fy, n = monitor.along(ref, nominal, exp)
-        hit = r * np.hypot(fx, fy), exp.plant.friction * n * r
-        _grip_memo[key] = hit
-        if len(_grip_memo) > GRIP_MEMO_SIZE:
-            _grip_memo.popitem(last=False)
-    return hit[0].copy(), hit[1].copy()
+        return r * np.hypot(fx, fy), exp.plant.friction * n * r
+
+    needed, limit = _grip_memo.get(key, grip)
+    return needed.copy(), limit.copy()
 
 
 def saturation_verdict(code: RobotCode, controller: str, formulation: str,
