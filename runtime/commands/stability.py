@@ -23,7 +23,6 @@ from runtime.experiment.settings import (
 )
 from runtime.stability.analysis import (
     Analysis,
-    analyse,
     analyse_all,
     as_json,
     not_analysed,
@@ -33,9 +32,7 @@ from runtime.stability.analysis import (
 from runtime.stability.sampled_loop import (
     FORMULATIONS,
     OPERATING_POINTS,
-    NotLinearisable,
     covers,
-    refusal,
 )
 
 
@@ -121,24 +118,9 @@ def main(argv: list[str] | None = None) -> int:
     if (args.robot or exp.robot) is not None and not args.json:
         print(f"robot '{setup.name}' from {setup.source}:", *setting_.scaling, sep="\n  ")
     refused: list[str] = []
-    if only is None:
-        rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure,
-                           path=args.path, delays=not args.no_delay,
-                           saturation=not args.no_saturation, refused=refused)
-    else:
-        rows = []
-        for name, form in only:
-            info = code.controller(name)
-            if refusal(info):
-                refused.append(f"* {info.label} {form}: no sampled-data verdict: "
-                               f"{refusal(info)}")
-                continue
-            try:
-                rows.append(analyse(code, name, form, robot, exp, args.plant,
-                                    not args.no_measure, args.path, not args.no_delay,
-                                    not args.no_saturation))
-            except NotLinearisable as exc:
-                refused.append(f"* {info.label} {form}: no sampled-data verdict: {exc}")
+    rows = analyse_all(code, robot, exp, args.plant, measure=not args.no_measure,
+                       path=args.path, delays=not args.no_delay,
+                       saturation=not args.no_saturation, refused=refused, only=only)
     replay_on = (None if args.jitter_replay is None
                  else args.jitter_replay or exp.plant.model)
     timing = args.jitter or args.jitter_budget or replay_on is not None

@@ -14,7 +14,7 @@ gain each has come from the robot's generated code (``CONTROLLERS``).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
@@ -319,16 +319,18 @@ def analyse_all(
     code: RobotCode, robot: dict[str, float], exp: Experiment, plant: str = "nominal",
     measure: bool = True, path: str = "circle", delays: bool = False,
     saturation: bool = False, refused: list[str] | None = None,
+    only: Collection[tuple[str, str]] | None = None,
 ) -> list[Analysis]:
-    """Every controller of the robot's code in every formulation it is generated in, each
-    linearised from its own generated law; one the analysis cannot take is left out, its
-    reason appended to ``refused`` (if given; :func:`not_analysed` for the command)."""
+    """Every controller of the robot's code in every formulation it is generated in (or
+    the (controller, formulation) pairs ``only`` names), each linearised from its own
+    generated law; one the analysis cannot take is left out, its reason appended to
+    ``refused`` (if given; :func:`not_analysed` for the command)."""
     rows = []
     for c in code.controller_infos:
         if refusal(c):
             continue
         for f in c.formulations:
-            if f not in FORMULATIONS:
+            if f not in FORMULATIONS or (only is not None and (c.name, f) not in only):
                 continue
             try:
                 rows.append(analyse(code, c.name, f, robot, exp, plant, measure, path, delays,
