@@ -37,7 +37,12 @@ def certificate_doc(name: str, body: object, prefix: str) -> list[str]:
         arg = out["output"].split("[")[0].split("->")[0]
         per_arg[arg] = max(per_arg.get(arg, 0.0), out["bound"])
     bounds = ", ".join(f"{a} {b:.2g}" for a, b in per_arg.items())
-    if row["proved"]:
+    composed = row.get("composed", {}).get("function", "")
+    if row["proved"] and composed:  # over its producer's image (certify/compose.py)
+        verdict = (f"proved over its derived inputs as {composed} computes them in float32 "
+                   f"from its declared box (its rounding included): no intermediate "
+                   f"overflows or is NaN;")
+    elif row["proved"]:
         verdict = "proved over its declared box: no intermediate overflows or is NaN;"
     else:
         verdict = f"NOT proved over its declared box ({row['reason']});"

@@ -38,6 +38,13 @@ DERIVED: Mapping[str, tuple[str, Sequence[str]]] = {
 }
 
 
+def derived_key(access: str) -> str:
+    """The :data:`DERIVED` entry an input read as ``access`` takes its range from ("" for
+    none): its own (``mhat[0]``) or its argument's (``p12[0]``), as :func:`input_range`."""
+    base = access.split("[")[0]
+    return access if access in DERIVED else base if base in DERIVED else ""
+
+
 @dataclass(frozen=True)
 class Envelope:
     """The operating envelope the certificates are stated for (SI units)."""

@@ -53,6 +53,10 @@ class Program:
     # nonfinite checks (bit tests on inputs and results): certified by the no-overflow
     # proof rather than evaluated
     skipped_checks: int = 0
+    # composed with the producer of its derived inputs (:mod:`.compose`): that function's
+    # name, and consumer input access -> the producer's output lvalue it reads
+    producer: str = ""
+    wiring: dict[str, str] = field(default_factory=dict)
 
     def add(self, node: Node) -> int:
         self.nodes.append(node)

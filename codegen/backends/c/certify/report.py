@@ -3,34 +3,51 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
+from functools import partial
 from typing import Any
 
 from codegen.backend import RobotTarget
 from codegen.backends.c.backend import config_for
 from codegen.backends.c.certify.analysis import TRIG_ULPS
-from codegen.backends.c.certify.boxes import ENVELOPE
-from codegen.backends.c.certify.robot import certify_robot
+from codegen.backends.c.certify.boxes import ENVELOPE, Interval
+from codegen.backends.c.certify.compose import ComposedExact
+from codegen.backends.c.certify.robot import certify_robot, programs
 from codegen.backends.c.certify.search import search
 from codegen.backends.c.lowering import function_context
 from codegen.certify.header import body_hash
 
 
 def certify_and_search(target: RobotTarget, seconds: float, points: int,
-                       certs: dict[str, Any] | None = None) -> Iterator[dict[str, Any]]:
+                       certs: dict[str, Any] | None = None,
+                       only: Collection[str] | None = None,
+                       derived: Mapping[str, Interval] | None = None
+                       ) -> Iterator[dict[str, Any]]:
     """Per function: box, certificate, search, ratio (``certs`` collects, per function,
-    the program, box and certificate, for :mod:`.steps`)."""
-    for ir, prog, box, cert in certify_robot(target, seconds=seconds):
+    the program, box and certificate, for :mod:`.steps`; ``only`` and ``derived`` as in
+    :func:`~codegen.backends.c.certify.robot.certify_robot`)."""
+    own = {ir.name: (ir, prog) for ir, prog in programs(target)}
+    config = config_for(target.layout)
+    for ir, prog, box, cert in certify_robot(target, seconds=seconds, only=only,
+                                             derived=derived):
         if certs is not None:
             certs[ir.name] = (prog, box, cert)
         start = time.perf_counter()
-        found = search(prog, ir, box, random_points=points, climbs=1, rounds=2)
+        exact_of = None
+        if prog.producer:  # over the image of its derived inputs' producer (compose.py)
+            (first, first_prog), second = own[prog.producer], own[ir.name][1]
+            exact_of = partial(ComposedExact, first, ir, first_prog, second, prog.wiring)
+        found = search(prog, ir, box, random_points=points, climbs=1, rounds=2,
+                       exact_of=exact_of)
         ratios = [b / e if e > 0 else float("inf")
                   for b, e in zip(cert.bounds, found.errors, strict=True)]
         worst = max(range(len(cert.bounds)), key=lambda j: cert.bounds[j])
         yield {
             "function": ir.name,
-            "hash": body_hash(function_context(ir, config_for(target.layout), "")["body"]),
+            "hash": body_hash(function_context(ir, config, "")["body"]),
+            **({"composed": {"function": prog.producer, "hash": body_hash(
+                function_context(own[prog.producer][0], config, "")["body"])}}
+               if prog.producer else {}),
             "box": {prog.input_names[s]: list(b) for s, b in box.items()},
             "proved": cert.proved,
             "reason": cert.reason,
@@ -120,16 +137,24 @@ def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
     out += [
         "## Where a bound is loose or a proof missing, and why",
         "",
+        "* **Certified over M̂ as `minimal_mhat` computes it** (the trailer's",
+        "  `minimal_minv_norm_mhat`): it divides by det(M̂), and over M̂'s entries given",
+        "  independently, each within the enclosure of `minimal_mhat`'s output, the box",
+        "  holds singular matrices (M̂[1] ranges over [-0.19, 0.13] while M̂[0] = M̂[3] go",
+        "  down to 0.068), so no bound exists there. The step only passes it the M̂ that",
+        "  `minimal_mhat` computed in float32, so the certifier composes the two printed",
+        "  programs (`minimal_mhat`'s nodes, then the function's with each M̂ entry read",
+        "  from the stored float32 output: codegen/backends/c/certify/compose.py) and",
+        "  certifies that over `minimal_mhat`'s box (hitch angles and parameters): the",
+        "  divisor is proved nonzero there, and the bound is |float32 result − exact",
+        "  result of the exact M̂(q)|, M̂'s own rounding included; the search's exact",
+        "  reference feeds `minimal_mhat`'s 113-bit outputs, unrounded, to the function's.",
+        "  The same applies wherever independent derived entries leave a divisor that may",
+        "  be 0. At ±20 % parameters (not the declared box, which stays ±10 %) Drishti's",
+        "  forward dynamics are proved too, with the divisors' enclosures (a run of the",
+        "  certifier with `Envelope(uncertainty=0.2)`).",
         "* **Not proved** (the table names the operation): a divisor whose enclosure",
-        "  still contains 0 when the budgets end. The trailer's `minimal_minv_norm_mhat`",
-        "  divides by det(M̂) of M̂'s entries given independently, each within the",
-        "  enclosure of `minimal_mhat`'s output: that box holds singular matrices (M̂[1]",
-        "  ranges over [-0.19, 0.13] while M̂[0] = M̂[3] go down to 0.068), so no bound",
-        "  exists over it; a certificate needs M̂ as `minimal_mhat` computes it (the",
-        "  image of the configuration and parameter box), which a box of independent",
-        "  entries cannot state. At ±20 % parameters (not the declared box, which stays",
-        "  ±10 %) Drishti's forward dynamics are proved too, with the divisors'",
-        "  enclosures (a run of the certifier with `Envelope(uncertainty=0.2)`).",
+        "  still contains 0 when the budgets end.",
         "* **Proved, bound loose** (the functions whose row names a divisor enclosure:",
         "  Drishti's `wheel_contact_forces`; the trailer's forward dynamics, linearization,",
         "  contact forces, `minimal_minv_norm`, plant): the determinant is proved nonzero",
@@ -160,6 +185,9 @@ def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
                 "|---|---|---|---|---|---|---|"]
         for row in res["functions"]:
             proved = "yes" if row["proved"] else f"**no**: {row['reason']}"
+            if row.get("composed"):
+                proved += (f" (over the inputs of `{row['composed']['function']}`: M̂ as it "
+                           "computes it)")
             if row.get("divisors"):
                 proved += f" (divisor {', '.join(row['divisors'])})"
             if row["open_guards"]:

@@ -109,7 +109,8 @@ class Exact:
 
     def __call__(self, point: Sequence[float]) -> list[mpmath.mpf]:
         with mpmath.workprec(EXACT_BITS):
-            vals = [mpmath.mpf(float(v)) for v in point] + [mpmath.mpf(0)] * self._extra
+            vals = [v if isinstance(v, mpmath.mpf) else mpmath.mpf(float(v))
+                    for v in point] + [mpmath.mpf(0)] * self._extra
             for f in self._temps:
                 vals.append(f(*vals))
             return [mpmath.mpf(f(*vals)) for f in self._outs]
@@ -214,12 +215,14 @@ def errors_at(program: Program, exact: Exact, pts: npt.NDArray[np.float32]
 
 def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float, float]],
            *, random_points: int = 200, climbs: int = 4, rounds: int = 3,
-           seed: int = 0) -> Found:
+           seed: int = 0, exact_of: Callable[[list[sp.Symbol]], Exact] | None = None
+           ) -> Found:
     """Random points, corners and points on the boundary layers (:func:`boundary_points`),
-    then a coordinate search over ``box`` for each output's largest error."""
+    then a coordinate search over ``box`` for each output's largest error (``exact_of``:
+    the exact reference for the inputs in order, if not ``ir``'s outputs)."""
     rng = np.random.default_rng(seed)
     symbols = sorted(program.inputs, key=lambda s: program.inputs[s])
-    exact = Exact(ir, symbols)
+    exact = exact_of(symbols) if exact_of is not None else Exact(ir, symbols)
     lo = np.array([box[s][0] for s in symbols], dtype=np.float64)
     hi = np.array([box[s][1] for s in symbols], dtype=np.float64)
 

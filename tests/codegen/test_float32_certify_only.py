@@ -1,0 +1,142 @@
+"""``python -m codegen.backends.c.certify --only``: re-certifies the named functions and
+steps (and the steps reading them), keeps every other stored entry byte for byte, and
+refuses an unknown name, or a stored result it needs that is stale, with one line and
+nothing written. And a function certified over its producer's image (compose.py)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from codegen.backend import RobotTarget
+from codegen.backends.c.certify import __main__ as cli
+from codegen.backends.c.certify.boxes import DERIVED, ENVELOPE, box_of, derived_key
+from codegen.backends.c.certify.compose import ComposedExact, composed
+from codegen.backends.c.certify.only import Refused, plan_only
+from codegen.backends.c.certify.robot import programs, robot_angles, robot_params
+from codegen.backends.c.certify.search import Exact, node_values
+from codegen.backends.c.certify.steps import steps_of
+from codegen.certify.stored import RESULTS_DIR
+from codegen.generate import robot_target
+from modeling.robot_file import load_robot_model, model_of, robot_source
+from modeling.robot_io import shipped_robot_file
+
+
+@pytest.fixture(scope="module")
+def drishti() -> RobotTarget:
+    model, robot = load_robot_model(None)
+    return robot_target(model, robot)
+
+
+@pytest.fixture
+def results(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A copy of the committed results the command reads and writes."""
+    for path in RESULTS_DIR.glob("*.json"):
+        shutil.copy(path, tmp_path / path.name)
+    monkeypatch.setattr(cli, "RESULTS_DIR", tmp_path)
+    monkeypatch.setattr(cli, "DOC", tmp_path / "FLOAT32.md")
+    return tmp_path
+
+
+def _entries(data: dict[str, Any]) -> dict[str, str]:
+    """Each function's and step's entry as the command writes it."""
+    out = {f"function {r['function']}": json.dumps(r, indent=1, sort_keys=True)
+           for r in data["functions"]}
+    out.update({f"step {s['controller']}/{s['formulation']}": json.dumps(s, indent=1,
+                                                                         sort_keys=True)
+                for s in data["steps"]})
+    return out
+
+
+def test_only_rewrites_the_named_entry_and_keeps_the_others(results: Path) -> None:
+    before = {p.name: p.read_text() for p in results.glob("*.json")}
+    assert cli.main(["--robot", "drishti", "--only", "mass_matrix", "--seconds", "0.2",
+                     "--search", "3"]) == 0
+    old = _entries(json.loads(before["drishti.json"]))
+    data = json.loads((results / "drishti.json").read_text())
+    new = _entries(data)
+    assert set(new) == set(old)
+    changed = {k for k in old if new[k] != old[k]}
+    assert changed == {"function mass_matrix"}  # its search ran 3 points, not the stored run's
+    assert [r["function"] for r in data["functions"]] == [
+        r["function"] for r in json.loads(before["drishti.json"])["functions"]]
+    assert {k: v for k, v in data.items() if k not in ("functions", "steps")} == {
+        k: v for k, v in json.loads(before["drishti.json"]).items()
+        if k not in ("functions", "steps")}
+    assert (results / "trailer.json").read_text() == before["trailer.json"]
+    assert "mass_matrix" in (results / "FLOAT32.md").read_text()
+
+
+def test_an_unknown_name_is_refused_with_one_line(
+        results: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    before = {p.name: p.read_text() for p in results.glob("*.json")}
+    assert cli.main(["--robot", "drishti", "--only", "mass_matrix,mass_matirx"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "mass_matirx" in err and "mass_matrix," not in err
+    assert {p.name: p.read_text() for p in results.glob("*.json")} == before
+    assert not (results / "FLOAT32.md").exists()
+
+
+def test_steps_reading_a_named_function_are_recertified(drishti: RobotTarget) -> None:
+    stored = json.loads((RESULTS_DIR / "drishti.json").read_text())
+    plan = plan_only("drishti", drishti, stored, ["tdroc_weighted_gain"])
+    steps = list(steps_of(drishti, {ir.name for ir, _ in programs(drishti)}))
+    windowed = {s.key for s in steps if s.gain == "tdroc_weighted_gain"}
+    assert windowed and plan.steps == windowed and plan.functions == {"tdroc_weighted_gain"}
+    # a step named alone: the functions it combines are read from the stored results
+    plan = plan_only("drishti", drishti, stored, ["roc/minimal"])
+    assert plan.steps == {"roc/minimal"} and not plan.functions
+    assert {"minimal_roc_law", "lyapunov_p"} <= set(plan.stored)
+    assert {"p12", "p22"} <= set(plan.derived)
+
+
+def test_a_stale_stored_result_it_needs_is_refused(drishti: RobotTarget) -> None:
+    stored = json.loads((RESULTS_DIR / "drishti.json").read_text())
+    for row in stored["functions"]:
+        if row["function"] == "lyapunov_p":
+            row["hash"] = "0" * 16
+    plan_only("drishti", drishti, stored, ["mass_matrix"])  # reads nothing stored
+    with pytest.raises(Refused, match=r"lyapunov_p.*stale"):
+        plan_only("drishti", drishti, stored, ["minimal_roc_law"])  # its box reads P
+
+
+@pytest.fixture(scope="module")
+def trailer() -> RobotTarget:
+    model, robot = model_of(robot_source(shipped_robot_file("trailer")))
+    return robot_target(model, robot)
+
+
+def test_composed_program_is_the_function_of_q_its_step_computes(trailer: RobotTarget) -> None:
+    """minimal_minv_norm_mhat over M-hat as minimal_mhat computes it (compose.py): its
+    program in double and its exact reference agree with minimal_minv_norm, the same
+    quantity generated as one function of q (a wrong wiring of M-hat's entries fails)."""
+    own = {ir.name: (ir, prog) for ir, prog in programs(trailer)}
+    (first, first_prog), (second, second_prog) = own["minimal_mhat"], own[
+        "minimal_minv_norm_mhat"]
+    wiring = {a: DERIVED[derived_key(a)][1][0] for a in second_prog.input_names.values()
+              if derived_key(a)}
+    assert wiring and set(wiring.values()) <= {lv for lv, _ in first_prog.outputs}
+    prog = composed(first_prog, second_prog, wiring)
+    assert prog.producer == "minimal_mhat" and not any(
+        derived_key(a) for a in prog.input_names.values())
+    ref_ir, ref_prog = own["minimal_minv_norm"]
+    symbols = sorted(prog.inputs, key=lambda s: prog.inputs[s])
+    assert set(symbols) == set(ref_prog.inputs)
+    angles, params = robot_angles(trailer), robot_params(trailer, ENVELOPE)
+    box = box_of(ref_prog, angles, params, {}, ENVELOPE)
+    rng = np.random.default_rng(3)
+    pts = np.array([[rng.uniform(*box[s]) for s in symbols] for _ in range(6)])
+    ours = node_values(prog, {s: pts[:, k] for k, s in enumerate(symbols)}, np.float64)
+    theirs = node_values(ref_prog, {s: pts[:, k] for k, s in enumerate(symbols)}, np.float64)
+    for (_, n), (_, m) in zip(prog.outputs, ref_prog.outputs, strict=True):
+        assert np.allclose(ours[n], theirs[m], rtol=1e-9, atol=0)
+    exact = ComposedExact(first, second, first_prog, second_prog, wiring, symbols)
+    reference = Exact(ref_ir, symbols)
+    for p in pts:
+        got, want = exact(list(p)), reference(list(p))
+        assert all(abs(g - w) <= 1e-25 * abs(w) for g, w in zip(got, want, strict=True))
