@@ -47,8 +47,8 @@ def model_section(prefix: str) -> str:
               "|---|---|---|---|---|"]
     for st in data.get("steps", []):
         reason = "; ".join(dict.fromkeys(st["reason"].split("; ")))
-        holds = "proved" if st["proved"] else f"if {reason.replace('leaves', 'stays in')}" if (
-            "leaves the declared" in reason) else f"not proved ({reason})"
+        holds = "proved" if st["proved"] else reason if reason.startswith("if ") else (
+            f"not proved ({reason})")
         lines.append(f"| {st['controller'].upper()} | {st['formulation']} | {st['bound']:.3g} "
                      f"| {st['tau_max']:g} | {holds} |")
     return "\n".join(lines) + "\n"

@@ -15,12 +15,14 @@ import pytest
 
 from codegen.backend import RobotTarget
 from codegen.backends.c.certify import __main__ as cli
+from codegen.backends.c.certify import steps as steps_module
+from codegen.backends.c.certify.bound import certify
 from codegen.backends.c.certify.boxes import DERIVED, ENVELOPE, box_of, derived_key
 from codegen.backends.c.certify.compose import ComposedExact, composed
-from codegen.backends.c.certify.only import Refused, plan_only
+from codegen.backends.c.certify.only import Refused, plan_only, step_inputs
 from codegen.backends.c.certify.robot import programs, robot_angles, robot_params
 from codegen.backends.c.certify.search import Exact, node_values
-from codegen.backends.c.certify.steps import steps_of
+from codegen.backends.c.certify.steps import step_certificates, steps_of
 from codegen.certify.stored import RESULTS_DIR
 from codegen.generate import robot_target
 from modeling.robot_file import load_robot_model, model_of, robot_source
@@ -140,3 +142,30 @@ def test_composed_program_is_the_function_of_q_its_step_computes(trailer: RobotT
     for p in pts:
         got, want = exact(list(p)), reference(list(p))
         assert all(abs(g - w) <= 1e-25 * abs(w) for g, w in zip(got, want, strict=True))
+
+
+def test_steps_take_the_estimate_over_its_enclosure_and_state_the_gain_conditions(
+        drishti: RobotTarget, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A TDC step's law is certified with H1hat over the estimator's certified enclosure
+    (wider than the law's declared box), so it needs no condition; a TDROC step names the
+    gain's conditions its bound holds under."""
+    stored = json.loads((RESULTS_DIR / "drishti.json").read_text())
+    plan = plan_only("drishti", drishti, stored, ["tdc/minimal", "tdroc/minimal"])
+    certs: dict[str, Any] = {}
+    step_inputs(drishti, plan, certs)
+    seen: dict[str, dict[Any, tuple[float, float]]] = {}
+
+    def spy(prog: Any, box: Any, errs: Any, seconds: float) -> Any:
+        seen[prog.function] = dict(box)
+        return certify(prog, box, errs, seconds=0.1, max_boxes=1)
+
+    monkeypatch.setattr(steps_module, "certify", spy)
+    rows = {s.controller: s for s in step_certificates(drishti, certs,
+                                                       only={"tdc/minimal", "tdroc/minimal"})}
+    prog, declared, _ = certs["minimal_tdc_law"]
+    est = certs["minimal_tde"][2]
+    h1 = [s for s, a in prog.input_names.items() if a.startswith("H1hat")]
+    assert h1 and all(seen["minimal_tdc_law"][s][1] >= max(r[1] for r in est.ranges) >
+                      declared[s][1] for s in h1)
+    assert rows["tdc"].reason == "" or "k-hat" not in rows["tdc"].reason
+    assert not rows["tdroc"].proved and rows["tdroc"].reason.startswith("if k-hat stays in")

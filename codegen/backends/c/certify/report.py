@@ -176,6 +176,25 @@ def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
         "  (`linearization`, ~1e2).",
         "* The bound is for the exact function of the float32 inputs; inputs that a step",
         "  computes in float32 carry their own certified errors only in the steps' table.",
+        "* **The steps' torque bounds and (17)'s estimate**: a TDC/TDROC step's law is",
+        "  certified with H1hat over the estimator's certified output enclosure (every",
+        "  state, rate history and input in the estimator's box: up to ±7e4 on Drishti's",
+        "  paper form, ±1.4e3 on the trailer), not the law's declared ±100 box, so the TDC",
+        "  steps' bounds are unconditional.",
+        "* **The TDROC steps' bounds are conditional** (the table's \"if ...\"): (25)'s k̂",
+        "  enters the law over its declared gain box [0, 100] with the gain function's",
+        "  bound as its error, and that bound holds over the gain function's box (the",
+        "  window's difference norms ‖Ω(i) − Ω(i+1)‖ and ‖M̂⁻¹‖ within [0, 10]). The",
+        "  certified enclosures do not prove these: k̂'s reaches 800 (eight weights in",
+        "  [0, 1], taken independently, times 10 × 10), the difference norms over the",
+        "  estimate's enclosure reach 2e3–2e5, the trailer's ‖M̂⁻¹‖ 66.7. Certifying the",
+        "  gain and the law over those enclosures instead would put the law's k̂ anywhere",
+        "  up to its cap, GAIN_MAX = 1e6, 10⁴ times the declared box (not attempted).",
+        "  Nothing in the step checks the condition (k̂ is capped at GAIN_MAX only): it",
+        "  holds while each new difference norm and ‖M̂⁻¹‖ stay ≤ 10 and k̂ ≤ 100; a",
+        "  firmware that relies on the TDROC bound should check k̂ and the new difference",
+        "  norm against those values. Each row states its conditions and the enclosure",
+        "  that fails to prove them (codegen/backends/c/certify/steps.py).",
         "",
     ]
     for res in results:
@@ -204,7 +223,8 @@ def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
                 " bound / τ_max | proved |", "|---|---|---|---|---|---|---|"]
         for st in res["steps"]:
             reason = "; ".join(dict.fromkeys(st["reason"].split("; ")))
-            proved = "yes" if st["proved"] else f"**no**: {reason}"
+            proved = "yes" if st["proved"] else f"**{reason}**" if reason.startswith(
+                "if ") else f"**no**: {reason}"
             out.append(f"| {st['controller'].upper()} | {st['formulation']} | `{st['law']}` "
                        f"| {st['bound']:.3g} | {st['tau_max']:g} | "
                        f"{st['bound'] / st['tau_max']:.2g} | {proved} |")

@@ -70,6 +70,7 @@ class Step:
     law: str
     estimator: str  # "" without (17)'s estimate
     gain: str  # "" without (25)'s window gain
+    norm: str = ""  # the ||M-hat^-1|| function (25)'s gain reads
 
     @property
     def key(self) -> str:
@@ -80,7 +81,8 @@ class Step:
         uses, ``law`` the law's program: the law, estimator and gain, and the producers of
         the law's derived inputs (P's entries, M-hat)."""
         args = {access.split("[")[0] for access in law.input_names.values()}
-        return frozenset(n for n in (self.law, self.estimator, self.gain) if n) | {
+        return frozenset(n for n in (self.law, self.estimator, self.gain, self.norm)
+                         if n) | {
             fn for arg, (fn, _) in DERIVED.items() if arg.split("[")[0] in args}
 
 
@@ -95,7 +97,44 @@ def steps_of(target: RobotTarget, names: Collection[str]) -> Iterator[Step]:
             law_name = _pick(set(names), law.format(f=form), paper)
             if law_name:
                 yield Step(info.name, form, paper, law_name,
-                           _pick(set(names), est.format(f=form), paper) if est else "", gain)
+                           _pick(set(names), est.format(f=form), paper) if est else "", gain,
+                           _pick(set(names), f"{form}_minv_norm", paper) if gain else "")
+
+
+def _gain_conditions(certs: Mapping[str, tuple[Program, Mapping[object, Interval],
+                                                Certificate]],
+                     step: Step, declared: Interval, law_box: Mapping[object, Interval]
+                     ) -> list[str]:
+    """The conditions ("if ...") a TDROC step's bound holds under: (25)'s k-hat and the
+    gain function's inputs within the boxes the law's and the gain's certificates hold
+    over, wherever the certified enclosures do not prove it (the step checks none of
+    these: k-hat is capped at GAIN_MAX = 1e6 only): k-hat's enclosure against the law's
+    gain box; ||M-hat^-1||'s (the norm function's enclosure) and the window's difference
+    norms' (at most 2 sqrt(sum of max|H1hat_i|^2) over the law's H1hat box, i.e. the
+    estimator's enclosure) against the gain function's boxes."""
+    notes: list[str] = []
+    gprog, gbox, gcert = certs[step.gain]
+    top = max(r[1] for r in gcert.ranges)
+    if top > declared[1]:
+        notes.append(f"if k-hat stays in the law's gain box [{declared[0]:g}, {declared[1]:g}]"
+                     f" ({step.gain}'s enclosure reaches {top:.3g})")
+    inputs = {a.split("[")[0]: gbox[s] for s, a in gprog.input_names.items()}
+    if step.norm in certs and "minv_norm" in inputs:
+        top = max(r[1] for r in certs[step.norm][2].ranges)
+        if top > inputs["minv_norm"][1]:
+            notes.append(f"if the norm of M-hat^-1 stays in {step.gain}'s box [0, "
+                         f"{inputs['minv_norm'][1]:g}] ({step.norm}'s enclosure reaches "
+                         f"{top:.3g})")
+    law = certs[step.law][0]
+    h = [max(abs(b[0]), abs(b[1])) for s, b in law_box.items()
+         if law.input_names.get(s, "").startswith("H1hat")]
+    if h and "dn_new" in inputs:
+        top = 2.0 * sum(v * v for v in h) ** 0.5
+        if top > inputs["dn_new"][1]:
+            notes.append(f"if the window's difference norms stay in {step.gain}'s box "
+                         f"[0, {inputs['dn_new'][1]:g}] (over the estimate's enclosure they "
+                         f"reach {top:.3g})")
+    return notes
 
 
 def step_certificates(target: RobotTarget,
@@ -113,9 +152,11 @@ def step_certificates(target: RobotTarget,
         if only is not None and step.key not in only:
             continue
         law_name, est_name, gain, paper = step.law, step.estimator, step.gain, step.paper
-        prog, box, _ = certs[law_name]
+        prog, declared, _ = certs[law_name]
+        box = dict(declared)
         errs: dict[object, float] = {}
         notes: list[str] = []
+        gain_box: Interval | None = None
         for sym, access in prog.input_names.items():
             arg = access.split("[")[0]
             if arg == "e":
@@ -127,15 +168,22 @@ def step_certificates(target: RobotTarget,
             elif arg == "trig":
                 errs[sym] = 4.0 * U
             elif arg == "H1hat" and est_name:
+                # (17)'s estimate as the step computes it: over the estimator's certified
+                # output enclosure (every state and history in its box), not the law's
+                # declared H1hat box, which that enclosure exceeds (docs/FLOAT32.md)
                 errs[sym] = bound_of(est_name)
-                lo, hi = box[sym]
-                rng = certs[est_name][2].ranges
-                if min(r[0] for r in rng) < lo or max(r[1] for r in rng) > hi:
-                    notes.append(f"{est_name}'s output leaves the declared H1hat box")
+                est = certs[est_name][2]
+                rng = ([est.ranges[est.outputs.index(access)]] if access in est.outputs
+                       else est.ranges)
+                box[sym] = (min(box[sym][0], *(r[0] for r in rng)),
+                            max(box[sym][1], *(r[1] for r in rng)))
             elif arg == "gain" and gain:
                 errs[sym] = bound_of(gain)
+                gain_box = box[sym]
             elif arg == "mhat":
                 errs[sym] = bound_of("minimal_mhat")
+        if gain_box is not None:  # after the loop: box's H1hat entries are the estimate's
+            notes += _gain_conditions(certs, step, gain_box, box)
         cert = certify(prog, box, errs, seconds=seconds)
         rows = (tuple(f"u[{i}]" for i in layout.actuated) if paper
                 else tuple(f"u[{i}]" for i in range(layout.nu)))
