@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from codegen.backend import RobotTarget
+from codegen.backends.c.backend import config_for
 from codegen.backends.c.certify import __main__ as cli
 from codegen.backends.c.certify import steps as steps_module
 from codegen.backends.c.certify.bound import certify
@@ -23,6 +24,8 @@ from codegen.backends.c.certify.only import Refused, plan_only, step_inputs
 from codegen.backends.c.certify.robot import programs, robot_angles, robot_params
 from codegen.backends.c.certify.search import Exact, node_values
 from codegen.backends.c.certify.steps import step_certificates, steps_of
+from codegen.backends.c.lowering import function_context
+from codegen.certify.header import body_hash
 from codegen.certify.stored import RESULTS_DIR
 from codegen.generate import robot_target
 from modeling.robot_file import load_robot_model, model_of, robot_source
@@ -169,3 +172,18 @@ def test_steps_take_the_estimate_over_its_enclosure_and_state_the_gain_condition
                       declared[s][1] for s in h1)
     assert rows["tdc"].reason == "" or "k-hat" not in rows["tdc"].reason
     assert not rows["tdroc"].proved and rows["tdroc"].reason.startswith("if k-hat stays in")
+
+
+def test_committed_compositions_are_current(trailer: RobotTarget) -> None:
+    """A row certified over its producer's image (compose.py) is stale when the producer's
+    printing changes too, which the row's own hash does not see: its ``composed`` hash must
+    match the producer printed now (re-certify with ``--only <producer>``)."""
+    config = config_for(trailer.layout)
+    irs = {ir.name: ir for ir in trailer.functions()}
+    rows = [r for r in json.loads((RESULTS_DIR / "trailer.json").read_text())["functions"]
+            if r.get("composed")]
+    assert [r["function"] for r in rows] == ["minimal_minv_norm_mhat"]
+    for row in rows:
+        producer = irs[row["composed"]["function"]]
+        assert row["composed"]["hash"] == body_hash(
+            function_context(producer, config, "")["body"]), row["function"]
