@@ -187,3 +187,22 @@ def test_committed_compositions_are_current(trailer: RobotTarget) -> None:
         producer = irs[row["composed"]["function"]]
         assert row["composed"]["hash"] == body_hash(
             function_context(producer, config, "")["body"]), row["function"]
+
+
+def test_stale_names_the_functions_whose_printing_changed(drishti: RobotTarget) -> None:
+    stored = json.loads((RESULTS_DIR / "drishti.json").read_text())
+    assert not plan_only("drishti", drishti, stored, ["stale"])  # the committed are current
+    for row in stored["functions"]:
+        if row["function"] == "kinematics":
+            row["hash"] = "0" * 16
+    plan = plan_only("drishti", drishti, stored, ["stale"])
+    assert plan.functions == {"kinematics"} and "stale" in plan.known
+
+
+def test_stale_with_nothing_stale_writes_nothing(
+        results: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    before = {p.name: p.read_text() for p in results.glob("*.json")}
+    assert cli.main(["--robot", "drishti", "--only", "stale"]) == 0
+    assert "nothing to re-certify" in capsys.readouterr().out
+    assert {p.name: p.read_text() for p in results.glob("*.json")} == before
+    assert not (results / "FLOAT32.md").exists()

@@ -4,6 +4,7 @@ trailer in float32, search for the largest error, and write the results.
     python -m codegen.backends.c.certify                 # both robots; writes the results
     python -m codegen.backends.c.certify --robot trailer --seconds 2 --no-write
     python -m codegen.backends.c.certify --only minimal_tde,tdroc/minimal   # those alone
+    python -m codegen.backends.c.certify --only stale      # what the printing changed
 
 Writes ``codegen/certify/results/<robot>.json`` (per function: the box, the certified bound
 and the enclosure of each output, the no-overflow verdict, the largest error found and
@@ -65,8 +66,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="random points per function (default 150)")
     parser.add_argument("--only", action="append", default=None, metavar="NAME[,NAME...]",
                         help="re-certify only these functions and controller steps "
-                             "(tdroc/minimal, or tdroc for each formulation), and the steps "
-                             "that read them; keep the others' stored results")
+                             "(tdroc/minimal, or tdroc for each formulation; 'stale': every "
+                             "function whose stored result is stale), and the steps that "
+                             "read them; keep the others' stored results")
     parser.add_argument("--no-write", action="store_true")
     parser.add_argument("--render-only", action="store_true",
                         help="only rewrite docs/FLOAT32.md from the committed results")
@@ -89,11 +91,15 @@ def main(argv: list[str] | None = None) -> int:
         except Refused as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
-        unknown = [n for n in names if not any(n in p.known for p in plans.values() if p)]
+        unknown = [n for n in names
+                   if not any(n in p.known for p in plans.values() if p is not None)]
         if not names or unknown:
             print(f"error: --only: {', '.join(unknown) or 'no name'} is not a function or "
                   f"controller step of {' or '.join(robots)}", file=sys.stderr)
             return 2
+        if not any(plans.values()):  # "stale" with every stored result current
+            print("nothing to re-certify: every stored result named is current")
+            return 0
     for name in robots:
         target, start = targets[name]
         plan = plans[name]

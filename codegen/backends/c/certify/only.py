@@ -8,9 +8,11 @@ now; otherwise the command refuses and says which to name too): the enclosures o
 :data:`~codegen.backends.c.certify.boxes.DERIVED` inputs (P's entries from ``lyapunov_p``,
 M-hat's from ``minimal_mhat``) that make the boxes, and, for a step, the bounds and
 enclosures of the functions it combines (:meth:`~codegen.backends.c.certify.steps.Step.reads`).
-A step is re-certified when it is named (``tdroc/minimal``, or ``tdroc`` for each of its
-formulations) or when it reads a re-certified function: its bound is made of theirs; a
-function certified over its producer's image (:mod:`.compose`) when its producer is.
+``--only stale`` names every function whose stored result is missing or stale (its
+printing, or its producer's for a composed one, changed since). A step is re-certified
+when it is named (``tdroc/minimal``, or ``tdroc`` for each of its formulations) or when it
+reads a re-certified function: its bound is made of theirs; a function certified over its
+producer's image (:mod:`.compose`) when its producer is.
 """
 
 from __future__ import annotations
@@ -30,6 +32,9 @@ from codegen.backends.c.certify.robot import derive, programs, robot_angles, rob
 from codegen.backends.c.certify.steps import steps_of
 from codegen.backends.c.lowering import function_context
 from codegen.certify.header import body_hash
+
+# the name ``--only`` takes for every function whose stored result is missing or stale
+STALE = "stale"
 
 
 class Refused(ValueError):
@@ -76,12 +81,22 @@ def plan_only(robot: str, target: RobotTarget, stored: Mapping[str, Any] | None,
     irs = {ir.name: (ir, prog) for ir, prog in programs(target)}
     steps = {s.key: s for s in steps_of(target, irs)}
     rows = {r["function"]: r for r in (stored or {}).get("functions", [])}
+    config = config_for(target.layout)
+
+    def current(name: str) -> bool:
+        row = rows.get(name)
+        return row is not None and row["hash"] == body_hash(
+            function_context(irs[name][0], config, "")["body"])
+
     functions = frozenset(n for n in names if n in irs)
+    if STALE in names:  # every function with no stored result or a stale one
+        functions |= {n for n in irs if not current(n) or (
+            rows[n].get("composed") and not current(rows[n]["composed"]["function"]))}
     # a function certified over its producer's image (compose.py) with its producer
     functions |= {n for n, r in rows.items() if n in irs
                   and r.get("composed", {}).get("function") in functions}
     chosen = {k for n in names for k, s in steps.items() if n in (k, s.controller)}
-    known = frozenset(n for n in names if n in irs) | {
+    known = frozenset(n for n in names if n in irs or n == STALE) | {
         n for n in names for s in steps.values() if n in (s.key, s.controller)}
     chosen |= {k for k, s in steps.items() if s.reads(irs[s.law][1]) & functions}
     plan = Plan(functions, frozenset(chosen), frozenset(known), {}, {})
@@ -93,13 +108,12 @@ def plan_only(robot: str, target: RobotTarget, stored: Mapping[str, Any] | None,
              for k in map(derived_key, irs[n][1].input_names.values()) if k}
     reads |= {n for k in chosen for n in steps[k].reads(irs[steps[k].law][1])}
     reads -= functions
-    config = config_for(target.layout)
     for name in sorted(reads):
         row = rows.get(name)
         if row is None:
             raise Refused(f"{robot}: --only needs the stored certificate of {name}, and there "
                           f"is none: name {name} too (or run without --only)")
-        if row["hash"] != body_hash(function_context(irs[name][0], config, "")["body"]):
+        if not current(name):
             raise Refused(f"{robot}: --only needs the stored certificate of {name}, which is "
                           f"stale (its printed code changed): name {name} too")
         plan.stored[name] = stored_certificate(row)
