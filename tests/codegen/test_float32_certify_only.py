@@ -206,3 +206,12 @@ def test_stale_with_nothing_stale_writes_nothing(
     assert "nothing to re-certify" in capsys.readouterr().out
     assert {p.name: p.read_text() for p in results.glob("*.json")} == before
     assert not (results / "FLOAT32.md").exists()
+
+
+def test_a_producer_brings_the_functions_whose_box_it_makes(drishti: RobotTarget) -> None:
+    """Re-certifying lyapunov_p changes P's enclosure, the box of every law reading it."""
+    stored = json.loads((RESULTS_DIR / "drishti.json").read_text())
+    plan = plan_only("drishti", drishti, stored, ["lyapunov_p"])
+    readers = {ir.name for ir, prog in programs(drishti)
+               if any(a.startswith("p12") for a in prog.input_names.values())}
+    assert readers and readers | {"lyapunov_p"} == plan.functions

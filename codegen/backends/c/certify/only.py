@@ -11,8 +11,9 @@ enclosures of the functions it combines (:meth:`~codegen.backends.c.certify.step
 ``--only stale`` names every function whose stored result is missing or stale (its
 printing, or its producer's for a composed one, changed since). A step is re-certified
 when it is named (``tdroc/minimal``, or ``tdroc`` for each of its formulations) or when it
-reads a re-certified function: its bound is made of theirs; a function certified over its
-producer's image (:mod:`.compose`) when its producer is.
+reads a re-certified function: its bound is made of theirs; a function that reads a
+re-certified producer's derived inputs (its box is their enclosure), or is certified over
+its image (:mod:`.compose`), when its producer is.
 """
 
 from __future__ import annotations
@@ -92,7 +93,11 @@ def plan_only(robot: str, target: RobotTarget, stored: Mapping[str, Any] | None,
     if STALE in names:  # every function with no stored result or a stale one
         functions |= {n for n in irs if not current(n) or (
             rows[n].get("composed") and not current(rows[n]["composed"]["function"]))}
-    # a function certified over its producer's image (compose.py) with its producer
+    # the readers of a re-certified producer's derived inputs (their boxes are its output
+    # enclosures), and a function certified over its producer's image (compose.py)
+    functions |= {n for n, (_, prog) in irs.items()
+                  if any(DERIVED[k][0] in functions
+                         for k in map(derived_key, prog.input_names.values()) if k)}
     functions |= {n for n, r in rows.items() if n in irs
                   and r.get("composed", {}).get("function") in functions}
     chosen = {k for n in names for k, s in steps.items() if n in (k, s.controller)}
