@@ -215,3 +215,23 @@ def test_a_producer_brings_the_functions_whose_box_it_makes(drishti: RobotTarget
     readers = {ir.name for ir, prog in programs(drishti)
                if any(a.startswith("p12") for a in prog.input_names.values())}
     assert readers and readers | {"lyapunov_p"} == plan.functions
+
+
+def test_an_adapted_gain_step_states_that_its_gain_must_stay_in_the_box(
+        drishti: RobotTarget, monkeypatch: pytest.MonkeyPatch) -> None:
+    """ASMC's law reads the gain the state carries, which the step caps at GAIN_MAX only:
+    its bound holds if that gain stays in the law's declared box, and the row says so (it
+    is not 'proved'); PI's law reads no gain and needs no such condition."""
+    keys = ["asmc/minimal", "pi/minimal"]
+    stored = json.loads((RESULTS_DIR / "drishti.json").read_text())
+    plan = plan_only("drishti", drishti, stored, keys)
+    certs: dict[str, Any] = {}
+    step_inputs(drishti, plan, certs)
+    monkeypatch.setattr(steps_module, "certify", lambda prog, box, errs, seconds: certify(
+        prog, box, errs, seconds=0.1, max_boxes=1))
+    rows = {s.controller: s for s in step_certificates(drishti, certs, only=set(keys))}
+    assert not rows["asmc"].proved
+    assert rows["asmc"].reason.startswith("if the adapted gain the state carries stays in")
+    assert "adapted gain" not in rows["pi"].reason
+    committed = {s["controller"]: s for s in stored["steps"] if s["formulation"] == "minimal"}
+    assert not committed["asmc"]["proved"] and "adapted gain" in committed["asmc"]["reason"]

@@ -71,6 +71,7 @@ class Step:
     estimator: str  # "" without (17)'s estimate
     gain: str  # "" without (25)'s window gain
     norm: str = ""  # the ||M-hat^-1|| function (25)'s gain reads
+    adaptive: bool = False  # the law's gain is adapted and carried in the state (ASMC)
 
     @property
     def key(self) -> str:
@@ -98,7 +99,8 @@ def steps_of(target: RobotTarget, names: Collection[str]) -> Iterator[Step]:
             if law_name:
                 yield Step(info.name, form, paper, law_name,
                            _pick(set(names), est.format(f=form), paper) if est else "", gain,
-                           _pick(set(names), f"{form}_minv_norm", paper) if gain else "")
+                           _pick(set(names), f"{form}_minv_norm", paper) if gain else "",
+                           info.adaptive)
 
 
 def _gain_conditions(certs: Mapping[str, tuple[Program, Mapping[object, Interval],
@@ -180,6 +182,11 @@ def step_certificates(target: RobotTarget,
             elif arg == "gain" and gain:
                 errs[sym] = bound_of(gain)
                 gain_box = box[sym]
+            elif arg == "gain" and step.adaptive:
+                # the adapted gain is the state's, which nothing keeps in the law's box
+                notes.append(f"if the adapted gain the state carries stays in the law's "
+                             f"gain box [{box[sym][0]:g}, {box[sym][1]:g}] (the step caps "
+                             "it at GAIN_MAX only)")
             elif arg == "mhat":
                 errs[sym] = bound_of("minimal_mhat")
         if gain_box is not None:  # after the loop: box's H1hat entries are the estimate's
