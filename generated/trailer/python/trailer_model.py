@@ -65,7 +65,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     Returns:
         qddot: array of 8 (shape 8x1, row-major)
 
-    operations after CSE: 72 add, 122 mul, 5 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 67 add, 140 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -91,96 +91,95 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         _t0 = theta_cart - theta_tractor
         _t1 = math.sin(_t0)
         _t2 = math.cos(_t0)
-        _t3 = 0.3*_t2
-        _t4 = 0.3*_t1
-        _t5 = -1.6666666666666667*_t1
-        _t6 = 0.2*_t5
-        _t7 = -1.6666666666666667*_t3
-        _t8 = 0.2*_t7
-        _t9 = K_theta_cart_x_tractor*_t2
-        _t10 = 2.4154589371980677*radius_right
-        _t11 = -2.4154589371980677*radius_left
-        _t12 = _t10*thetadot_right + _t11*thetadot_left
-        _t13 = _t12*_t12
-        _t14 = 0.5*radius_right
-        _t15 = 0.5*radius_left
-        _t16 = _t14*thetadot_right + _t15*thetadot_left
-        _t17 = _t12*_t7 + _t16*_t5
-        _t18 = _t17*_t17
-        _t19 = K_theta_cart_x_tractor*_t4
-        _t20 = K_theta_cart_x_tractor_2*_t3
-        _t21 = 1.6666666666666667*_t2
-        _t22 = 0.2*_t21
-        _t23 = -1.6666666666666667*_t4
-        _t24 = 0.2*_t23
-        _t25 = _t12*_t16
-        _t26 = 1.0/radius_cart_right
-        _t27 = _t2 + _t6
-        _t28 = _t26*_t27
-        _t29 = J_theta_cart_right*_t28
-        _t30 = -_t4 + _t8
-        _t31 = _t26*_t30
-        _t32 = J_theta_cart_right*_t31
-        _t33 = 1.0/radius_cart_left
-        _t34 = _t2 - _t6
-        _t35 = _t33*_t34
-        _t36 = J_theta_cart_left*_t35
-        _t37 = -_t4 - _t8
-        _t38 = _t33*_t37
-        _t39 = J_theta_cart_left*_t38
-        _t40 = K_theta_cart_x_tractor_2*_t1 - _t9
-        _t41 = _t13*_t19 + _t13*_t20
-        _t42 = -_t16*_t17 + _t25
-        _t43 = -_t12*_t17 + _t13
-        _t44 = _t21*_t42 + _t23*_t43
-        _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
-        _t46 = 1.0/radius_right
-        _t47 = 1.0/radius_left
-        _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t49 = J_x_tractor + _t48*_t5
-        _t50 = J_theta_cart*_t5 + _t48
-        _t51 = J_theta_right*_t46
-        _t52 = J_theta_left*_t47
-        _t53 = _t28*_t29 + _t35*_t36 + _t46*_t51 + _t47*_t52 + _t49 + _t5*_t50
-        _t54 = K_theta_tractor_x_tractor_2 + _t48*_t7
-        _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-        _t56 = J_theta_cart*_t7 + _t55
-        _t57 = 0.207*_t46
-        _t58 = J_theta_right*_t57
-        _t59 = -0.207*_t47
-        _t60 = J_theta_left*_t59
-        _t61 = _t28*_t32 + _t35*_t39 + _t46*_t58 + _t47*_t60 + _t5*_t56 + _t54
-        _t62 = J_theta_tractor + _t55*_t7
-        _t63 = _t31*_t32 + _t38*_t39 + _t56*_t7 + _t57*_t58 + _t59*_t60 + _t62
-        _t64 = _t53*_t63 - _t61*_t61
-        _t65 = math.cos(theta_tractor)
-        _t66 = math.sin(theta_tractor)
-        _t67 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
-        _t68 = -_t18*_t19 - _t18*_t20
-        _t69 = _t1 + _t22
-        _t70 = _t26*_t69
-        _t71 = _t24 + _t3
-        _t72 = _t26*_t71
-        _t73 = _t1 - _t22
-        _t74 = _t33*_t73
-        _t75 = -_t24 + _t3
-        _t76 = _t33*_t75
-        _t77 = _t42*_t70 + _t43*_t72
-        _t78 = _t42*_t74 + _t43*_t76
-        _t79 = _t29*_t77 + _t36*_t78 + _t44*_t48 + _t45*_t5 + _t67
-        _t80 = -K_theta_tractor_x_tractor*_t25 + _t32*_t77 + _t39*_t78 + _t44*_t55 + _t45*_t7 + _t68
-        _t81 = _t46*tau_right + _t47*tau_left - _t79
-        _t82 = _t57*tau_right + _t59*tau_left - _t80
-        _t83 = 1.0/_t64
-        _t84 = _t83*(-_t61*_t82 + _t63*_t81)
-        _t85 = _t83*(_t53*_t82 - _t61*_t81)
-        _t86 = _t44 + _t5*_t84 + _t7*_t85
-        _t87 = _t46*_t84 + _t57*_t85
-        _t88 = _t47*_t84 + _t59*_t85
-        _t89 = _t28*_t84 + _t31*_t85 + _t77
-        _t90 = _t35*_t84 + _t38*_t85 + _t78
-        _t91 = -_t25*_t66 + _t65*_t84
-        _t92 = _t25*_t65 + _t66*_t84
+        _t3 = radius_left*radius_right
+        _t4 = 1.0/_t3
+        _t5 = _t4*radius_left
+        _t6 = _t4*radius_right
+        _t7 = radius_cart_left*radius_cart_right
+        _t8 = -0.6*_t7
+        _t9 = 1.0/_t8
+        _t10 = _t7*_t9
+        _t11 = 0.5*radius_right
+        _t12 = 0.5*radius_left
+        _t13 = _t11*thetadot_right + _t12*thetadot_left
+        _t14 = _t1*_t10
+        _t15 = -0.3*_t2
+        _t16 = -_t10*_t15
+        _t17 = 2.4154589371980677*radius_right
+        _t18 = -2.4154589371980677*radius_left
+        _t19 = _t17*thetadot_right + _t18*thetadot_left
+        _t20 = _t13*_t14 + _t16*_t19
+        _t21 = _t13*_t20
+        _t22 = -0.3*_t19
+        _t23 = _t20*_t22
+        _t24 = 0.2*radius_cart_left
+        _t25 = -0.6*radius_cart_left
+        _t26 = _t9*(_t1*_t24 + _t2*_t25)
+        _t27 = -0.2*radius_cart_right
+        _t28 = -0.6*radius_cart_right
+        _t29 = _t9*(_t1*_t27 + _t2*_t28)
+        _t30 = J_theta_right*_t5
+        _t31 = J_theta_left*_t6
+        _t32 = J_theta_cart_right*_t26
+        _t33 = J_theta_cart_left*_t29
+        _t34 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+        _t35 = _t14*_t34
+        _t36 = J_x_tractor + _t35
+        _t37 = J_theta_cart*_t14 + _t34
+        _t38 = _t14*_t37 + _t26*_t32 + _t29*_t33 + _t30*_t5 + _t31*_t6 + _t36
+        _t39 = _t16*_t34
+        _t40 = K_theta_tractor_x_tractor_2 + _t39
+        _t41 = 0.207*_t5
+        _t42 = J_theta_right*_t41
+        _t43 = -0.207*_t6
+        _t44 = J_theta_left*_t43
+        _t45 = 0.3*_t1
+        _t46 = _t9*(-_t15*_t24 - _t25*_t45)
+        _t47 = J_theta_cart_right*_t46
+        _t48 = _t9*(-_t15*_t27 - _t28*_t45)
+        _t49 = J_theta_cart_left*_t48
+        _t50 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+        _t51 = J_theta_cart*_t16 - 0.3*_t50
+        _t52 = _t14*_t51 + _t26*_t47 + _t29*_t49 + _t40 + _t42*_t5 + _t44*_t6
+        _t53 = _t16*_t50
+        _t54 = J_theta_tractor - 0.3*_t53
+        _t55 = _t16*_t51 + _t41*_t42 + _t43*_t44 + _t46*_t47 + _t48*_t49 + _t54
+        _t56 = _t38*_t55 - _t52*_t52
+        _t57 = math.cos(theta_tractor)
+        _t58 = math.sin(theta_tractor)
+        _t59 = _t19*_t19
+        _t60 = _t20*_t20
+        _t61 = 0.3*_t59
+        _t62 = -_t13*_t19
+        _t63 = -_t3*_t4*_t62
+        _t64 = -_t1*_t23 - _t2*_t21
+        _t65 = _t1*_t21 - _t2*_t23
+        _t66 = _t1*_t61 - _t2*_t63 - _t64
+        _t67 = _t1*_t63 + _t2*_t61 - _t65
+        _t68 = _t10*_t66
+        _t69 = _t9*(_t24*_t66 + _t25*_t67)
+        _t70 = _t9*(_t27*_t66 + _t28*_t67)
+        _t71 = _t34*_t68 - _t50*_t60
+        _t72 = _t34*_t60 + _t50*_t68
+        _t73 = K_theta_tractor_x_tractor*_t59 + _t71
+        _t74 = J_theta_cart_right*_t69
+        _t75 = J_theta_cart_left*_t70
+        _t76 = -K_theta_tractor_x_tractor*_t63 - 0.3*_t72
+        _t77 = J_theta_cart*_t68 + _t34*_t61 + _t50*_t63
+        _t78 = _t14*_t77 + _t26*_t74 + _t29*_t75 + _t73
+        _t79 = _t16*_t77 + _t46*_t74 + _t48*_t75 + _t76
+        _t80 = _t5*tau_right + _t6*tau_left - _t78
+        _t81 = _t41*tau_right + _t43*tau_left - _t79
+        _t82 = 1.0/_t56
+        _t83 = _t82*(-_t52*_t81 + _t55*_t80)
+        _t84 = _t82*(_t38*_t81 - _t52*_t80)
+        _t85 = _t14*_t83 + _t16*_t84 + _t68
+        _t86 = _t41*_t84 + _t5*_t83
+        _t87 = _t43*_t84 + _t6*_t83
+        _t88 = _t26*_t83 + _t46*_t84 + _t69
+        _t89 = _t29*_t83 + _t48*_t84 + _t70
+        _t90 = _t57*_t83 - _t58*_t63
+        _t91 = _t57*_t63 + _t58*_t83
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -205,11 +204,11 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires J_x_tractor > 0")
-    if not (_t53 > 0.0):
+    if not (_t38 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t64 > 0.0):
+    if not (_t56 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    qddot = np.array([_t91, _t92, _t85, _t86, _t87, _t88, _t89, _t90])
+    qddot = np.array([_t90, _t91, _t84, _t85, _t86, _t87, _t88, _t89])
     if not np.all(np.isfinite(qddot)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of forward_dynamics is not finite")
     return qddot
@@ -228,7 +227,7 @@ def kinematics(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray[np.float
     Returns:
         pose_rates: array of 6 (shape 6x1, row-major)
 
-    operations after CSE: 10 add, 26 mul, 2 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 10 add, 39 mul, 1 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -239,31 +238,31 @@ def kinematics(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray[np.float
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = -1.6666666666666667*_t1
-    _t4 = 0.2*_t3
-    _t5 = -0.3*_t2
-    _t6 = 1.6666666666666667*_t5
-    _t7 = 0.2*_t6
-    _t8 = 2.4154589371980677*radius_right
-    _t9 = -2.4154589371980677*radius_left
-    _t10 = 1.0/radius_cart_right
-    _t11 = 1.0/radius_cart_left
-    _t12 = 0.3*_t1
-    _t13 = 0.5*radius_right
-    _t14 = 0.5*radius_left
-    _t15 = _t2 + _t4
-    _t16 = -_t12 + _t7
-    _t17 = _t10*_t15
-    _t18 = _t10*_t16
-    _t19 = _t2 - _t4
-    _t20 = -_t12 - _t7
-    _t21 = _t11*_t19
-    _t22 = _t11*_t20
-    _t23 = _t13*thetadot_right + _t14*thetadot_left
-    _t24 = _t8*thetadot_right + _t9*thetadot_left
-    _t25 = _t23*_t3 + _t24*_t6
-    _t26 = _t17*_t23 + _t18*_t24
-    _t27 = _t21*_t23 + _t22*_t24
+    _t3 = radius_cart_left*radius_cart_right
+    _t4 = -0.6*_t3
+    _t5 = 1.0/_t4
+    _t6 = _t3*_t5
+    _t7 = 2.4154589371980677*radius_right
+    _t8 = -2.4154589371980677*radius_left
+    _t9 = -0.3*_t2
+    _t10 = 0.3*_t1
+    _t11 = 0.5*radius_right
+    _t12 = 0.5*radius_left
+    _t13 = 0.2*radius_cart_left
+    _t14 = -0.6*radius_cart_left
+    _t15 = -0.2*radius_cart_right
+    _t16 = -0.6*radius_cart_right
+    _t17 = _t1*_t6
+    _t18 = _t5*(_t1*_t13 + _t14*_t2)
+    _t19 = _t5*(_t1*_t15 + _t16*_t2)
+    _t20 = -_t6*_t9
+    _t21 = _t5*(-_t10*_t14 - _t13*_t9)
+    _t22 = _t5*(-_t10*_t16 - _t15*_t9)
+    _t23 = _t11*thetadot_right + _t12*thetadot_left
+    _t24 = _t7*thetadot_right + _t8*thetadot_left
+    _t25 = _t17*_t23 + _t20*_t24
+    _t26 = _t18*_t23 + _t21*_t24
+    _t27 = _t19*_t23 + _t22*_t24
     _t28 = _t23*math.cos(theta_tractor)
     _t29 = _t23*math.sin(theta_tractor)
     pose_rates = np.array([_t28, _t29, _t24, _t25, _t26, _t27])
@@ -282,7 +281,7 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         M: array of 4 (shape 2x2, row-major). 2x2 row-major
 
-    operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 34 add, 80 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -302,58 +301,63 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = 0.3*_t2
-    _t4 = 0.3*_t1
-    _t5 = -1.6666666666666667*_t1
-    _t6 = 0.2*_t5
-    _t7 = -1.6666666666666667*_t3
-    _t8 = 0.2*_t7
-    _t9 = 2.4154589371980677*radius_right
-    _t10 = -2.4154589371980677*radius_left
-    _t11 = 1.0/radius_cart_right
-    _t12 = 1.0/radius_cart_left
-    _t13 = 0.5*radius_right
-    _t14 = 0.5*radius_left
-    _t15 = 1.0/radius_right
-    _t16 = 0.207*_t15
-    _t17 = 1.0/radius_left
-    _t18 = -0.207*_t17
-    _t19 = _t2 + _t6
-    _t20 = -_t4 + _t8
-    _t21 = _t11*_t19
-    _t22 = _t11*_t20
-    _t23 = _t2 - _t6
-    _t24 = -_t4 - _t8
-    _t25 = _t12*_t23
-    _t26 = _t12*_t24
-    _t27 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t28 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t29 = J_x_tractor + _t27*_t5
-    _t30 = K_theta_tractor_x_tractor_2 + _t27*_t7
-    _t31 = J_theta_tractor + _t28*_t7
-    _t32 = J_theta_cart*_t5 + _t27
-    _t33 = J_theta_cart*_t7 + _t28
-    _t34 = J_theta_right*_t15
-    _t35 = J_theta_right*_t16
-    _t36 = J_theta_left*_t17
-    _t37 = J_theta_left*_t18
-    _t38 = J_theta_cart_right*_t21
-    _t39 = J_theta_cart_right*_t22
-    _t40 = J_theta_cart_left*_t25
-    _t41 = J_theta_cart_left*_t26
-    _t42 = _t15*_t34 + _t17*_t36 + _t21*_t38 + _t25*_t40 + _t29 + _t32*_t5
-    _t43 = _t15*_t35 + _t17*_t37 + _t21*_t39 + _t25*_t41 + _t30 + _t33*_t5
-    _t44 = _t16*_t35 + _t18*_t37 + _t22*_t39 + _t26*_t41 + _t31 + _t33*_t7
-    _t45 = _t13*_t42 + _t43*_t9
-    _t46 = _t10*_t43 + _t14*_t42
-    _t47 = _t13*_t43 + _t44*_t9
-    _t48 = _t10*_t44 + _t14*_t43
-    _t49 = _t13*_t45 + _t47*_t9
-    _t50 = _t13*_t46 + _t48*_t9
-    _t51 = _t10*_t48 + _t14*_t46
+    _t3 = radius_left*radius_right
+    _t4 = 1.0/_t3
+    _t5 = _t4*radius_left
+    _t6 = _t4*radius_right
+    _t7 = radius_cart_left*radius_cart_right
+    _t8 = -0.6*_t7
+    _t9 = 1.0/_t8
+    _t10 = _t7*_t9
+    _t11 = 2.4154589371980677*radius_right
+    _t12 = -2.4154589371980677*radius_left
+    _t13 = -0.3*_t2
+    _t14 = 0.3*_t1
+    _t15 = 0.5*radius_right
+    _t16 = 0.5*radius_left
+    _t17 = 0.2*radius_cart_left
+    _t18 = -0.6*radius_cart_left
+    _t19 = -0.2*radius_cart_right
+    _t20 = -0.6*radius_cart_right
+    _t21 = _t1*_t10
+    _t22 = _t9*(_t1*_t17 + _t18*_t2)
+    _t23 = _t9*(_t1*_t19 + _t2*_t20)
+    _t24 = 0.207*_t5
+    _t25 = -0.207*_t6
+    _t26 = -_t10*_t13
+    _t27 = _t9*(-_t13*_t17 - _t14*_t18)
+    _t28 = _t9*(-_t13*_t19 - _t14*_t20)
+    _t29 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t30 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+    _t31 = _t21*_t29
+    _t32 = J_theta_right*_t5
+    _t33 = J_theta_left*_t6
+    _t34 = J_theta_cart_right*_t22
+    _t35 = J_theta_cart_left*_t23
+    _t36 = J_x_tractor + _t31
+    _t37 = J_theta_cart*_t21 + _t29
+    _t38 = _t26*_t29
+    _t39 = _t26*_t30
+    _t40 = K_theta_tractor_x_tractor_2 + _t38
+    _t41 = J_theta_right*_t24
+    _t42 = J_theta_left*_t25
+    _t43 = J_theta_cart_right*_t27
+    _t44 = J_theta_cart_left*_t28
+    _t45 = J_theta_tractor - 0.3*_t39
+    _t46 = J_theta_cart*_t26 - 0.3*_t30
+    _t47 = _t21*_t37 + _t22*_t34 + _t23*_t35 + _t32*_t5 + _t33*_t6 + _t36
+    _t48 = _t21*_t46 + _t22*_t43 + _t23*_t44 + _t40 + _t41*_t5 + _t42*_t6
+    _t49 = _t24*_t41 + _t25*_t42 + _t26*_t46 + _t27*_t43 + _t28*_t44 + _t45
+    _t50 = _t11*_t48 + _t15*_t47
+    _t51 = _t12*_t48 + _t16*_t47
+    _t52 = _t11*_t49 + _t15*_t48
+    _t53 = _t12*_t49 + _t16*_t48
+    _t54 = _t11*_t52 + _t15*_t50
+    _t55 = _t11*_t53 + _t15*_t51
+    _t56 = _t12*_t53 + _t16*_t51
     M = np.array([
-        [_t49, _t50],
-        [_t50, _t51],
+        [_t54, _t55],
+        [_t55, _t56],
     ])
     return M
 
@@ -371,7 +375,7 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     Returns:
         H: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 37 add, 72 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 32 add, 84 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -388,66 +392,60 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = 0.3*_t2
-    _t4 = 0.3*_t1
-    _t5 = -1.6666666666666667*_t1
-    _t6 = 0.2*_t5
-    _t7 = -1.6666666666666667*_t3
-    _t8 = 0.2*_t7
-    _t9 = K_theta_cart_x_tractor*_t2
-    _t10 = 2.4154589371980677*radius_right
-    _t11 = -2.4154589371980677*radius_left
-    _t12 = _t10*thetadot_right + _t11*thetadot_left
-    _t13 = _t12*_t12
-    _t14 = 0.5*radius_right
-    _t15 = 0.5*radius_left
-    _t16 = _t14*thetadot_right + _t15*thetadot_left
-    _t17 = _t12*_t7 + _t16*_t5
-    _t18 = _t17*_t17
-    _t19 = K_theta_cart_x_tractor*_t4
-    _t20 = K_theta_cart_x_tractor_2*_t3
-    _t21 = 1.6666666666666667*_t2
-    _t22 = 0.2*_t21
-    _t23 = -1.6666666666666667*_t4
-    _t24 = 0.2*_t23
-    _t25 = _t12*_t16
-    _t26 = 1.0/radius_cart_left
-    _t27 = _t1 - _t22
-    _t28 = _t26*_t27
-    _t29 = -_t24 + _t3
-    _t30 = _t26*_t29
-    _t31 = -_t16*_t17 + _t25
-    _t32 = -_t12*_t17 + _t13
-    _t33 = _t28*_t31 + _t30*_t32
-    _t34 = J_theta_cart_left*_t33
-    _t35 = 1.0/radius_cart_right
-    _t36 = _t1 + _t22
-    _t37 = _t35*_t36
-    _t38 = _t24 + _t3
-    _t39 = _t35*_t38
-    _t40 = _t31*_t37 + _t32*_t39
-    _t41 = J_theta_cart_right*_t40
-    _t42 = K_theta_cart_x_tractor_2*_t1 - _t9
-    _t43 = _t13*_t19 + _t13*_t20
-    _t44 = _t21*_t31 + _t23*_t32
-    _t45 = J_theta_cart*_t44 + _t25*_t42 + _t43
-    _t46 = _t2 + _t6
-    _t47 = -_t4 + _t8
-    _t48 = _t35*_t46
-    _t49 = _t35*_t47
-    _t50 = _t2 - _t6
-    _t51 = -_t4 - _t8
-    _t52 = _t26*_t50
-    _t53 = _t26*_t51
-    _t54 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-    _t56 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
-    _t57 = -_t18*_t19 - _t18*_t20
-    _t58 = _t34*_t52 + _t41*_t48 + _t44*_t54 + _t45*_t5 + _t56
-    _t59 = -K_theta_tractor_x_tractor*_t25 + _t34*_t53 + _t41*_t49 + _t44*_t55 + _t45*_t7 + _t57
-    _t60 = _t10*_t59 + _t14*_t58
-    _t61 = _t11*_t59 + _t15*_t58
-    H = np.array([_t60, _t61])
+    _t3 = radius_cart_left*radius_cart_right
+    _t4 = -0.6*_t3
+    _t5 = 1.0/_t4
+    _t6 = _t3*_t5
+    _t7 = 0.5*radius_right
+    _t8 = 0.5*radius_left
+    _t9 = _t7*thetadot_right + _t8*thetadot_left
+    _t10 = _t1*_t6
+    _t11 = -0.3*_t2
+    _t12 = -_t11*_t6
+    _t13 = 2.4154589371980677*radius_right
+    _t14 = -2.4154589371980677*radius_left
+    _t15 = _t13*thetadot_right + _t14*thetadot_left
+    _t16 = _t10*_t9 + _t12*_t15
+    _t17 = _t16*_t9
+    _t18 = -0.3*_t15
+    _t19 = _t16*_t18
+    _t20 = 0.3*_t1
+    _t21 = radius_left*radius_right
+    _t22 = 1.0/_t21
+    _t23 = 0.2*radius_cart_left
+    _t24 = -0.6*radius_cart_left
+    _t25 = -0.2*radius_cart_right
+    _t26 = -0.6*radius_cart_right
+    _t27 = _t5*(_t1*_t23 + _t2*_t24)
+    _t28 = _t5*(_t1*_t25 + _t2*_t26)
+    _t29 = _t5*(-_t11*_t23 - _t20*_t24)
+    _t30 = _t5*(-_t11*_t25 - _t20*_t26)
+    _t31 = _t15*_t15
+    _t32 = _t16*_t16
+    _t33 = 0.3*_t31
+    _t34 = -_t15*_t9
+    _t35 = -_t21*_t22*_t34
+    _t36 = -_t1*_t19 - _t17*_t2
+    _t37 = _t1*_t17 - _t19*_t2
+    _t38 = _t1*_t33 - _t2*_t35 - _t36
+    _t39 = _t1*_t35 + _t2*_t33 - _t37
+    _t40 = _t38*_t6
+    _t41 = _t5*(_t23*_t38 + _t24*_t39)
+    _t42 = _t5*(_t25*_t38 + _t26*_t39)
+    _t43 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t44 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+    _t45 = -_t32*_t44 + _t40*_t43
+    _t46 = _t32*_t43 + _t40*_t44
+    _t47 = K_theta_tractor_x_tractor*_t31 + _t45
+    _t48 = J_theta_cart_right*_t41
+    _t49 = J_theta_cart_left*_t42
+    _t50 = -K_theta_tractor_x_tractor*_t35 - 0.3*_t46
+    _t51 = J_theta_cart*_t40 + _t33*_t43 + _t35*_t44
+    _t52 = _t10*_t51 + _t27*_t48 + _t28*_t49 + _t47
+    _t53 = _t12*_t51 + _t29*_t48 + _t30*_t49 + _t50
+    _t54 = _t13*_t53 + _t52*_t7
+    _t55 = _t14*_t53 + _t52*_t8
+    H = np.array([_t54, _t55])
     return H
 
 
@@ -465,7 +463,7 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
     Returns:
         wheel_accels: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 64 add, 112 mul, 5 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 59 add, 130 mul, 3 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -491,89 +489,88 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         _t0 = theta_cart - theta_tractor
         _t1 = math.sin(_t0)
         _t2 = math.cos(_t0)
-        _t3 = 0.3*_t2
-        _t4 = 0.3*_t1
-        _t5 = -1.6666666666666667*_t1
-        _t6 = 0.2*_t5
-        _t7 = -1.6666666666666667*_t3
-        _t8 = 0.2*_t7
-        _t9 = K_theta_cart_x_tractor*_t2
-        _t10 = 2.4154589371980677*radius_right
-        _t11 = -2.4154589371980677*radius_left
-        _t12 = _t10*thetadot_right + _t11*thetadot_left
-        _t13 = _t12*_t12
-        _t14 = 0.5*radius_right
-        _t15 = 0.5*radius_left
-        _t16 = _t14*thetadot_right + _t15*thetadot_left
-        _t17 = _t12*_t7 + _t16*_t5
-        _t18 = _t17*_t17
-        _t19 = K_theta_cart_x_tractor*_t4
-        _t20 = K_theta_cart_x_tractor_2*_t3
-        _t21 = 1.6666666666666667*_t2
-        _t22 = 0.2*_t21
-        _t23 = -1.6666666666666667*_t4
-        _t24 = 0.2*_t23
-        _t25 = _t12*_t16
-        _t26 = 1.0/radius_cart_right
-        _t27 = _t2 + _t6
-        _t28 = _t26*_t27
-        _t29 = J_theta_cart_right*_t28
-        _t30 = -_t4 + _t8
-        _t31 = _t26*_t30
-        _t32 = J_theta_cart_right*_t31
-        _t33 = 1.0/radius_cart_left
-        _t34 = _t2 - _t6
-        _t35 = _t33*_t34
-        _t36 = J_theta_cart_left*_t35
-        _t37 = -_t4 - _t8
-        _t38 = _t33*_t37
-        _t39 = J_theta_cart_left*_t38
-        _t40 = K_theta_cart_x_tractor_2*_t1 - _t9
-        _t41 = _t13*_t19 + _t13*_t20
-        _t42 = -_t16*_t17 + _t25
-        _t43 = -_t12*_t17 + _t13
-        _t44 = _t21*_t42 + _t23*_t43
-        _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
-        _t46 = 1.0/radius_right
-        _t47 = 1.0/radius_left
-        _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t49 = J_x_tractor + _t48*_t5
-        _t50 = J_theta_cart*_t5 + _t48
-        _t51 = J_theta_right*_t46
-        _t52 = J_theta_left*_t47
-        _t53 = _t28*_t29 + _t35*_t36 + _t46*_t51 + _t47*_t52 + _t49 + _t5*_t50
-        _t54 = K_theta_tractor_x_tractor_2 + _t48*_t7
-        _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-        _t56 = J_theta_cart*_t7 + _t55
-        _t57 = 0.207*_t46
-        _t58 = J_theta_right*_t57
-        _t59 = -0.207*_t47
-        _t60 = J_theta_left*_t59
-        _t61 = _t28*_t32 + _t35*_t39 + _t46*_t58 + _t47*_t60 + _t5*_t56 + _t54
-        _t62 = J_theta_tractor + _t55*_t7
-        _t63 = _t31*_t32 + _t38*_t39 + _t56*_t7 + _t57*_t58 + _t59*_t60 + _t62
-        _t64 = _t53*_t63 - _t61*_t61
-        _t65 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
-        _t66 = -_t18*_t19 - _t18*_t20
-        _t67 = _t1 + _t22
-        _t68 = _t26*_t67
-        _t69 = _t24 + _t3
-        _t70 = _t26*_t69
-        _t71 = _t1 - _t22
-        _t72 = _t33*_t71
-        _t73 = -_t24 + _t3
-        _t74 = _t33*_t73
-        _t75 = _t42*_t68 + _t43*_t70
-        _t76 = _t42*_t72 + _t43*_t74
-        _t77 = _t29*_t75 + _t36*_t76 + _t44*_t48 + _t45*_t5 + _t65
-        _t78 = -K_theta_tractor_x_tractor*_t25 + _t32*_t75 + _t39*_t76 + _t44*_t55 + _t45*_t7 + _t66
-        _t79 = _t46*tau_right + _t47*tau_left - _t77
-        _t80 = _t57*tau_right + _t59*tau_left - _t78
-        _t81 = 1.0/_t64
-        _t82 = _t81*(-_t61*_t80 + _t63*_t79)
-        _t83 = _t81*(_t53*_t80 - _t61*_t79)
-        _t84 = _t46*_t82 + _t57*_t83
-        _t85 = _t47*_t82 + _t59*_t83
+        _t3 = radius_left*radius_right
+        _t4 = 1.0/_t3
+        _t5 = _t4*radius_left
+        _t6 = _t4*radius_right
+        _t7 = radius_cart_left*radius_cart_right
+        _t8 = -0.6*_t7
+        _t9 = 1.0/_t8
+        _t10 = _t7*_t9
+        _t11 = 0.5*radius_right
+        _t12 = 0.5*radius_left
+        _t13 = _t11*thetadot_right + _t12*thetadot_left
+        _t14 = _t1*_t10
+        _t15 = -0.3*_t2
+        _t16 = -_t10*_t15
+        _t17 = 2.4154589371980677*radius_right
+        _t18 = -2.4154589371980677*radius_left
+        _t19 = _t17*thetadot_right + _t18*thetadot_left
+        _t20 = _t13*_t14 + _t16*_t19
+        _t21 = _t13*_t20
+        _t22 = -0.3*_t19
+        _t23 = _t20*_t22
+        _t24 = 0.2*radius_cart_left
+        _t25 = -0.6*radius_cart_left
+        _t26 = _t9*(_t1*_t24 + _t2*_t25)
+        _t27 = -0.2*radius_cart_right
+        _t28 = -0.6*radius_cart_right
+        _t29 = _t9*(_t1*_t27 + _t2*_t28)
+        _t30 = J_theta_right*_t5
+        _t31 = J_theta_left*_t6
+        _t32 = J_theta_cart_right*_t26
+        _t33 = J_theta_cart_left*_t29
+        _t34 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+        _t35 = _t14*_t34
+        _t36 = J_x_tractor + _t35
+        _t37 = J_theta_cart*_t14 + _t34
+        _t38 = _t14*_t37 + _t26*_t32 + _t29*_t33 + _t30*_t5 + _t31*_t6 + _t36
+        _t39 = _t16*_t34
+        _t40 = K_theta_tractor_x_tractor_2 + _t39
+        _t41 = 0.207*_t5
+        _t42 = J_theta_right*_t41
+        _t43 = -0.207*_t6
+        _t44 = J_theta_left*_t43
+        _t45 = 0.3*_t1
+        _t46 = _t9*(-_t15*_t24 - _t25*_t45)
+        _t47 = J_theta_cart_right*_t46
+        _t48 = _t9*(-_t15*_t27 - _t28*_t45)
+        _t49 = J_theta_cart_left*_t48
+        _t50 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+        _t51 = J_theta_cart*_t16 - 0.3*_t50
+        _t52 = _t14*_t51 + _t26*_t47 + _t29*_t49 + _t40 + _t42*_t5 + _t44*_t6
+        _t53 = _t16*_t50
+        _t54 = J_theta_tractor - 0.3*_t53
+        _t55 = _t16*_t51 + _t41*_t42 + _t43*_t44 + _t46*_t47 + _t48*_t49 + _t54
+        _t56 = _t38*_t55 - _t52*_t52
+        _t57 = _t19*_t19
+        _t58 = _t20*_t20
+        _t59 = 0.3*_t57
+        _t60 = -_t13*_t19
+        _t61 = -_t3*_t4*_t60
+        _t62 = -_t1*_t23 - _t2*_t21
+        _t63 = _t1*_t21 - _t2*_t23
+        _t64 = _t1*_t59 - _t2*_t61 - _t62
+        _t65 = _t1*_t61 + _t2*_t59 - _t63
+        _t66 = _t10*_t64
+        _t67 = _t9*(_t24*_t64 + _t25*_t65)
+        _t68 = _t9*(_t27*_t64 + _t28*_t65)
+        _t69 = _t34*_t66 - _t50*_t58
+        _t70 = _t34*_t58 + _t50*_t66
+        _t71 = K_theta_tractor_x_tractor*_t57 + _t69
+        _t72 = J_theta_cart_right*_t67
+        _t73 = J_theta_cart_left*_t68
+        _t74 = -K_theta_tractor_x_tractor*_t61 - 0.3*_t70
+        _t75 = J_theta_cart*_t66 + _t34*_t59 + _t50*_t61
+        _t76 = _t14*_t75 + _t26*_t72 + _t29*_t73 + _t71
+        _t77 = _t16*_t75 + _t46*_t72 + _t48*_t73 + _t74
+        _t78 = _t5*tau_right + _t6*tau_left - _t76
+        _t79 = _t41*tau_right + _t43*tau_left - _t77
+        _t80 = 1.0/_t56
+        _t81 = _t80*(-_t52*_t79 + _t55*_t78)
+        _t82 = _t80*(_t38*_t79 - _t52*_t78)
+        _t83 = _t41*_t82 + _t5*_t81
+        _t84 = _t43*_t82 + _t6*_t81
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -598,11 +595,11 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires J_x_tractor > 0")
-    if not (_t53 > 0.0):
+    if not (_t38 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t64 > 0.0):
+    if not (_t56 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    wheel_accels = np.array([_t84, _t85])
+    wheel_accels = np.array([_t83, _t84])
     if not np.all(np.isfinite(wheel_accels)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of minimal_forward_dynamics is not finite")
     return wheel_accels
@@ -625,7 +622,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         A: array of 100 (shape 10x10, row-major). 10x10 row-major
         B: array of 20 (shape 10x2, row-major). 10x2 row-major
 
-    operations after CSE: 201 add, 335 mul, 5 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 198 add, 379 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -648,212 +645,240 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = 0.3*_t2
-    _t4 = 0.3*_t1
-    _t5 = -1.6666666666666667*_t1
-    _t6 = 0.2*_t5
-    _t7 = -1.6666666666666667*_t3
-    _t8 = 0.2*_t7
-    _t9 = K_theta_cart_x_tractor*_t1
-    _t10 = K_theta_cart_x_tractor_2*_t2
-    _t11 = K_theta_cart_x_tractor*_t2
-    _t12 = K_theta_cart_x_tractor*_t3
-    _t13 = K_theta_cart_x_tractor_2*_t4
-    _t14 = 2.4154589371980677*radius_right
-    _t15 = -2.4154589371980677*radius_left
-    _t16 = _t14*thetadot_right + _t15*thetadot_left
-    _t17 = _t16*_t16
-    _t18 = 0.5*radius_right
-    _t19 = 0.5*radius_left
-    _t20 = _t18*thetadot_right + _t19*thetadot_left
-    _t21 = _t16*_t7 + _t20*_t5
-    _t22 = _t21*_t21
-    _t23 = K_theta_cart_x_tractor_2*_t1
-    _t24 = K_theta_cart_x_tractor*_t4
-    _t25 = K_theta_cart_x_tractor_2*_t3
-    _t26 = 1.6666666666666667*_t2
-    _t27 = 0.2*_t26
-    _t28 = -1.6666666666666667*_t4
-    _t29 = 0.2*_t28
-    _t30 = _t16*_t20
-    _t31 = _t10 + _t9
-    _t32 = _t31*_t5
-    _t33 = _t31*_t7
-    _t34 = J_theta_cart*_t5 + _t31
-    _t35 = _t12 - _t13
-    _t36 = J_theta_cart*_t7 + _t35
-    _t37 = 1.0/radius_cart_right
-    _t38 = _t2 + _t6
-    _t39 = _t37*_t38
-    _t40 = J_theta_cart_right*_t39
-    _t41 = -_t4 + _t8
-    _t42 = _t37*_t41
-    _t43 = J_theta_cart_right*_t42
-    _t44 = 1.0/radius_cart_left
-    _t45 = _t2 - _t6
-    _t46 = _t44*_t45
-    _t47 = J_theta_cart_left*_t46
-    _t48 = -_t4 - _t8
-    _t49 = _t44*_t48
-    _t50 = J_theta_cart_left*_t49
-    _t51 = K_theta_cart_x_tractor_2*_t1 - _t11
-    _t52 = _t17*_t24 + _t17*_t25
-    _t53 = -_t20*_t21 + _t30
-    _t54 = -_t16*_t21 + _t17
-    _t55 = _t26*_t53 + _t28*_t54
-    _t56 = J_theta_cart*_t55 + _t30*_t51 + _t52
-    _t57 = math.cos(theta_tractor)
-    _t58 = math.sin(theta_tractor)
-    _t59 = _t29 + _t3
-    _t60 = _t37*_t59
-    _t61 = J_theta_cart_right*_t60
-    _t62 = -_t29 + _t3
-    _t63 = _t44*_t62
-    _t64 = J_theta_cart_left*_t63
-    _t65 = 2.0*_t21
-    _t66 = _t11*_t65 - _t23*_t65
-    _t67 = _t1 - _t27
-    _t68 = _t44*_t67
+    _t3 = radius_left*radius_right
+    _t4 = 1.0/_t3
+    _t5 = _t4*radius_left
+    _t6 = _t4*radius_right
+    _t7 = radius_cart_left*radius_cart_right
+    _t8 = -0.6*_t7
+    _t9 = 1.0/_t8
+    _t10 = _t7*_t9
+    _t11 = _t3*_t4
+    _t12 = 0.5*radius_right
+    _t13 = 0.5*radius_left
+    _t14 = _t12*thetadot_right + _t13*thetadot_left
+    _t15 = _t14*_t2
+    _t16 = 2.4154589371980677*radius_right
+    _t17 = -2.4154589371980677*radius_left
+    _t18 = _t16*thetadot_right + _t17*thetadot_left
+    _t19 = -0.3*_t18
+    _t20 = _t1*_t19
+    _t21 = _t1*_t10
+    _t22 = -0.3*_t2
+    _t23 = -_t10*_t22
+    _t24 = _t14*_t21 + _t18*_t23
+    _t25 = _t15*_t24 + _t20*_t24
+    _t26 = _t1*_t14
+    _t27 = _t24*_t26
+    _t28 = _t19*_t2
+    _t29 = _t24*_t28
+    _t30 = _t18*_t18
+    _t31 = 0.3*_t30
+    _t32 = -_t14*_t18
+    _t33 = -_t11*_t32
+    _t34 = -_t1*_t31 + _t2*_t33
+    _t35 = _t1*_t33 + _t2*_t31
+    _t36 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t37 = _t23*_t36
+    _t38 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+    _t39 = _t23*_t38
+    _t40 = _t24*_t24
+    _t41 = _t25 - _t34
+    _t42 = _t10*_t41
+    _t43 = -_t36*_t42 + _t38*_t40
+    _t44 = _t36*_t40 + _t38*_t42
+    _t45 = math.cos(theta_tractor)
+    _t46 = math.sin(theta_tractor)
+    _t47 = -0.6*radius_cart_left
+    _t48 = _t47*_t9
+    _t49 = 0.2*radius_cart_left
+    _t50 = _t49*_t9
+    _t51 = -0.6*radius_cart_right
+    _t52 = _t51*_t9
+    _t53 = -0.2*radius_cart_right
+    _t54 = _t53*_t9
+    _t55 = 2.0*_t24
+    _t56 = -_t15 - _t20
+    _t57 = _t26 - _t28
+    _t58 = _t9*(_t1*_t49 + _t2*_t47)
+    _t59 = _t9*(_t1*_t53 + _t2*_t51)
+    _t60 = K_theta_tractor_x_tractor_2 + _t37
+    _t61 = 0.207*_t5
+    _t62 = J_theta_right*_t61
+    _t63 = -0.207*_t6
+    _t64 = J_theta_left*_t63
+    _t65 = 0.3*_t1
+    _t66 = _t9*(-_t22*_t49 - _t47*_t65)
+    _t67 = J_theta_cart_right*_t66
+    _t68 = _t9*(-_t22*_t53 - _t51*_t65)
     _t69 = J_theta_cart_left*_t68
-    _t70 = _t1 + _t27
-    _t71 = _t37*_t70
-    _t72 = J_theta_cart_right*_t71
-    _t73 = 0.6*_t21
-    _t74 = -_t10*_t73 - _t73*_t9
-    _t75 = _t5*_t51
-    _t76 = 1.0/radius_right
-    _t77 = 1.0/radius_left
-    _t78 = K_theta_tractor_x_tractor_2 + _t33
-    _t79 = 0.207*_t76
-    _t80 = J_theta_right*_t79
-    _t81 = -0.207*_t77
-    _t82 = J_theta_left*_t81
-    _t83 = _t36*_t5 + _t39*_t43 + _t46*_t50 + _t76*_t80 + _t77*_t82 + _t78
-    _t84 = J_x_tractor + _t32
-    _t85 = J_theta_right*_t76
-    _t86 = J_theta_left*_t77
-    _t87 = _t34*_t5 + _t39*_t40 + _t46*_t47 + _t76*_t85 + _t77*_t86 + _t84
-    _t88 = J_theta_tractor + _t35*_t7
-    _t89 = _t36*_t7 + _t42*_t43 + _t49*_t50 + _t79*_t80 + _t81*_t82 + _t88
-    _t90 = -_t83*_t83 + _t87*_t89
-    _t91 = 1.0/_t90
-    _t92 = _t91
-    _t93 = _t83*_t92
-    _t94 = K_theta_tractor_x_tractor*_t17 + _t11*_t22 - _t22*_t23
-    _t95 = _t53*_t71 + _t54*_t60
-    _t96 = _t53*_t68 + _t54*_t63
-    _t97 = _t31*_t55 + _t40*_t95 + _t47*_t96 + _t5*_t56 + _t94
-    _t98 = _t76*tau_right + _t77*tau_left - _t97
-    _t99 = _t92*_t98
-    _t100 = _t89*_t92
-    _t101 = -_t22*_t24 - _t22*_t25
-    _t102 = -K_theta_tractor_x_tractor*_t30 + _t101 + _t35*_t55 + _t43*_t95 + _t50*_t96 + _t56*_t7
-    _t103 = -_t102 + _t79*tau_right + _t81*tau_left
-    _t104 = _t103*_t92
-    _t105 = _t87*_t92
-    _t106 = 2.0*_t16
-    _t107 = K_theta_tractor_x_tractor*_t106
-    _t108 = 0.6*_t16
-    _t109 = _t10*_t108 + _t108*_t9
-    _t110 = _t14*_t20
-    _t111 = -_t21
-    _t112 = _t111 + _t16
-    _t113 = _t106 + _t111
-    _t114 = -K_theta_tractor_x_tractor + _t51*_t7
-    _t115 = _t15*_t20
-    _t116 = _t14*_t79 + _t18*_t76
-    _t117 = _t14*_t81 + _t18*_t77
-    _t118 = _t15*_t79 + _t19*_t76
-    _t119 = _t15*_t81 + _t19*_t77
-    _t120 = _t20*_t57
-    _t121 = _t20*_t58
-    _t122 = _t18*_t57
-    _t123 = _t19*_t57
-    _t124 = _t18*_t58
-    _t125 = _t19*_t58
-    _t126 = _t16*_t28 + _t20*_t26
-    _t127 = _t14*_t7 + _t18*_t5
-    _t128 = _t15*_t7 + _t19*_t5
-    _t129 = _t16*_t60 + _t20*_t71
-    _t130 = _t14*_t42 + _t18*_t39
-    _t131 = _t15*_t42 + _t19*_t39
-    _t132 = _t16*_t63 + _t20*_t68
-    _t133 = _t14*_t49 + _t18*_t46
-    _t134 = _t15*_t49 + _t19*_t46
-    _t135 = _t28*_t31 + _t51*_t7
-    _t136 = _t24 + _t25
-    _t137 = J_theta_cart*_t28 + _t136
-    _t138 = _t135 + _t137*_t5 + _t26*_t36 + _t39*_t61 + _t43*_t71 + _t46*_t64 + _t50*_t68
-    _t139 = _t136*_t7 + _t28*_t35
-    _t140 = _t137*_t7 + _t139 + _t28*_t36 + _t42*_t61 + _t43*_t60 + _t49*_t64 + _t50*_t63
-    _t141 = _t10*_t22 + _t126*_t66 + _t22*_t9
-    _t142 = 0.3*K_theta_cart_x_tractor_2*_t1*_t17 - _t12*_t17
-    _t143 = -_t126*_t20
-    _t144 = -_t126*_t16
-    _t145 = _t143*_t26 + _t144*_t28 - _t5*_t53 - _t54*_t7
-    _t146 = _t143*_t71 + _t144*_t60 - _t39*_t53 - _t42*_t54
-    _t147 = _t143*_t68 + _t144*_t63 - _t46*_t53 - _t49*_t54
-    _t148 = _t141 + _t142*_t5 + _t145*_t34 + _t146*_t40 + _t147*_t47 + _t26*_t56 - _t30*_t32 + _t51*_t55 + _t69*_t96 + _t72*_t95
-    _t149 = _t12*_t22 + _t126*_t74 - _t13*_t22
-    _t150 = _t136*_t55 + _t142*_t7 + _t145*_t36 + _t146*_t43 + _t147*_t50 + _t149 + _t28*_t56 - _t30*_t33 + _t61*_t95 + _t64*_t96
-    _t151 = _t26*_t31 + _t75
-    _t152 = J_theta_cart*_t26 + _t51
-    _t153 = _t151 + _t152*_t5 + _t26*_t34 + _t39*_t72 + _t40*_t71 + _t46*_t69 + _t47*_t68
-    _t154 = -2.0*_t138*_t83 + _t140*_t87 + _t153*_t89
-    _t155 = -_t154*_t91*_t91
-    _t156 = -_t100*_t148 - _t104*_t138 + _t140*_t99 + _t150*_t93 + _t155*(-_t103*_t83 + _t89*_t98)
-    _t157 = _t104*_t153 - _t105*_t150 - _t138*_t99 + _t148*_t93 + _t155*(_t103*_t87 - _t83*_t98)
-    _t158 = _t156*_t76 + _t157*_t79
-    _t159 = _t107*_t14 + _t127*_t66
-    _t160 = _t109*_t14
-    _t161 = _t110 + _t112*_t18 - _t127*_t20
-    _t162 = _t113*_t14 - _t127*_t16
-    _t163 = _t161*_t26 + _t162*_t28
-    _t164 = _t161*_t71 + _t162*_t60
-    _t165 = _t161*_t68 + _t162*_t63
-    _t166 = _t110 + _t16*_t18
-    _t167 = _t159 + _t160*_t5 + _t163*_t34 + _t164*_t40 + _t165*_t47 + _t166*_t75
-    _t168 = _t127*_t74
-    _t169 = _t114*_t166 + _t160*_t7 + _t163*_t36 + _t164*_t43 + _t165*_t50 + _t168
-    _t170 = -_t100*_t167 + _t169*_t93
-    _t171 = -_t105*_t169 + _t167*_t83*_t92
-    _t172 = _t170*_t76 + _t171*_t79
-    _t173 = _t107*_t15 + _t128*_t66
-    _t174 = _t109*_t15
-    _t175 = _t112*_t19 + _t115 - _t128*_t20
-    _t176 = _t113*_t15 - _t128*_t16
-    _t177 = _t175*_t26 + _t176*_t28
-    _t178 = _t175*_t71 + _t176*_t60
-    _t179 = _t175*_t68 + _t176*_t63
-    _t180 = _t115 + _t16*_t19
-    _t181 = _t173 + _t174*_t5 + _t177*_t34 + _t178*_t40 + _t179*_t47 + _t180*_t75
-    _t182 = _t128*_t74
-    _t183 = _t114*_t180 + _t174*_t7 + _t177*_t36 + _t178*_t43 + _t179*_t50 + _t182
-    _t184 = -_t100*_t181 + _t183*_t93
-    _t185 = -_t105*_t183 + _t181*_t83*_t92
-    _t186 = _t184*_t76 + _t185*_t79
-    _t187 = _t156*_t77 + _t157*_t81
-    _t188 = _t170*_t77 + _t171*_t81
-    _t189 = _t184*_t77 + _t185*_t81
-    _t190 = _t76*_t89*_t92 - _t79*_t93
-    _t191 = _t105*_t79 - _t76*_t93
-    _t192 = _t190*_t76 + _t191*_t79
-    _t193 = _t77*_t89*_t92 - _t81*_t93
-    _t194 = _t105*_t81 - _t77*_t93
-    _t195 = _t193*_t76 + _t194*_t79
-    _t196 = _t190*_t77 + _t191*_t81
-    _t197 = _t193*_t77 + _t194*_t81
+    _t70 = J_theta_cart*_t23 - 0.3*_t38
+    _t71 = _t21*_t70 + _t5*_t62 + _t58*_t67 + _t59*_t69 + _t6*_t64 + _t60
+    _t72 = J_theta_right*_t5
+    _t73 = J_theta_left*_t6
+    _t74 = J_theta_cart_right*_t58
+    _t75 = J_theta_cart_left*_t59
+    _t76 = _t21*_t36
+    _t77 = J_x_tractor + _t76
+    _t78 = J_theta_cart*_t21 + _t36
+    _t79 = _t21*_t78 + _t5*_t72 + _t58*_t74 + _t59*_t75 + _t6*_t73 + _t77
+    _t80 = J_theta_tractor - 0.3*_t39
+    _t81 = _t23*_t70 + _t61*_t62 + _t63*_t64 + _t66*_t67 + _t68*_t69 + _t80
+    _t82 = -_t71*_t71 + _t79*_t81
+    _t83 = 1.0/_t82
+    _t84 = _t83
+    _t85 = _t71*_t84
+    _t86 = K_theta_tractor_x_tractor*_t30 - _t43
+    _t87 = _t27 - _t29
+    _t88 = _t35 - _t87
+    _t89 = _t9*(_t41*_t49 + _t47*_t88)
+    _t90 = J_theta_cart_right*_t89
+    _t91 = _t9*(_t41*_t53 + _t51*_t88)
+    _t92 = J_theta_cart_left*_t91
+    _t93 = J_theta_cart*_t42 + _t31*_t36 + _t33*_t38
+    _t94 = _t21*_t93 + _t58*_t90 + _t59*_t92 + _t86
+    _t95 = _t5*tau_right + _t6*tau_left - _t94
+    _t96 = _t84*_t95
+    _t97 = _t81*_t84
+    _t98 = -K_theta_tractor_x_tractor*_t33 - 0.3*_t44
+    _t99 = _t23*_t93 + _t66*_t90 + _t68*_t92 + _t98
+    _t100 = _t61*tau_right + _t63*tau_left - _t99
+    _t101 = _t100*_t84
+    _t102 = _t79*_t84
+    _t103 = 2.0*_t18
+    _t104 = _t1*_t24
+    _t105 = _t2*_t24
+    _t106 = _t12*_t5 + _t16*_t61
+    _t107 = _t12*_t6 + _t16*_t63
+    _t108 = _t13*_t5 + _t17*_t61
+    _t109 = _t13*_t6 + _t17*_t63
+    _t110 = _t14*_t45
+    _t111 = _t14*_t46
+    _t112 = _t12*_t45
+    _t113 = _t13*_t45
+    _t114 = _t12*_t46
+    _t115 = _t13*_t46
+    _t116 = -_t10*_t2
+    _t117 = _t10*_t65
+    _t118 = _t116*_t14 + _t117*_t18
+    _t119 = _t12*_t21 + _t16*_t23
+    _t120 = _t13*_t21 + _t17*_t23
+    _t121 = _t1*_t48 - _t2*_t50
+    _t122 = -_t22*_t48 + _t49*_t65*_t9
+    _t123 = _t121*_t14 + _t122*_t18
+    _t124 = _t12*_t58 + _t16*_t66
+    _t125 = _t13*_t58 + _t17*_t66
+    _t126 = _t1*_t52 - _t2*_t54
+    _t127 = -_t22*_t52 + _t53*_t65*_t9
+    _t128 = _t126*_t14 + _t127*_t18
+    _t129 = _t12*_t59 + _t16*_t68
+    _t130 = _t13*_t59 + _t17*_t68
+    _t131 = _t117*_t36 + _t39
+    _t132 = J_theta_cart_right*_t122
+    _t133 = J_theta_cart_left*_t127
+    _t134 = J_theta_cart*_t117 + 0.3*_t36
+    _t135 = _t116*_t70 + _t121*_t67 + _t126*_t69 + _t131 + _t132*_t58 + _t133*_t59 + _t134*_t21
+    _t136 = _t117*_t38 - _t37
+    _t137 = -0.3*_t136
+    _t138 = _t117*_t70 + _t122*_t67 + _t127*_t69 + _t132*_t66 + _t133*_t68 + _t134*_t23 + _t137
+    _t139 = _t118*_t55
+    _t140 = _t118*_t56 - _t27 + _t29
+    _t141 = -_t140 - _t35
+    _t142 = _t10*_t141
+    _t143 = -_t139*_t38 + _t142*_t36 + _t44
+    _t144 = _t118*_t57 - _t25
+    _t145 = -_t144 - _t34
+    _t146 = _t141*_t50 + _t145*_t48
+    _t147 = J_theta_cart_right*_t146
+    _t148 = _t141*_t54 + _t145*_t52
+    _t149 = J_theta_cart_left*_t148
+    _t150 = J_theta_cart*_t142 + _t31*_t38 - _t33*_t36
+    _t151 = _t116*_t93 + _t121*_t90 + _t126*_t92 + _t143 + _t147*_t58 + _t149*_t59 + _t150*_t21
+    _t152 = _t139*_t36 + _t142*_t38 + _t43
+    _t153 = -0.3*_t152
+    _t154 = _t117*_t93 + _t122*_t90 + _t127*_t92 + _t147*_t66 + _t149*_t68 + _t150*_t23 + _t153
+    _t155 = J_theta_cart_right*_t121
+    _t156 = J_theta_cart_left*_t126
+    _t157 = _t116*_t36 + _t21*_t38
+    _t158 = J_theta_cart*_t116 + _t38
+    _t159 = _t116*_t78 + _t121*_t74 + _t126*_t75 + _t155*_t58 + _t156*_t59 + _t157 + _t158*_t21
+    _t160 = -2.0*_t135*_t71 + _t138*_t79 + _t159*_t81
+    _t161 = -_t160*_t83*_t83
+    _t162 = -_t101*_t135 + _t138*_t96 - _t151*_t97 + _t154*_t85 + _t161*(-_t100*_t71 + _t81*_t95)
+    _t163 = _t101*_t159 - _t102*_t154 - _t135*_t96 + _t151*_t85 + _t161*(_t100*_t79 - _t71*_t95)
+    _t164 = _t162*_t5 + _t163*_t61
+    _t165 = _t119*_t55
+    _t166 = _t103*_t16
+    _t167 = 0.3*_t166
+    _t168 = -_t12*_t18 - _t14*_t16
+    _t169 = -_t11*_t168
+    _t170 = -0.3*_t16
+    _t171 = -_t104*_t170 - _t105*_t12 + _t119*_t56
+    _t172 = _t1*_t167 - _t169*_t2 - _t171
+    _t173 = _t10*_t172
+    _t174 = -_t165*_t38 + _t173*_t36
+    _t175 = K_theta_tractor_x_tractor*_t166 + _t174
+    _t176 = _t104*_t12 - _t105*_t170 + _t119*_t57
+    _t177 = _t1*_t169 + _t167*_t2 - _t176
+    _t178 = _t172*_t50 + _t177*_t48
+    _t179 = J_theta_cart_right*_t178
+    _t180 = _t172*_t54 + _t177*_t52
+    _t181 = J_theta_cart_left*_t180
+    _t182 = J_theta_cart*_t173 + _t167*_t36 + _t169*_t38
+    _t183 = _t175 + _t179*_t58 + _t181*_t59 + _t182*_t21
+    _t184 = _t165*_t36 + _t173*_t38
+    _t185 = -K_theta_tractor_x_tractor*_t169 - 0.3*_t184
+    _t186 = _t179*_t66 + _t181*_t68 + _t182*_t23 + _t185
+    _t187 = -_t183*_t97 + _t186*_t85
+    _t188 = -_t102*_t186 + _t183*_t71*_t84
+    _t189 = _t187*_t5 + _t188*_t61
+    _t190 = _t120*_t55
+    _t191 = _t103*_t17
+    _t192 = 0.3*_t191
+    _t193 = -_t13*_t18 - _t14*_t17
+    _t194 = -_t11*_t193
+    _t195 = -0.3*_t17
+    _t196 = -_t104*_t195 - _t105*_t13 + _t120*_t56
+    _t197 = _t1*_t192 - _t194*_t2 - _t196
+    _t198 = _t10*_t197
+    _t199 = -_t190*_t38 + _t198*_t36
+    _t200 = K_theta_tractor_x_tractor*_t191 + _t199
+    _t201 = _t104*_t13 - _t105*_t195 + _t120*_t57
+    _t202 = _t1*_t194 + _t192*_t2 - _t201
+    _t203 = _t197*_t50 + _t202*_t48
+    _t204 = J_theta_cart_right*_t203
+    _t205 = _t197*_t54 + _t202*_t52
+    _t206 = J_theta_cart_left*_t205
+    _t207 = J_theta_cart*_t198 + _t192*_t36 + _t194*_t38
+    _t208 = _t200 + _t204*_t58 + _t206*_t59 + _t207*_t21
+    _t209 = _t190*_t36 + _t198*_t38
+    _t210 = -K_theta_tractor_x_tractor*_t194 - 0.3*_t209
+    _t211 = _t204*_t66 + _t206*_t68 + _t207*_t23 + _t210
+    _t212 = -_t208*_t97 + _t211*_t85
+    _t213 = -_t102*_t211 + _t208*_t71*_t84
+    _t214 = _t212*_t5 + _t213*_t61
+    _t215 = _t162*_t6 + _t163*_t63
+    _t216 = _t187*_t6 + _t188*_t63
+    _t217 = _t212*_t6 + _t213*_t63
+    _t218 = _t5*_t81*_t84 - _t61*_t85
+    _t219 = _t102*_t61 - _t5*_t85
+    _t220 = _t218*_t5 + _t219*_t61
+    _t221 = _t6*_t81*_t84 - _t63*_t85
+    _t222 = _t102*_t63 - _t6*_t85
+    _t223 = _t221*_t5 + _t222*_t61
+    _t224 = _t218*_t6 + _t219*_t63
+    _t225 = _t221*_t6 + _t222*_t63
     A = np.array([
-        [0.0, 0.0, -_t121, 0.0, 0.0, 0.0, 0.0, 0.0, _t122, _t123],
-        [0.0, 0.0, _t120, 0.0, 0.0, 0.0, 0.0, 0.0, _t124, _t125],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t14, _t15],
-        [0.0, 0.0, _t126, -_t126, 0.0, 0.0, 0.0, 0.0, _t127, _t128],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t116, _t118],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t117, _t119],
-        [0.0, 0.0, _t129, -_t129, 0.0, 0.0, 0.0, 0.0, _t130, _t131],
-        [0.0, 0.0, _t132, -_t132, 0.0, 0.0, 0.0, 0.0, _t133, _t134],
-        [0.0, 0.0, _t158, -_t158, 0.0, 0.0, 0.0, 0.0, _t172, _t186],
-        [0.0, 0.0, _t187, -_t187, 0.0, 0.0, 0.0, 0.0, _t188, _t189],
+        [0.0, 0.0, -_t111, 0.0, 0.0, 0.0, 0.0, 0.0, _t112, _t113],
+        [0.0, 0.0, _t110, 0.0, 0.0, 0.0, 0.0, 0.0, _t114, _t115],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t16, _t17],
+        [0.0, 0.0, _t118, -_t118, 0.0, 0.0, 0.0, 0.0, _t119, _t120],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t106, _t108],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t107, _t109],
+        [0.0, 0.0, _t123, -_t123, 0.0, 0.0, 0.0, 0.0, _t124, _t125],
+        [0.0, 0.0, _t128, -_t128, 0.0, 0.0, 0.0, 0.0, _t129, _t130],
+        [0.0, 0.0, _t164, -_t164, 0.0, 0.0, 0.0, 0.0, _t189, _t214],
+        [0.0, 0.0, _t215, -_t215, 0.0, 0.0, 0.0, 0.0, _t216, _t217],
     ])
     B = np.array([
         [0.0, 0.0],
@@ -864,8 +889,8 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         [0.0, 0.0],
         [0.0, 0.0],
         [0.0, 0.0],
-        [_t192, _t195],
-        [_t196, _t197],
+        [_t220, _t223],
+        [_t224, _t225],
     ])
     return A, B
 
@@ -893,7 +918,7 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         longitudinal: array of 2 (shape 2x1, row-major). N, per driven wheel
         lateral: array of 2 (shape 2x1, row-major). N, per no-side-slip row (axle)
 
-    operations after CSE: 95 add, 147 mul, 5 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 91 add, 165 mul, 5 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -919,112 +944,118 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t0 = theta_cart - theta_tractor
         _t1 = math.sin(_t0)
         _t2 = math.cos(_t0)
-        _t3 = 0.3*_t2
-        _t4 = 0.3*_t1
-        _t5 = -1.6666666666666667*_t1
-        _t6 = 0.2*_t5
-        _t7 = -1.6666666666666667*_t3
-        _t8 = 0.2*_t7
-        _t9 = K_theta_cart_x_tractor*_t1
-        _t10 = K_theta_cart_x_tractor_2*_t2
-        _t11 = K_theta_cart_x_tractor*_t2
+        _t3 = 0.3*_t1
+        _t4 = radius_left*radius_right
+        _t5 = 1.0/_t4
+        _t6 = _t5*radius_left
+        _t7 = _t5*radius_right
+        _t8 = radius_cart_left*radius_cart_right
+        _t9 = -0.6*_t8
+        _t10 = 1.0/_t9
+        _t11 = _t10*_t8
         _t12 = 2.4154589371980677*radius_right
         _t13 = -2.4154589371980677*radius_left
         _t14 = _t12*thetadot_right + _t13*thetadot_left
         _t15 = _t14*_t14
-        _t16 = 0.5*radius_right
-        _t17 = 0.5*radius_left
-        _t18 = _t16*thetadot_right + _t17*thetadot_left
-        _t19 = _t14*_t7 + _t18*_t5
-        _t20 = _t19*_t19
-        _t21 = K_theta_cart_x_tractor*_t4
-        _t22 = K_theta_cart_x_tractor_2*_t3
-        _t23 = 1.6666666666666667*_t2
-        _t24 = 0.2*_t23
-        _t25 = -1.6666666666666667*_t4
-        _t26 = 0.2*_t25
-        _t27 = _t14*_t18
-        _t28 = 1.0/radius_cart_right
-        _t29 = _t2 + _t6
-        _t30 = _t28*_t29
-        _t31 = J_theta_cart_right*_t30
-        _t32 = -_t4 + _t8
-        _t33 = _t28*_t32
-        _t34 = J_theta_cart_right*_t33
-        _t35 = 1.0/radius_cart_left
-        _t36 = _t2 - _t6
-        _t37 = _t35*_t36
-        _t38 = J_theta_cart_left*_t37
-        _t39 = -_t4 - _t8
-        _t40 = _t35*_t39
-        _t41 = J_theta_cart_left*_t40
-        _t42 = K_theta_cart_x_tractor_2*_t1 - _t11
-        _t43 = _t15*_t21 + _t15*_t22
-        _t44 = _t27*_t42 + _t43
-        _t45 = -_t18*_t19 + _t27
-        _t46 = -_t14*_t19 + _t15
-        _t47 = _t23*_t45 + _t25*_t46
-        _t48 = J_theta_cart*_t47 + _t44
-        _t49 = -_t20*_t21 - _t20*_t22
-        _t50 = -K_theta_tractor_x_tractor*_t27 + _t49
-        _t51 = 1.0/radius_right
-        _t52 = 1.0/radius_left
-        _t53 = _t10 + _t9
-        _t54 = J_x_tractor + _t5*_t53
-        _t55 = J_theta_cart*_t5 + _t53
-        _t56 = J_theta_right*_t51
-        _t57 = J_theta_left*_t52
-        _t58 = _t30*_t31 + _t37*_t38 + _t5*_t55 + _t51*_t56 + _t52*_t57 + _t54
-        _t59 = K_theta_tractor_x_tractor_2 + _t53*_t7
-        _t60 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
-        _t61 = J_theta_cart*_t7 + _t60
-        _t62 = 0.207*_t51
-        _t63 = J_theta_right*_t62
-        _t64 = -0.207*_t52
-        _t65 = J_theta_left*_t64
-        _t66 = _t30*_t34 + _t37*_t41 + _t5*_t61 + _t51*_t63 + _t52*_t65 + _t59
-        _t67 = J_theta_tractor + _t60*_t7
-        _t68 = _t33*_t34 + _t40*_t41 + _t61*_t7 + _t62*_t63 + _t64*_t65 + _t67
-        _t69 = _t58*_t68 - _t66*_t66
-        _t70 = -K_theta_cart_x_tractor_2*_t1*_t20 + K_theta_tractor_x_tractor*_t15 + _t11*_t20
-        _t71 = _t1 + _t24
-        _t72 = _t28*_t71
-        _t73 = _t26 + _t3
-        _t74 = _t28*_t73
-        _t75 = _t45*_t72 + _t46*_t74
-        _t76 = _t1 - _t24
-        _t77 = _t35*_t76
-        _t78 = -_t26 + _t3
-        _t79 = _t35*_t78
-        _t80 = _t45*_t77 + _t46*_t79
-        _t81 = _t31*_t75 + _t38*_t80 + _t47*_t53 + _t48*_t5 + _t70
-        _t82 = _t51*tau_right + _t52*tau_left - _t81
-        _t83 = _t34*_t75 + _t41*_t80 + _t47*_t60 + _t48*_t7 + _t50
-        _t84 = _t62*tau_right + _t64*tau_left - _t83
-        _t85 = 1.0/_t69
-        _t86 = _t85*(-_t66*_t84 + _t68*_t82)
-        _t87 = _t85*(_t58*_t84 - _t66*_t82)
-        _t88 = _t47 + _t5*_t86 + _t7*_t87
-        _t89 = -J_x_tractor*_t86 - K_theta_tractor_x_tractor_2*_t87 - _t53*_t88 - _t70
-        _t90 = _t30*_t86 + _t33*_t87 + _t75
-        _t91 = -J_theta_cart_right*_t90
-        _t92 = _t28*_t91
-        _t93 = _t37*_t86 + _t40*_t87 + _t80
-        _t94 = -J_theta_cart_left*_t93
-        _t95 = _t35*_t94
-        _t96 = -J_theta_cart*_t88 - _t44 - _t53*_t86 - _t60*_t87
-        _t97 = 0.2*_t92 - 0.2*_t95 + _t96
-        _t98 = -1.6666666666666667*_t97
-        _t99 = _t1*_t98 + _t2*_t92 + _t2*_t95 + _t89
-        _t100 = 0.5*_t99
-        _t101 = -J_theta_tractor*_t87 - K_theta_tractor_x_tractor_2*_t86 - _t50 - _t60*_t88
-        _t102 = _t101 + _t3*_t98 - _t4*_t92 - _t4*_t95
-        _t103 = 2.4154589371980677*_t102
-        _t104 = K_theta_tractor_x_tractor_2*_t15 + _t10*_t20 + _t20*_t9
-        _t105 = -J_x_tractor*_t27 + K_theta_tractor_x_tractor*_t87 - _t104 - _t42*_t88
-        _t106 = -_t100 + _t103
-        _t107 = -_t100 - _t103
-        _t108 = _t1*_t92 + _t1*_t95 + _t105 - _t2*_t98
+        _t16 = 0.3*_t15
+        _t17 = 0.5*radius_right
+        _t18 = 0.5*radius_left
+        _t19 = _t17*thetadot_right + _t18*thetadot_left
+        _t20 = _t1*_t11
+        _t21 = -0.3*_t2
+        _t22 = -_t11*_t21
+        _t23 = _t14*_t22 + _t19*_t20
+        _t24 = _t19*_t23
+        _t25 = -0.3*_t14
+        _t26 = _t23*_t25
+        _t27 = _t23*_t23
+        _t28 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+        _t29 = _t27*_t28
+        _t30 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+        _t31 = _t27*_t30
+        _t32 = K_theta_tractor_x_tractor*_t15
+        _t33 = -_t14*_t19
+        _t34 = -_t33*_t4*_t5
+        _t35 = K_theta_tractor_x_tractor*_t34
+        _t36 = 0.2*radius_cart_left
+        _t37 = -0.6*radius_cart_left
+        _t38 = _t10*(_t1*_t36 + _t2*_t37)
+        _t39 = -0.2*radius_cart_right
+        _t40 = -0.6*radius_cart_right
+        _t41 = _t10*(_t1*_t39 + _t2*_t40)
+        _t42 = J_theta_right*_t6
+        _t43 = J_theta_left*_t7
+        _t44 = J_theta_cart_right*_t38
+        _t45 = J_theta_cart_left*_t41
+        _t46 = _t20*_t30
+        _t47 = J_x_tractor + _t46
+        _t48 = J_theta_cart*_t20 + _t30
+        _t49 = _t20*_t48 + _t38*_t44 + _t41*_t45 + _t42*_t6 + _t43*_t7 + _t47
+        _t50 = _t22*_t30
+        _t51 = K_theta_tractor_x_tractor_2 + _t50
+        _t52 = 0.207*_t6
+        _t53 = J_theta_right*_t52
+        _t54 = -0.207*_t7
+        _t55 = J_theta_left*_t54
+        _t56 = _t10*(-_t21*_t36 - _t3*_t37)
+        _t57 = J_theta_cart_right*_t56
+        _t58 = _t10*(-_t21*_t39 - _t3*_t40)
+        _t59 = J_theta_cart_left*_t58
+        _t60 = J_theta_cart*_t22 - 0.3*_t28
+        _t61 = _t20*_t60 + _t38*_t57 + _t41*_t59 + _t51 + _t53*_t6 + _t55*_t7
+        _t62 = _t22*_t28
+        _t63 = J_theta_tractor - 0.3*_t62
+        _t64 = _t22*_t60 + _t52*_t53 + _t54*_t55 + _t56*_t57 + _t58*_t59 + _t63
+        _t65 = _t49*_t64 - _t61*_t61
+        _t66 = -_t1*_t26 - _t2*_t24
+        _t67 = _t1*_t16 - _t2*_t34 - _t66
+        _t68 = _t11*_t67
+        _t69 = -_t29 + _t30*_t68
+        _t70 = _t32 + _t69
+        _t71 = _t1*_t24 - _t2*_t26
+        _t72 = _t1*_t34 + _t16*_t2 - _t71
+        _t73 = _t10*(_t36*_t67 + _t37*_t72)
+        _t74 = J_theta_cart_right*_t73
+        _t75 = _t10*(_t39*_t67 + _t40*_t72)
+        _t76 = J_theta_cart_left*_t75
+        _t77 = J_theta_cart*_t68 + _t16*_t30 + _t28*_t34
+        _t78 = _t20*_t77 + _t38*_t74 + _t41*_t76 + _t70
+        _t79 = _t6*tau_right + _t7*tau_left - _t78
+        _t80 = _t28*_t68 + _t31
+        _t81 = -_t35 - 0.3*_t80
+        _t82 = _t22*_t77 + _t56*_t74 + _t58*_t76 + _t81
+        _t83 = _t52*tau_right + _t54*tau_left - _t82
+        _t84 = 1.0/_t65
+        _t85 = _t84*(-_t61*_t83 + _t64*_t79)
+        _t86 = _t84*(_t49*_t83 - _t61*_t79)
+        _t87 = _t20*_t85 + _t22*_t86 + _t68
+        _t88 = -_t29 + _t30*_t87
+        _t89 = K_theta_tractor_x_tractor_2*_t86 + _t32 + _t88
+        _t90 = J_x_tractor*_t85 + _t89
+        _t91 = 1.0/radius_cart_right
+        _t92 = _t38*_t85 + _t56*_t86 + _t73
+        _t93 = J_theta_cart_right*_t92
+        _t94 = -_t91*_t93
+        _t95 = 1.0/radius_cart_left
+        _t96 = _t41*_t85 + _t58*_t86 + _t75
+        _t97 = J_theta_cart_left*_t96
+        _t98 = -_t95*_t97
+        _t99 = _t16 + _t85
+        _t100 = _t34 - 0.3*_t86
+        _t101 = J_theta_cart*_t87 + _t100*_t28 + _t30*_t99
+        _t102 = -_t101 + 0.2*_t94 - 0.2*_t98
+        _t103 = -1.6666666666666667*_t102
+        _t104 = _t1*_t103 + _t2*_t94 + _t2*_t98 - _t90
+        _t105 = 0.5*_t104
+        _t106 = _t28*_t87 + _t31
+        _t107 = J_theta_tractor*_t86 + K_theta_tractor_x_tractor_2*_t85 - 0.3*_t106 - _t35
+        _t108 = 0.3*_t103*_t2 - _t107 - _t3*_t94 - _t3*_t98
+        _t109 = 2.4154589371980677*_t108
+        _t110 = -K_theta_tractor_x_tractor*_t86 + K_theta_tractor_x_tractor_2*_t15 + _t106
+        _t111 = J_x_tractor*_t34 + _t110
+        _t112 = -_t105 + _t109
+        _t113 = -_t105 - _t109
+        _t114 = _t1*_t94 + _t1*_t98 - _t103*_t2 - _t111
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -1049,12 +1080,12 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires J_x_tractor > 0")
-    if not (_t58 > 0.0):
+    if not (_t49 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires (S^T M S)[0][0] > 0")
-    if not (_t69 > 0.0):
+    if not (_t65 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires det(S^T M S) > 0: a positive-definite model")
-    longitudinal = np.array([_t107, _t106])
-    lateral = np.array([-_t108, -_t98])
+    longitudinal = np.array([_t113, _t112])
+    lateral = np.array([-_t114, -_t103])
     if not np.all(np.isfinite(longitudinal)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
     if not np.all(np.isfinite(lateral)):
