@@ -99,6 +99,81 @@ class ChainInertia:
         return sp.Matrix(out)
 
 
+    def _hitch_velocities(self, stage: Stage, column: Sequence[sp.Expr]) -> list[Vector]:
+        """P_i of ``column``: (v_x, v_y), then P_{i+1} = P_i + e_i v_θi."""
+        d = stage.define
+        prefix: list[Vector] = [(column[self.x], column[self.y])]
+        for i in range(len(self.yaws) - 1):
+            (px, py), (ex, ey), rate = prefix[-1], self.hitches[i], column[self.yaws[i]]
+            prefix.append((d(px + d(ex) * rate), d(py + d(ey) * rate)))
+        return prefix
+
+    def congruence(self, stage: Stage, s: sp.Matrix) -> sp.Matrix:
+        """Sᵀ M S forwards only: the suffix sums folded into the prefix ones,
+        Σ_i S_iᵃ e_i · Q_iᵇ = Σ_j S_jᵇ g_j · (P_jᵃ − P_0ᵃ), so that
+
+        (Sᵀ M S)_ab = P_0ᵃᵀ M_xy P_0ᵇ + Σ_i (S_iᵃ g_i · P_iᵇ + S_iᵇ g_i · P_iᵃ)
+                      + Σ_k M_kk S_kᵃ S_kᵇ (k: the yaws and the wheels),
+
+        each term added to a running sum body by body (a quantity each), so that a
+        step's evaluation streams along the chain (few values live at once)."""
+        k = s.cols
+        return self._projected(stage, s, [s[:, b] for b in range(k)], None,
+                               symmetric=True)
+
+    def projected(self, stage: Stage, s: sp.Matrix, column: Sequence[sp.Expr],
+                  rates: Sequence[sp.Expr]) -> sp.Matrix:
+        """Sᵀ(M ``column`` + H(``rates``)) forwards only (as :meth:`congruence`, the
+        column's g_j v_j with the towed moments' centripetal g'_j θ̇_j² added, its hitch
+        accelerations with e'_j θ̇_j²)."""
+        return self._projected(stage, s, [sp.Matrix(column)], rates, symmetric=False)[:, 0]
+
+    def _projected(self, stage: Stage, s: sp.Matrix, columns: list[sp.Matrix],
+                   rates: Sequence[sp.Expr] | None, symmetric: bool) -> sp.Matrix:
+        d = stage.define
+        k, n = s.cols, len(self.diagonal)
+        g = [(d(a), d(b)) for a, b in self.moments]
+        left = [self._hitch_velocities(stage, s[:, a]) for a in range(k)]
+        if rates is None:
+            right = left
+            weight = [[(g[i][0] * columns[b][y], g[i][1] * columns[b][y])
+                       for i, y in enumerate(self.yaws)] for b in range(len(columns))]
+        else:
+            sq = [d(rates[y] ** 2) for y in self.yaws]
+            es = [(d(a) * q, d(b) * q) for (a, b), q in zip(self.hitch_slopes, sq,
+                                                                strict=True)]
+            column = columns[0]
+            prefix: list[Vector] = [(column[self.x], column[self.y])]
+            for i in range(len(self.yaws) - 1):
+                (px, py), (ex, ey) = prefix[-1], self.hitches[i]
+                rate = column[self.yaws[i]]
+                prefix.append((d(px + d(ex) * rate + es[i][0]),
+                               d(py + d(ey) * rate + es[i][1])))
+            right = [prefix]
+            weight = [[(g[i][0] * column[y] + d(a) * sq[i], g[i][1] * column[y] + d(b) * sq[i])
+                       for i, (y, (a, b)) in enumerate(zip(self.yaws, self.moment_slopes,
+                                                           strict=True))]]
+        out = sp.zeros(k, len(columns))
+        others = [i for i in range(n) if i not in (self.x, self.y)]
+        for a in range(k):
+            for b in range(len(columns)):
+                if symmetric and b < a:
+                    out[a, b] = out[b, a]
+                    continue
+                pa, pb = left[a][0], right[b][0]
+                pos = (sp.Matrix([pa]) * self.position_block * sp.Matrix(pb))[0]
+                total = d(pos + sum((self.diagonal[i] * s[i, a] * columns[b][i]
+                                     for i in others if i not in self.yaws), sp.S.Zero))
+                for i, yaw in enumerate(self.yaws):
+                    (gx, gy), (wx, wy) = g[i], weight[b][i]
+                    term = (s[yaw, a] * (gx * right[b][i][0] + gy * right[b][i][1])
+                            + wx * left[a][i][0] + wy * left[a][i][1]
+                            + self.diagonal[yaw] * s[yaw, a] * columns[b][yaw])
+                    total = d(total + term)
+                out[a, b] = total
+        return out
+
+
 def chain_inertia(mass: sp.Matrix, bias: sp.Matrix, q: Sequence[sp.Symbol],
                   qdot: Sequence[sp.Symbol], planar_frame: Sequence[int],
                   simplify: Callable[[sp.Expr], sp.Expr]) -> ChainInertia | None:

@@ -129,12 +129,13 @@ class StagedMinimal:
 
 def _congruence(stage: Stage, s: sp.Matrix, m: sp.Matrix,
                 chain: ChainInertia | None = None) -> sp.Matrix:
-    """Sᵀ M S for a symmetric M through the stage: M S once (column by column in O(n)
-    along a hitch ``chain``), then each entry on and above the diagonal once (the result
-    is symmetric)."""
+    """Sᵀ M S for a symmetric M through the stage: M S once, then each entry on and above
+    the diagonal once (the result is symmetric); along a hitch ``chain``, its running
+    sums in O(n) (``ChainInertia.congruence``)."""
+    if chain is not None:
+        return chain.congruence(stage, s)
     k = s.cols
-    ms = (stage.matrix(m * s) if chain is None else
-          sp.Matrix.hstack(*(chain.product(stage, s[:, a]) for a in range(k))))
+    ms = stage.matrix(m * s)
     return sp.Matrix(k, k, lambda i, j: stage.define((s[:, min(i, j)].T * ms[:, max(i, j)])[0]))
 
 
@@ -396,8 +397,8 @@ class ConstrainedSystem:
         the velocities ``v``, ``_on_manifold``; along a hitch ``chain``, in the same
         frame, M S and M Ṡ η + H in chain order instead)."""
         mbar = _congruence(stage, s, m, chain)
-        inertial = m * rate + h if chain is None else chain.product(stage, rate, v)
-        hbar = stage.matrix(s.T * inertial)
+        hbar = (stage.matrix(s.T * (m * rate + h)) if chain is None
+                else chain.projected(stage, s, list(rate), list(v)))
         return StagedMinimal(stage, s, v, rate, mbar, hbar,
                              stage.matrix(s.T * self.input_matrix.xreplace(
                                  self.root_frame_point() if plane else {})),

@@ -90,7 +90,7 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
  * @param[in]  span [1] row-major (TRAILER_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (TRAILER_MINIMAL_TDE_H1HAT_SIZE)
  *
- * operations after CSE: 40 add, 86 mul, 3 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 39 add, 93 mul, 3 div, 2 sin/cos, 0 sqrt
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
  * certificate (the printed code changed since the
@@ -152,7 +152,7 @@ void trailer_minimal_tde_mhat(const trailer_params_t *p, const trailer_real_t *m
  *     measured q
  * @param[out] norm [1] row-major (TRAILER_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 37 add, 86 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 36 add, 93 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fabs
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
  * certificate (the printed code changed since the
@@ -301,7 +301,7 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
  * @param[in]  H1hat [2] row-major (TRAILER_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (TRAILER_MINIMAL_TDC_LAW_U_SIZE)
  *
- * operations after CSE: 42 add, 88 mul, 2 div, 2 sin/cos, 0 sqrt
+ * operations after CSE: 41 add, 95 mul, 2 div, 2 sin/cos, 0 sqrt
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
  * certificate (the printed code changed since the
@@ -400,7 +400,7 @@ void trailer_minimal_tdc_law_mhat(const trailer_params_t *p, const trailer_real_
  * @param[out] s [2] row-major (TRAILER_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 49 add, 102 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 48 add, 109 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
  * certificate (the printed code changed since the
@@ -518,7 +518,7 @@ void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_rea
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 79 add, 159 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 79 add, 168 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
  * certificate (the printed code changed since the
@@ -580,7 +580,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
  * @param[out] s_norm [1] row-major (TRAILER_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 75 add, 156 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 75 add, 165 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
  * certificate (the printed code changed since the

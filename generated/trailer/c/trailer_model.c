@@ -9,7 +9,7 @@
 /* trailer_staged_quantities: The quantities minimal_bias_forces, minimal_forward_dynamics,
    linearization, wheel_contact_forces all read.
    Each caller's documented operations include these:
-   operations after CSE: 30 add, 80 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 31 add, 83 mul, 2 div, 2 sin/cos, 0 sqrt */
 static void trailer_staged_quantities(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *shared_quantities)
 {
@@ -41,100 +41,99 @@ static void trailer_staged_quantities(const trailer_params_t *p, const trailer_r
     const trailer_real_t _t17 = _t16*_t9;
     const trailer_real_t _t18 = -TRAILER_LIT(0.3)*_t15;
     const trailer_real_t _t19 = _t16*_t18;
-    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t21 = radius_left*radius_right;
-    const trailer_real_t _t22 = TRAILER_LIT(1.0)/_t21;
-    const trailer_real_t _t23 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t24 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t25 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t26 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t27 = _t5*(_t1*_t23 + _t2*_t24);
-    const trailer_real_t _t28 = _t5*(_t1*_t25 + _t2*_t26);
-    const trailer_real_t _t29 = _t5*(-_t11*_t23 - _t20*_t24);
-    const trailer_real_t _t30 = _t5*(-_t11*_t25 - _t20*_t26);
-    const trailer_real_t _t31 = _t15*_t15;
-    const trailer_real_t _t32 = _t16*_t16;
-    const trailer_real_t _t33 = TRAILER_LIT(0.3)*_t31;
-    const trailer_real_t _t34 = -_t15*_t9;
-    const trailer_real_t _t35 = -_t21*_t22*_t34;
-    const trailer_real_t _t36 = -_t1*_t19 - _t17*_t2;
-    const trailer_real_t _t37 = _t1*_t17 - _t19*_t2;
-    const trailer_real_t _t38 = _t1*_t33 - _t2*_t35 - _t36;
-    const trailer_real_t _t39 = _t1*_t35 + _t2*_t33 - _t37;
-    const trailer_real_t _t40 = _t38*_t6;
-    const trailer_real_t _t41 = _t5*(_t23*_t38 + _t24*_t39);
-    const trailer_real_t _t42 = _t5*(_t25*_t38 + _t26*_t39);
+    const trailer_real_t _t20 = -TRAILER_LIT(0.2)*radius_cart_right;
+    const trailer_real_t _t21 = -TRAILER_LIT(0.6)*radius_cart_right;
+    const trailer_real_t _t22 = _t15*_t15;
+    const trailer_real_t _t23 = TRAILER_LIT(0.3)*_t22;
+    const trailer_real_t _t24 = radius_left*radius_right;
+    const trailer_real_t _t25 = TRAILER_LIT(1.0)/_t24;
+    const trailer_real_t _t26 = -_t15*_t9;
+    const trailer_real_t _t27 = -_t24*_t25*_t26;
+    const trailer_real_t _t28 = -_t1*_t19 - _t17*_t2;
+    const trailer_real_t _t29 = _t1*_t23 - _t2*_t27 - _t28;
+    const trailer_real_t _t30 = _t1*_t17 - _t19*_t2;
+    const trailer_real_t _t31 = _t1*_t27 + _t2*_t23 - _t30;
+    const trailer_real_t _t32 = _t5*(_t20*_t29 + _t21*_t31);
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t33 = J_theta_cart_left*_t32;
+    const trailer_real_t _t34 = TRAILER_LIT(0.2)*radius_cart_left;
+    const trailer_real_t _t35 = -TRAILER_LIT(0.6)*radius_cart_left;
+    const trailer_real_t _t36 = _t5*(_t29*_t34 + _t31*_t35);
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t37 = J_theta_cart_right*_t36;
+    const trailer_real_t _t38 = _t29*_t6;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t39 = J_theta_cart*_t38;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t43 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t44 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t45 = -_t32*_t44 + _t40*_t43;
-    const trailer_real_t _t46 = _t32*_t43 + _t40*_t44;
+    const trailer_real_t _t40 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t41 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1;
+    const trailer_real_t _t42 = _t23*_t40 + _t27*_t41;
+    const trailer_real_t _t43 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t44 = _t5*(_t1*_t34 + _t2*_t35);
+    const trailer_real_t _t45 = _t5*(_t1*_t20 + _t2*_t21);
+    const trailer_real_t _t46 = _t5*(-_t11*_t34 - _t35*_t43);
+    const trailer_real_t _t47 = _t5*(-_t11*_t20 - _t21*_t43);
+    const trailer_real_t _t48 = _t16*_t16;
+    const trailer_real_t _t49 = _t33*_t45 + _t37*_t44;
     const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t47 = K_theta_tractor_x_tractor*_t31 + _t45;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t48 = J_theta_cart_right*_t41;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t49 = J_theta_cart_left*_t42;
-    const trailer_real_t _t50 = -K_theta_tractor_x_tractor*_t35 - TRAILER_LIT(0.3)*_t46;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t51 = J_theta_cart*_t40 + _t33*_t43 + _t35*_t44;
-    const trailer_real_t _t52 = _t10*_t51 + _t27*_t48 + _t28*_t49 + _t47;
-    const trailer_real_t _t53 = _t12*_t51 + _t29*_t48 + _t30*_t49 + _t50;
+    const trailer_real_t _t50 = K_theta_tractor_x_tractor*_t22 + _t49;
+    const trailer_real_t _t51 = _t10*_t39 + _t10*_t42 + _t38*_t40 - _t41*_t48 + _t50;
+    const trailer_real_t _t52 = _t33*_t47 + _t37*_t46;
+    const trailer_real_t _t53 = -K_theta_tractor_x_tractor*_t27 + _t52;
+    const trailer_real_t _t54 = _t12*_t39 + _t12*_t42 - TRAILER_LIT(0.3)*_t38*_t41
+            - TRAILER_LIT(0.3)*_t40*_t48 + _t53;
     shared_quantities[0] = _t13;
     shared_quantities[1] = _t14;
     shared_quantities[2] = -_t1;
     shared_quantities[3] = _t2;
     shared_quantities[4] = _t11;
-    shared_quantities[5] = _t20;
+    shared_quantities[5] = _t43;
     shared_quantities[6] = _t7;
     shared_quantities[7] = _t8;
-    shared_quantities[8] = _t21;
-    shared_quantities[9] = _t22;
+    shared_quantities[8] = _t24;
+    shared_quantities[9] = _t25;
     shared_quantities[10] = _t3;
-    shared_quantities[11] = _t23;
-    shared_quantities[12] = _t24;
-    shared_quantities[13] = _t25;
-    shared_quantities[14] = _t26;
+    shared_quantities[11] = _t34;
+    shared_quantities[12] = _t35;
+    shared_quantities[13] = _t20;
+    shared_quantities[14] = _t21;
     shared_quantities[15] = _t4;
     shared_quantities[16] = _t5;
     shared_quantities[17] = _t10;
-    shared_quantities[18] = _t27;
-    shared_quantities[19] = _t28;
+    shared_quantities[18] = _t44;
+    shared_quantities[19] = _t45;
     shared_quantities[20] = _t12;
-    shared_quantities[21] = _t29;
-    shared_quantities[22] = _t30;
+    shared_quantities[21] = _t46;
+    shared_quantities[22] = _t47;
     shared_quantities[23] = _t9;
     shared_quantities[24] = _t15;
     shared_quantities[25] = _t16;
-    shared_quantities[26] = _t31;
-    shared_quantities[27] = _t32;
-    shared_quantities[28] = _t33;
+    shared_quantities[26] = _t22;
+    shared_quantities[27] = _t48;
+    shared_quantities[28] = _t23;
     shared_quantities[29] = _t18;
-    shared_quantities[30] = _t34;
-    shared_quantities[31] = _t35;
-    shared_quantities[32] = _t36;
-    shared_quantities[33] = _t37;
-    shared_quantities[34] = _t38;
-    shared_quantities[35] = _t39;
-    shared_quantities[36] = _t40;
-    shared_quantities[37] = _t41;
-    shared_quantities[38] = _t42;
-    shared_quantities[39] = _t43;
-    shared_quantities[40] = _t44;
-    shared_quantities[41] = _t45;
-    shared_quantities[42] = _t46;
-    shared_quantities[43] = _t47;
-    shared_quantities[44] = _t48;
-    shared_quantities[45] = _t49;
-    shared_quantities[46] = _t50;
-    shared_quantities[47] = _t51;
-    shared_quantities[48] = _t52;
-    shared_quantities[49] = _t53;
+    shared_quantities[30] = _t26;
+    shared_quantities[31] = _t27;
+    shared_quantities[32] = _t28;
+    shared_quantities[33] = _t30;
+    shared_quantities[34] = _t29;
+    shared_quantities[35] = _t31;
+    shared_quantities[36] = _t38;
+    shared_quantities[37] = _t36;
+    shared_quantities[38] = _t32;
+    shared_quantities[39] = _t40;
+    shared_quantities[40] = _t41;
+    shared_quantities[41] = _t49;
+    shared_quantities[42] = _t50;
+    shared_quantities[43] = _t51;
+    shared_quantities[44] = _t52;
+    shared_quantities[45] = _t53;
+    shared_quantities[46] = _t54;
 }
 
 /* trailer_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 67 add, 140 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 67 add, 146 mul, 3 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot)
 {
@@ -159,7 +158,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
 }
 
 /* trailer_model_prepare: documented in trailer_model.h.
-   operations after CSE: 3 add, 27 mul, 2 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 29 mul, 2 div, 0 sin/cos, 0 sqrt */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared)
 {
@@ -201,20 +200,16 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     const trailer_real_t _t9 = TRAILER_LIT(0.5)*radius_left;
     const trailer_real_t _t10 = TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t12 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t13 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t14 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t16 = J_theta_right*_t2;
-    const trailer_real_t _t17 = J_theta_left*_t3;
-    const trailer_real_t _t18 = _t16*_t2 + _t17*_t3;
-    const trailer_real_t _t19 = TRAILER_LIT(0.207)*_t2;
-    const trailer_real_t _t20 = J_theta_right*_t19;
-    const trailer_real_t _t21 = -TRAILER_LIT(0.207)*_t3;
-    const trailer_real_t _t22 = J_theta_left*_t21;
-    const trailer_real_t _t23 = _t2*_t20 + _t22*_t3;
-    const trailer_real_t _t24 = _t19*_t20 + _t21*_t22;
-    const trailer_real_t _t25 = _t0*_t1;
+    const trailer_real_t _t12 = -TRAILER_LIT(0.2)*radius_cart_right;
+    const trailer_real_t _t13 = -TRAILER_LIT(0.6)*radius_cart_right;
+    const trailer_real_t _t14 = TRAILER_LIT(0.2)*radius_cart_left;
+    const trailer_real_t _t15 = -TRAILER_LIT(0.6)*radius_cart_left;
+    const trailer_real_t _t16 = _t0*_t1;
+    const trailer_real_t _t17 = J_theta_left*_t3*_t3 + J_theta_right*_t2*_t2 + J_x_tractor;
+    const trailer_real_t _t18 = TRAILER_LIT(0.207)*_t2;
+    const trailer_real_t _t19 = -TRAILER_LIT(0.207)*_t3;
+    const trailer_real_t _t20 = J_theta_left*_t19*_t3 + J_theta_right*_t18*_t2;
+    const trailer_real_t _t21 = J_theta_left*_t19*_t19 + J_theta_right*_t18*_t18;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -253,34 +248,33 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     prepared->forward_dynamics[1] = J_theta_cart_left;
     prepared->forward_dynamics[2] = J_theta_cart_right;
     prepared->forward_dynamics[3] = J_theta_tractor;
-    prepared->forward_dynamics[4] = J_x_tractor;
-    prepared->forward_dynamics[5] = K_theta_cart_x_tractor;
-    prepared->forward_dynamics[6] = K_theta_cart_x_tractor_2;
-    prepared->forward_dynamics[7] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[8] = K_theta_tractor_x_tractor_2;
-    prepared->forward_dynamics[9] = _t2;
-    prepared->forward_dynamics[10] = _t3;
-    prepared->forward_dynamics[11] = _t6;
-    prepared->forward_dynamics[12] = _t7;
-    prepared->forward_dynamics[13] = _t8;
-    prepared->forward_dynamics[14] = _t9;
-    prepared->forward_dynamics[15] = _t10;
-    prepared->forward_dynamics[16] = _t11;
-    prepared->forward_dynamics[17] = _t12;
-    prepared->forward_dynamics[18] = _t13;
-    prepared->forward_dynamics[19] = _t14;
-    prepared->forward_dynamics[20] = _t15;
-    prepared->forward_dynamics[21] = _t18;
-    prepared->forward_dynamics[22] = _t19;
-    prepared->forward_dynamics[23] = _t21;
-    prepared->forward_dynamics[24] = _t23;
-    prepared->forward_dynamics[25] = _t24;
-    prepared->forward_dynamics[26] = _t25;
+    prepared->forward_dynamics[4] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[5] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[6] = K_theta_tractor_x_tractor;
+    prepared->forward_dynamics[7] = K_theta_tractor_x_tractor_2;
+    prepared->forward_dynamics[8] = _t2;
+    prepared->forward_dynamics[9] = _t3;
+    prepared->forward_dynamics[10] = _t6;
+    prepared->forward_dynamics[11] = _t7;
+    prepared->forward_dynamics[12] = _t8;
+    prepared->forward_dynamics[13] = _t9;
+    prepared->forward_dynamics[14] = _t10;
+    prepared->forward_dynamics[15] = _t11;
+    prepared->forward_dynamics[16] = _t12;
+    prepared->forward_dynamics[17] = _t13;
+    prepared->forward_dynamics[18] = _t14;
+    prepared->forward_dynamics[19] = _t15;
+    prepared->forward_dynamics[20] = _t16;
+    prepared->forward_dynamics[21] = _t17;
+    prepared->forward_dynamics[22] = _t18;
+    prepared->forward_dynamics[23] = _t19;
+    prepared->forward_dynamics[24] = _t20;
+    prepared->forward_dynamics[25] = _t21;
     return TRAILER_OK;
 }
 
 /* trailer_forward_dynamics_prepared: documented in trailer_model.h.
-   operations after CSE: 64 add, 113 mul, 1 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 63 add, 117 mul, 1 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
     trailer_real_t *qddot)
@@ -292,8 +286,8 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     if (((trailer_exp_carry(theta_tractor)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t61 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t62 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t59 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t60 = TRAILER_SIN(theta_tractor);
     const trailer_real_t theta_cart = q[3];
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
@@ -304,115 +298,110 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t26 = theta_cart - theta_tractor;
-    const trailer_real_t _t27 = TRAILER_SIN(_t26);
-    const trailer_real_t _t28 = TRAILER_COS(_t26);
-    const trailer_real_t _t8 = prepared->forward_dynamics[13];
-    const trailer_real_t _t9 = prepared->forward_dynamics[14];
-    const trailer_real_t _t29 = _t8*thetadot_right + _t9*thetadot_left;
-    const trailer_real_t _t7 = prepared->forward_dynamics[12];
-    const trailer_real_t _t30 = _t27*_t7;
-    const trailer_real_t _t31 = -TRAILER_LIT(0.3)*_t28;
-    const trailer_real_t _t32 = -_t31*_t7;
-    const trailer_real_t _t10 = prepared->forward_dynamics[15];
-    const trailer_real_t _t11 = prepared->forward_dynamics[16];
-    const trailer_real_t _t33 = _t10*thetadot_right + _t11*thetadot_left;
-    const trailer_real_t _t34 = _t29*_t30 + _t32*_t33;
-    const trailer_real_t _t35 = _t29*_t34;
-    const trailer_real_t _t36 = -TRAILER_LIT(0.3)*_t33;
-    const trailer_real_t _t37 = _t34*_t36;
-    const trailer_real_t _t6 = prepared->forward_dynamics[11];
-    const trailer_real_t _t12 = prepared->forward_dynamics[17];
-    const trailer_real_t _t13 = prepared->forward_dynamics[18];
-    const trailer_real_t _t38 = _t6*(_t12*_t27 + _t13*_t28);
-    const trailer_real_t _t14 = prepared->forward_dynamics[19];
-    const trailer_real_t _t15 = prepared->forward_dynamics[20];
-    const trailer_real_t _t39 = _t6*(_t14*_t27 + _t15*_t28);
-    const trailer_real_t J_theta_cart_right = prepared->forward_dynamics[2];
-    const trailer_real_t _t40 = J_theta_cart_right*_t38;
+    const trailer_real_t _t22 = theta_cart - theta_tractor;
+    const trailer_real_t _t23 = TRAILER_SIN(_t22);
+    const trailer_real_t _t24 = TRAILER_COS(_t22);
+    const trailer_real_t _t8 = prepared->forward_dynamics[12];
+    const trailer_real_t _t9 = prepared->forward_dynamics[13];
+    const trailer_real_t _t25 = _t8*thetadot_right + _t9*thetadot_left;
+    const trailer_real_t _t7 = prepared->forward_dynamics[11];
+    const trailer_real_t _t26 = _t23*_t7;
+    const trailer_real_t _t27 = -TRAILER_LIT(0.3)*_t24;
+    const trailer_real_t _t28 = -_t27*_t7;
+    const trailer_real_t _t10 = prepared->forward_dynamics[14];
+    const trailer_real_t _t11 = prepared->forward_dynamics[15];
+    const trailer_real_t _t29 = _t10*thetadot_right + _t11*thetadot_left;
+    const trailer_real_t _t30 = _t25*_t26 + _t28*_t29;
+    const trailer_real_t _t31 = _t25*_t30;
+    const trailer_real_t _t32 = -TRAILER_LIT(0.3)*_t29;
+    const trailer_real_t _t33 = _t30*_t32;
+    const trailer_real_t _t6 = prepared->forward_dynamics[10];
+    const trailer_real_t _t12 = prepared->forward_dynamics[16];
+    const trailer_real_t _t13 = prepared->forward_dynamics[17];
+    const trailer_real_t _t34 = _t6*(_t12*_t23 + _t13*_t24);
     const trailer_real_t J_theta_cart_left = prepared->forward_dynamics[1];
-    const trailer_real_t _t41 = J_theta_cart_left*_t39;
-    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[5];
-    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[6];
-    const trailer_real_t _t42 = K_theta_cart_x_tractor*_t27 + K_theta_cart_x_tractor_2*_t28;
-    const trailer_real_t _t43 = _t30*_t42;
-    const trailer_real_t J_x_tractor = prepared->forward_dynamics[4];
-    const trailer_real_t _t44 = J_x_tractor + _t43;
+    const trailer_real_t _t35 = J_theta_cart_left*_t34;
+    const trailer_real_t _t14 = prepared->forward_dynamics[18];
+    const trailer_real_t _t15 = prepared->forward_dynamics[19];
+    const trailer_real_t _t36 = _t6*(_t14*_t23 + _t15*_t24);
+    const trailer_real_t J_theta_cart_right = prepared->forward_dynamics[2];
+    const trailer_real_t _t37 = J_theta_cart_right*_t36;
+    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[4];
+    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[5];
+    const trailer_real_t _t38 = -K_theta_cart_x_tractor*_t24 + K_theta_cart_x_tractor_2*_t23;
+    const trailer_real_t _t39 = TRAILER_LIT(0.3)*_t38;
     const trailer_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer_real_t _t45 = J_theta_cart*_t30 + _t42;
-    const trailer_real_t _t18 = prepared->forward_dynamics[21];
-    const trailer_real_t _t46 = _t18 + _t30*_t45 + _t38*_t40 + _t39*_t41 + _t44;
-    const trailer_real_t _t47 = _t32*_t42;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[8];
-    const trailer_real_t _t48 = K_theta_tractor_x_tractor_2 + _t47;
-    const trailer_real_t _t49 = TRAILER_LIT(0.3)*_t27;
-    const trailer_real_t _t50 = _t6*(-_t12*_t31 - _t13*_t49);
-    const trailer_real_t _t51 = J_theta_cart_right*_t50;
-    const trailer_real_t _t52 = _t6*(-_t14*_t31 - _t15*_t49);
-    const trailer_real_t _t53 = J_theta_cart_left*_t52;
-    const trailer_real_t _t54 = -K_theta_cart_x_tractor*_t28 + K_theta_cart_x_tractor_2*_t27;
-    const trailer_real_t _t55 = J_theta_cart*_t32 - TRAILER_LIT(0.3)*_t54;
-    const trailer_real_t _t23 = prepared->forward_dynamics[24];
-    const trailer_real_t _t56 = _t23 + _t30*_t55 + _t38*_t51 + _t39*_t53 + _t48;
-    const trailer_real_t _t57 = _t32*_t54;
+    const trailer_real_t _t40 = J_theta_cart*_t26;
+    const trailer_real_t _t41 = _t29*_t29;
+    const trailer_real_t _t42 = TRAILER_LIT(0.3)*_t41;
+    const trailer_real_t _t43 = -_t25*_t29;
+    const trailer_real_t _t16 = prepared->forward_dynamics[20];
+    const trailer_real_t _t44 = -_t16*_t43;
+    const trailer_real_t _t45 = K_theta_cart_x_tractor*_t23 + K_theta_cart_x_tractor_2*_t24;
+    const trailer_real_t _t46 = _t38*_t44 + _t42*_t45;
+    const trailer_real_t _t17 = prepared->forward_dynamics[21];
+    const trailer_real_t _t47 = J_theta_cart_left*_t34*_t34 + J_theta_cart_right*_t36*_t36 + _t17;
+    const trailer_real_t _t48 = J_theta_cart*_t26*_t26 + TRAILER_LIT(2.0)*_t26*_t45 + _t47;
+    const trailer_real_t _t49 = TRAILER_LIT(0.3)*_t23;
+    const trailer_real_t _t50 = _t6*(-_t14*_t27 - _t15*_t49);
+    const trailer_real_t _t51 = _t6*(-_t12*_t27 - _t13*_t49);
+    const trailer_real_t _t20 = prepared->forward_dynamics[24];
+    const trailer_real_t _t52 = _t20 + _t35*_t51 + _t37*_t50;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[7];
+    const trailer_real_t _t53 = K_theta_tractor_x_tractor_2 + _t52;
+    const trailer_real_t _t54 = -_t26*_t39 + _t28*(_t40 + _t45) + _t53;
+    const trailer_real_t _t21 = prepared->forward_dynamics[25];
+    const trailer_real_t _t55 = J_theta_cart_left*_t51*_t51 + J_theta_cart_right*_t50*_t50 + _t21;
     const trailer_real_t J_theta_tractor = prepared->forward_dynamics[3];
-    const trailer_real_t _t58 = J_theta_tractor - TRAILER_LIT(0.3)*_t57;
-    const trailer_real_t _t24 = prepared->forward_dynamics[25];
-    const trailer_real_t _t59 = _t24 + _t32*_t55 + _t50*_t51 + _t52*_t53 + _t58;
-    const trailer_real_t _t60 = _t46*_t59 - _t56*_t56;
-    const trailer_real_t _t63 = _t33*_t33;
-    const trailer_real_t _t64 = _t34*_t34;
-    const trailer_real_t _t65 = TRAILER_LIT(0.3)*_t63;
-    const trailer_real_t _t66 = -_t29*_t33;
-    const trailer_real_t _t25 = prepared->forward_dynamics[26];
-    const trailer_real_t _t67 = -_t25*_t66;
-    const trailer_real_t _t68 = -_t27*_t37 - _t28*_t35;
-    const trailer_real_t _t69 = _t27*_t35 - _t28*_t37;
-    const trailer_real_t _t70 = _t27*_t65 - _t28*_t67 - _t68;
-    const trailer_real_t _t71 = _t27*_t67 + _t28*_t65 - _t69;
-    const trailer_real_t _t72 = _t7*_t70;
-    const trailer_real_t _t73 = _t6*(_t12*_t70 + _t13*_t71);
-    const trailer_real_t _t74 = _t6*(_t14*_t70 + _t15*_t71);
-    const trailer_real_t _t75 = _t42*_t72 - _t54*_t64;
-    const trailer_real_t _t76 = _t42*_t64 + _t54*_t72;
-    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[7];
-    const trailer_real_t _t77 = K_theta_tractor_x_tractor*_t63 + _t75;
-    const trailer_real_t _t78 = J_theta_cart_right*_t73;
-    const trailer_real_t _t79 = J_theta_cart_left*_t74;
-    const trailer_real_t _t80 = -K_theta_tractor_x_tractor*_t67 - TRAILER_LIT(0.3)*_t76;
-    const trailer_real_t _t81 = J_theta_cart*_t72 + _t42*_t65 + _t54*_t67;
-    const trailer_real_t _t82 = _t30*_t81 + _t38*_t78 + _t39*_t79 + _t77;
-    const trailer_real_t _t83 = _t32*_t81 + _t50*_t78 + _t52*_t79 + _t80;
-    const trailer_real_t _t2 = prepared->forward_dynamics[9];
-    const trailer_real_t _t3 = prepared->forward_dynamics[10];
-    const trailer_real_t _t84 = _t2*tau_right + _t3*tau_left - _t82;
-    const trailer_real_t _t19 = prepared->forward_dynamics[22];
-    const trailer_real_t _t21 = prepared->forward_dynamics[23];
-    const trailer_real_t _t85 = _t19*tau_right + _t21*tau_left - _t83;
-    const trailer_real_t _t86 = TRAILER_LIT(1.0)/_t60;
-    const trailer_real_t _t87 = _t86*(-_t56*_t85 + _t59*_t84);
-    const trailer_real_t _t88 = _t86*(_t46*_t85 - _t56*_t84);
-    const trailer_real_t _t89 = _t30*_t87 + _t32*_t88 + _t72;
-    const trailer_real_t _t90 = _t19*_t88 + _t2*_t87;
-    const trailer_real_t _t91 = _t21*_t88 + _t3*_t87;
-    const trailer_real_t _t92 = _t38*_t87 + _t50*_t88 + _t73;
-    const trailer_real_t _t93 = _t39*_t87 + _t52*_t88 + _t74;
-    const trailer_real_t _t94 = _t61*_t87 - _t62*_t67;
-    const trailer_real_t _t95 = _t61*_t67 + _t62*_t87;
-    if (!(_t46 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer_real_t _t56 = J_theta_tractor + _t55;
+    const trailer_real_t _t57 = J_theta_cart*_t28*_t28 - TRAILER_LIT(0.6)*_t28*_t38 + _t56;
+    const trailer_real_t _t58 = _t48*_t57 - _t54*_t54;
+    const trailer_real_t _t61 = _t30*_t30;
+    const trailer_real_t _t62 = -_t23*_t33 - _t24*_t31;
+    const trailer_real_t _t63 = _t23*_t31 - _t24*_t33;
+    const trailer_real_t _t64 = _t23*_t42 - _t24*_t44 - _t62;
+    const trailer_real_t _t65 = _t23*_t44 + _t24*_t42 - _t63;
+    const trailer_real_t _t66 = _t64*_t7;
+    const trailer_real_t _t67 = _t6*(_t14*_t64 + _t15*_t65);
+    const trailer_real_t _t68 = _t6*(_t12*_t64 + _t13*_t65);
+    const trailer_real_t _t69 = _t35*_t68 + _t37*_t67;
+    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[6];
+    const trailer_real_t _t70 = K_theta_tractor_x_tractor*_t41 + _t69;
+    const trailer_real_t _t71 = _t26*_t46 - _t38*_t61 + _t66*(_t40 + _t45) + _t70;
+    const trailer_real_t _t72 = J_theta_cart_left*_t51*_t68 + J_theta_cart_right*_t50*_t67;
+    const trailer_real_t _t73 = -K_theta_tractor_x_tractor*_t44 + _t72;
+    const trailer_real_t _t74 = _t28*(J_theta_cart*_t66 + _t46) - _t39*_t66
+            - TRAILER_LIT(0.3)*_t45*_t61 + _t73;
+    const trailer_real_t _t2 = prepared->forward_dynamics[8];
+    const trailer_real_t _t3 = prepared->forward_dynamics[9];
+    const trailer_real_t _t75 = _t2*tau_right + _t3*tau_left - _t71;
+    const trailer_real_t _t18 = prepared->forward_dynamics[22];
+    const trailer_real_t _t19 = prepared->forward_dynamics[23];
+    const trailer_real_t _t76 = _t18*tau_right + _t19*tau_left - _t74;
+    const trailer_real_t _t77 = TRAILER_LIT(1.0)/_t58;
+    const trailer_real_t _t78 = _t77*(-_t54*_t76 + _t57*_t75);
+    const trailer_real_t _t79 = _t77*(_t48*_t76 - _t54*_t75);
+    const trailer_real_t _t80 = _t26*_t78 + _t28*_t79 + _t66;
+    const trailer_real_t _t81 = _t18*_t79 + _t2*_t78;
+    const trailer_real_t _t82 = _t19*_t79 + _t3*_t78;
+    const trailer_real_t _t83 = _t36*_t78 + _t50*_t79 + _t67;
+    const trailer_real_t _t84 = _t34*_t78 + _t51*_t79 + _t68;
+    const trailer_real_t _t85 = -_t44*_t60 + _t59*_t78;
+    const trailer_real_t _t86 = _t44*_t59 + _t60*_t78;
+    if (!(_t48 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t60 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t58 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t94;
-    const trailer_real_t r_1 = _t95;
-    const trailer_real_t r_2 = _t88;
-    const trailer_real_t r_3 = _t89;
-    const trailer_real_t r_4 = _t90;
-    const trailer_real_t r_5 = _t91;
-    const trailer_real_t r_6 = _t92;
-    const trailer_real_t r_7 = _t93;
+    const trailer_real_t r_0 = _t85;
+    const trailer_real_t r_1 = _t86;
+    const trailer_real_t r_2 = _t79;
+    const trailer_real_t r_3 = _t80;
+    const trailer_real_t r_4 = _t81;
+    const trailer_real_t r_5 = _t82;
+    const trailer_real_t r_6 = _t83;
+    const trailer_real_t r_7 = _t84;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3) | trailer_exp_carry(r_4) | trailer_exp_carry(r_5)
             | trailer_exp_carry(r_6) | trailer_exp_carry(r_7)) & TRAILER_EXP_CARRY_TOP) != 0u) {
@@ -481,7 +470,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_mass_matrix: documented in trailer_model.h.
-   operations after CSE: 34 add, 80 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 33 add, 87 mul, 2 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M)
 {
@@ -524,67 +513,60 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t _t29 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
     const trailer_real_t _t30 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t31 = _t21*_t29;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t32 = J_theta_right*_t5;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t33 = J_theta_left*_t6;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t34 = J_theta_cart_right*_t22;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t35 = J_theta_cart_left*_t23;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
     const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t36 = J_x_tractor + _t31;
+    const trailer_real_t _t31 = J_theta_cart_left*_t23*_t23 + J_theta_cart_right*_t22*_t22
+            + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t37 = J_theta_cart*_t21 + _t29;
-    const trailer_real_t _t38 = _t26*_t29;
-    const trailer_real_t _t39 = _t26*_t30;
+    const trailer_real_t _t32 = J_theta_cart*_t21*_t21 + TRAILER_LIT(2.0)*_t21*_t29 + _t31;
+    const trailer_real_t _t33 = J_theta_cart_left*_t23*_t28 + J_theta_cart_right*_t22*_t27
+            + J_theta_left*_t25*_t6 + J_theta_right*_t24*_t5;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t40 = K_theta_tractor_x_tractor_2 + _t38;
-    const trailer_real_t _t41 = J_theta_right*_t24;
-    const trailer_real_t _t42 = J_theta_left*_t25;
-    const trailer_real_t _t43 = J_theta_cart_right*_t27;
-    const trailer_real_t _t44 = J_theta_cart_left*_t28;
+    const trailer_real_t _t34 = K_theta_tractor_x_tractor_2 + _t33;
+    const trailer_real_t _t35 = J_theta_cart*_t21*_t26 - TRAILER_LIT(0.3)*_t21*_t30 + _t26*_t29
+            + _t34;
+    const trailer_real_t _t36 = J_theta_cart_left*_t28*_t28 + J_theta_cart_right*_t27*_t27
+            + J_theta_left*_t25*_t25 + J_theta_right*_t24*_t24;
     const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t45 = J_theta_tractor - TRAILER_LIT(0.3)*_t39;
-    const trailer_real_t _t46 = J_theta_cart*_t26 - TRAILER_LIT(0.3)*_t30;
-    const trailer_real_t _t47 = _t21*_t37 + _t22*_t34 + _t23*_t35 + _t32*_t5 + _t33*_t6 + _t36;
-    const trailer_real_t _t48 = _t21*_t46 + _t22*_t43 + _t23*_t44 + _t40 + _t41*_t5 + _t42*_t6;
-    const trailer_real_t _t49 = _t24*_t41 + _t25*_t42 + _t26*_t46 + _t27*_t43 + _t28*_t44 + _t45;
-    const trailer_real_t _t50 = _t11*_t48 + _t15*_t47;
-    const trailer_real_t _t51 = _t12*_t48 + _t16*_t47;
-    const trailer_real_t _t52 = _t11*_t49 + _t15*_t48;
-    const trailer_real_t _t53 = _t12*_t49 + _t16*_t48;
-    const trailer_real_t _t54 = _t11*_t52 + _t15*_t50;
-    const trailer_real_t _t55 = _t11*_t53 + _t15*_t51;
-    const trailer_real_t _t56 = _t12*_t53 + _t16*_t51;
-    M[0] = _t54;
-    M[1] = _t55;
-    M[2] = _t55;
-    M[3] = _t56;
+    const trailer_real_t _t37 = J_theta_tractor + _t36;
+    const trailer_real_t _t38 = J_theta_cart*_t26*_t26 - TRAILER_LIT(0.6)*_t26*_t30 + _t37;
+    const trailer_real_t _t39 = _t11*_t35 + _t15*_t32;
+    const trailer_real_t _t40 = _t12*_t35 + _t16*_t32;
+    const trailer_real_t _t41 = _t11*_t38 + _t15*_t35;
+    const trailer_real_t _t42 = _t12*_t38 + _t16*_t35;
+    const trailer_real_t _t43 = _t11*_t41 + _t15*_t39;
+    const trailer_real_t _t44 = _t11*_t42 + _t15*_t40;
+    const trailer_real_t _t45 = _t12*_t42 + _t16*_t40;
+    M[0] = _t43;
+    M[1] = _t44;
+    M[2] = _t44;
+    M[3] = _t45;
 }
 
 /* trailer_minimal_bias_forces: documented in trailer_model.h.
-   operations after CSE: 32 add, 84 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 33 add, 87 mul, 2 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H)
 {
-    trailer_real_t _shared[50];
+    trailer_real_t _shared[47];
     trailer_staged_quantities(p, q, wheel_rates, _shared);
     const trailer_real_t _ms12 = _shared[0];
     const trailer_real_t _ms13 = _shared[1];
     const trailer_real_t _ms34 = _shared[6];
     const trailer_real_t _ms35 = _shared[7];
-    const trailer_real_t _ms124 = _shared[48];
-    const trailer_real_t _ms125 = _shared[49];
-    const trailer_real_t _t0 = _ms12*_ms125 + _ms124*_ms34;
-    const trailer_real_t _t1 = _ms124*_ms35 + _ms125*_ms13;
+    const trailer_real_t _ms99 = _shared[43];
+    const trailer_real_t _ms102 = _shared[46];
+    const trailer_real_t _t0 = _ms102*_ms12 + _ms34*_ms99;
+    const trailer_real_t _t1 = _ms102*_ms13 + _ms35*_ms99;
     H[0] = _t0;
     H[1] = _t1;
 }
 
 /* trailer_minimal_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 59 add, 130 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 59 add, 140 mul, 3 div, 2 sin/cos, 0 sqrt */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
     trailer_real_t *wheel_accels)
@@ -631,7 +613,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     (void)theta_tractor;
     (void)thetadot_left;
     (void)thetadot_right;
-    trailer_real_t _shared[50];
+    trailer_real_t _shared[47];
     trailer_staged_quantities(p, q, wheel_rates, _shared);
     const trailer_real_t _ms49 = _shared[9];
     const trailer_real_t _ms59 = _shared[17];
@@ -642,39 +624,32 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t _ms66 = _shared[22];
     const trailer_real_t _ms87 = _shared[39];
     const trailer_real_t _ms88 = _shared[40];
-    const trailer_real_t _ms124 = _shared[48];
-    const trailer_real_t _ms125 = _shared[49];
+    const trailer_real_t _ms99 = _shared[43];
+    const trailer_real_t _ms102 = _shared[46];
     const trailer_real_t _t0 = _ms49*radius_left;
     const trailer_real_t _t1 = _ms49*radius_right;
-    const trailer_real_t _t2 = J_theta_right*_t0;
-    const trailer_real_t _t3 = J_theta_left*_t1;
-    const trailer_real_t _t4 = J_theta_cart_right*_ms60;
-    const trailer_real_t _t5 = J_theta_cart_left*_ms61;
-    const trailer_real_t _t6 = _ms59*_ms87;
-    const trailer_real_t _t7 = J_x_tractor + _t6;
-    const trailer_real_t _t8 = J_theta_cart*_ms59 + _ms87;
-    const trailer_real_t _t9 = _ms59*_t8 + _ms60*_t4 + _ms61*_t5 + _t0*_t2 + _t1*_t3 + _t7;
-    const trailer_real_t _t10 = _ms64*_ms87;
-    const trailer_real_t _t11 = K_theta_tractor_x_tractor_2 + _t10;
-    const trailer_real_t _t12 = TRAILER_LIT(0.207)*_t0;
-    const trailer_real_t _t13 = J_theta_right*_t12;
-    const trailer_real_t _t14 = -TRAILER_LIT(0.207)*_t1;
-    const trailer_real_t _t15 = J_theta_left*_t14;
-    const trailer_real_t _t16 = J_theta_cart_right*_ms65;
-    const trailer_real_t _t17 = J_theta_cart_left*_ms66;
-    const trailer_real_t _t18 = J_theta_cart*_ms64 - TRAILER_LIT(0.3)*_ms88;
-    const trailer_real_t _t19 = _ms59*_t18 + _ms60*_t16 + _ms61*_t17 + _t0*_t13 + _t1*_t15 + _t11;
-    const trailer_real_t _t20 = _ms64*_ms88;
-    const trailer_real_t _t21 = J_theta_tractor - TRAILER_LIT(0.3)*_t20;
-    const trailer_real_t _t22 = _ms64*_t18 + _ms65*_t16 + _ms66*_t17 + _t12*_t13 + _t14*_t15 + _t21;
-    const trailer_real_t _t23 = -_t19*_t19 + _t22*_t9;
-    const trailer_real_t _t24 = -_ms124 + _t0*tau_right + _t1*tau_left;
-    const trailer_real_t _t25 = -_ms125 + _t12*tau_right + _t14*tau_left;
-    const trailer_real_t _t26 = TRAILER_LIT(1.0)/_t23;
-    const trailer_real_t _t27 = _t26*(-_t19*_t25 + _t22*_t24);
-    const trailer_real_t _t28 = _t26*(-_t19*_t24 + _t25*_t9);
-    const trailer_real_t _t29 = _t0*_t27 + _t12*_t28;
-    const trailer_real_t _t30 = _t1*_t27 + _t14*_t28;
+    const trailer_real_t _t2 = J_theta_cart_left*_ms61*_ms61 + J_theta_cart_right*_ms60*_ms60
+            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
+    const trailer_real_t _t3 = J_theta_cart*_ms59*_ms59 + TRAILER_LIT(2.0)*_ms59*_ms87 + _t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.207)*_t0;
+    const trailer_real_t _t5 = -TRAILER_LIT(0.207)*_t1;
+    const trailer_real_t _t6 = J_theta_cart_left*_ms61*_ms66 + J_theta_cart_right*_ms60*_ms65
+            + J_theta_left*_t1*_t5 + J_theta_right*_t0*_t4;
+    const trailer_real_t _t7 = K_theta_tractor_x_tractor_2 + _t6;
+    const trailer_real_t _t8 = J_theta_cart*_ms59*_ms64 - TRAILER_LIT(0.3)*_ms59*_ms88 + _ms64*_ms87
+            + _t7;
+    const trailer_real_t _t9 = J_theta_cart_left*_ms66*_ms66 + J_theta_cart_right*_ms65*_ms65
+            + J_theta_left*_t5*_t5 + J_theta_right*_t4*_t4;
+    const trailer_real_t _t10 = J_theta_tractor + _t9;
+    const trailer_real_t _t11 = J_theta_cart*_ms64*_ms64 - TRAILER_LIT(0.6)*_ms64*_ms88 + _t10;
+    const trailer_real_t _t12 = _t11*_t3 - _t8*_t8;
+    const trailer_real_t _t13 = -_ms99 + _t0*tau_right + _t1*tau_left;
+    const trailer_real_t _t14 = -_ms102 + _t4*tau_right + _t5*tau_left;
+    const trailer_real_t _t15 = TRAILER_LIT(1.0)/_t12;
+    const trailer_real_t _t16 = _t15*(_t11*_t13 - _t14*_t8);
+    const trailer_real_t _t17 = _t15*(-_t13*_t8 + _t14*_t3);
+    const trailer_real_t _t18 = _t0*_t16 + _t17*_t4;
+    const trailer_real_t _t19 = _t1*_t16 + _t17*_t5;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -708,14 +683,14 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t9 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t3 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t23 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t12 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t29;
-    const trailer_real_t r_1 = _t30;
+    const trailer_real_t r_0 = _t18;
+    const trailer_real_t r_1 = _t19;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
@@ -725,7 +700,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
 }
 
 /* trailer_linearization: documented in trailer_model.h.
-   operations after CSE: 204 add, 395 mul, 3 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 200 add, 398 mul, 3 div, 6 sin/cos, 0 sqrt */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
     trailer_real_t *B)
@@ -738,7 +713,7 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t radius_right = p->radius_right;
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t theta_cart = q[3];
-    trailer_real_t _shared[50];
+    trailer_real_t _shared[47];
     trailer_staged_quantities(p, q, wheel_rates, _shared);
     const trailer_real_t _ms12 = _shared[0];
     const trailer_real_t _ms13 = _shared[1];
@@ -770,221 +745,212 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _ms77 = _shared[29];
     const trailer_real_t _ms79 = _shared[31];
     const trailer_real_t _ms84 = _shared[36];
+    const trailer_real_t _ms85 = _shared[37];
+    const trailer_real_t _ms86 = _shared[38];
     const trailer_real_t _ms87 = _shared[39];
     const trailer_real_t _ms88 = _shared[40];
-    const trailer_real_t _ms119 = _shared[44];
-    const trailer_real_t _ms120 = _shared[45];
-    const trailer_real_t _ms123 = _shared[47];
-    const trailer_real_t _ms124 = _shared[48];
-    const trailer_real_t _ms125 = _shared[49];
+    const trailer_real_t _ms99 = _shared[43];
+    const trailer_real_t _ms102 = _shared[46];
     const trailer_real_t _t0 = _ms49*radius_left;
     const trailer_real_t _t1 = _ms49*radius_right;
-    const trailer_real_t _t2 = _ms64*_ms87;
-    const trailer_real_t _t3 = _ms64*_ms88;
-    const trailer_real_t _t4 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t5 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t6 = _ms52*_ms58;
-    const trailer_real_t _t7 = _ms54*_ms58;
-    const trailer_real_t _t8 = _ms53*_ms58;
-    const trailer_real_t _t9 = _ms56*_ms58;
-    const trailer_real_t _t10 = _ms55*_ms58;
-    const trailer_real_t _t11 = TRAILER_LIT(2.0)*_ms69;
-    const trailer_real_t _t12 = theta_cart - theta_tractor;
-    const trailer_real_t _t13 = TRAILER_COS(_t12);
-    const trailer_real_t _t14 = _ms77*_t13;
-    const trailer_real_t _t15 = TRAILER_SIN(_t12);
-    const trailer_real_t _t16 = _ms67*_t15;
-    const trailer_real_t _t17 = _ms67*_t13;
-    const trailer_real_t _t18 = _ms77*_t15;
-    const trailer_real_t _t19 = -_t17 - _t18;
-    const trailer_real_t _t20 = -_t14 + _t16;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t21 = K_theta_tractor_x_tractor_2 + _t2;
-    const trailer_real_t _t22 = TRAILER_LIT(0.207)*_t0;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t _t23 = J_theta_right*_t22;
-    const trailer_real_t _t24 = -TRAILER_LIT(0.207)*_t1;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t _t25 = J_theta_left*_t24;
-    const trailer_real_t _t26 = J_theta_cart_right*_ms65;
-    const trailer_real_t _t27 = J_theta_cart_left*_ms66;
-    const trailer_real_t _t28 = J_theta_cart*_ms64 - TRAILER_LIT(0.3)*_ms88;
-    const trailer_real_t _t29 = _ms59*_t28 + _ms60*_t26 + _ms61*_t27 + _t0*_t23 + _t1*_t25 + _t21;
-    const trailer_real_t _t30 = J_theta_right*_t0;
-    const trailer_real_t _t31 = J_theta_left*_t1;
-    const trailer_real_t _t32 = J_theta_cart_right*_ms60;
-    const trailer_real_t _t33 = J_theta_cart_left*_ms61;
-    const trailer_real_t _t34 = _ms59*_ms87;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t35 = J_x_tractor + _t34;
-    const trailer_real_t _t36 = J_theta_cart*_ms59 + _ms87;
-    const trailer_real_t _t37 = _ms59*_t36 + _ms60*_t32 + _ms61*_t33 + _t0*_t30 + _t1*_t31 + _t35;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t38 = J_theta_tractor - TRAILER_LIT(0.3)*_t3;
-    const trailer_real_t _t39 = _ms64*_t28 + _ms65*_t26 + _ms66*_t27 + _t22*_t23 + _t24*_t25 + _t38;
-    const trailer_real_t _t40 = -_t29*_t29 + _t37*_t39;
-    const trailer_real_t _t41 = TRAILER_LIT(1.0)/_t40;
-    const trailer_real_t _t42 = _t41;
-    const trailer_real_t _t43 = _t29*_t42;
+    const trailer_real_t _t2 = TRAILER_LIT(2.0)*_ms87;
+    const trailer_real_t _t3 = J_theta_cart_left*_ms61;
+    const trailer_real_t _t4 = J_theta_cart_right*_ms60;
+    const trailer_real_t _t5 = _ms64*_ms87;
+    const trailer_real_t _t6 = TRAILER_LIT(0.3)*_ms88;
+    const trailer_real_t _t7 = J_theta_cart*_ms59;
+    const trailer_real_t _t8 = _ms64*_ms88;
+    const trailer_real_t _t9 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t10 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t11 = _ms52*_ms58;
+    const trailer_real_t _t12 = _ms54*_ms58;
+    const trailer_real_t _t13 = _ms53*_ms58;
+    const trailer_real_t _t14 = _ms56*_ms58;
+    const trailer_real_t _t15 = _ms55*_ms58;
+    const trailer_real_t _t16 = TRAILER_LIT(2.0)*_ms69;
+    const trailer_real_t _t17 = theta_cart - theta_tractor;
+    const trailer_real_t _t18 = TRAILER_COS(_t17);
+    const trailer_real_t _t19 = _ms77*_t18;
+    const trailer_real_t _t20 = TRAILER_SIN(_t17);
+    const trailer_real_t _t21 = _ms67*_t20;
+    const trailer_real_t _t22 = _ms67*_t18;
+    const trailer_real_t _t23 = _ms77*_t20;
+    const trailer_real_t _t24 = -_t22 - _t23;
+    const trailer_real_t _t25 = -_t19 + _t21;
+    const trailer_real_t _t26 = J_theta_cart_left*_ms86;
+    const trailer_real_t _t27 = J_theta_cart_right*_ms85;
+    const trailer_real_t _t28 = _ms87 + _t7;
+    const trailer_real_t _t29 = J_theta_cart*_ms84 + _ms76*_ms87 + _ms79*_ms88;
+    const trailer_real_t _t30 = J_theta_cart_left*_ms66;
+    const trailer_real_t _t31 = J_theta_cart_right*_ms65;
+    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_ms87;
+    const trailer_real_t _t33 = J_theta_cart*_ms64;
+    const trailer_real_t _t34 = _t33 - _t6;
+    const trailer_real_t _t35 = _ms59*_ms88;
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t44 = -_ms124 + _t0*tau_right + _t1*tau_left;
-    const trailer_real_t _t45 = _t42*_t44;
-    const trailer_real_t _t46 = _t39*_t42;
-    const trailer_real_t _t47 = -_ms125 + _t22*tau_right + _t24*tau_left;
-    const trailer_real_t _t48 = _t42*_t47;
-    const trailer_real_t _t49 = _t37*_t42;
-    const trailer_real_t _t50 = TRAILER_LIT(2.0)*_ms68;
-    const trailer_real_t _t51 = _ms48*_ms49;
-    const trailer_real_t _t52 = _ms69*_t15;
-    const trailer_real_t _t53 = _ms69*_t13;
-    const trailer_real_t _t54 = _ms12*_t22 + _ms34*_t0;
-    const trailer_real_t _t55 = _ms12*_t24 + _ms34*_t1;
-    const trailer_real_t _t56 = _ms13*_t22 + _ms35*_t0;
-    const trailer_real_t _t57 = _ms13*_t24 + _ms35*_t1;
-    const trailer_real_t _t58 = _ms67*_t4;
-    const trailer_real_t _t59 = _ms67*_t5;
-    const trailer_real_t _t60 = _ms34*_t4;
-    const trailer_real_t _t61 = _ms35*_t4;
-    const trailer_real_t _t62 = _ms34*_t5;
-    const trailer_real_t _t63 = _ms35*_t5;
-    const trailer_real_t _t64 = -_ms31*_t6;
-    const trailer_real_t _t65 = _ms33*_t6;
-    const trailer_real_t _t66 = _ms67*_t64 + _ms68*_t65;
-    const trailer_real_t _t67 = _ms12*_ms64 + _ms34*_ms59;
-    const trailer_real_t _t68 = _ms13*_ms64 + _ms35*_ms59;
-    const trailer_real_t _t69 = -_ms30*_t7 - _ms31*_t8;
-    const trailer_real_t _t70 = -_ms32*_t7 + _ms33*_ms53*_ms58;
-    const trailer_real_t _t71 = _ms67*_t69 + _ms68*_t70;
-    const trailer_real_t _t72 = _ms12*_ms65 + _ms34*_ms60;
-    const trailer_real_t _t73 = _ms13*_ms65 + _ms35*_ms60;
-    const trailer_real_t _t74 = -_ms30*_t9 - _ms31*_t10;
-    const trailer_real_t _t75 = -_ms32*_t9 + _ms33*_ms55*_ms58;
-    const trailer_real_t _t76 = _ms67*_t74 + _ms68*_t75;
-    const trailer_real_t _t77 = _ms12*_ms66 + _ms34*_ms61;
-    const trailer_real_t _t78 = _ms13*_ms66 + _ms35*_ms61;
-    const trailer_real_t _t79 = _ms87*_t65 + _t3;
-    const trailer_real_t _t80 = J_theta_cart_right*_t70;
-    const trailer_real_t _t81 = J_theta_cart_left*_t75;
-    const trailer_real_t _t82 = J_theta_cart*_t65 + TRAILER_LIT(0.3)*_ms87;
-    const trailer_real_t _t83 = _ms59*_t82 + _ms60*_t80 + _ms61*_t81 + _t26*_t69 + _t27*_t74
-            + _t28*_t64 + _t79;
-    const trailer_real_t _t84 = _ms88*_t65 - _t2;
-    const trailer_real_t _t85 = -TRAILER_LIT(0.3)*_t84;
-    const trailer_real_t _t86 = _ms64*_t82 + _ms65*_t80 + _ms66*_t81 + _t26*_t70 + _t27*_t75
-            + _t28*_t65 + _t85;
-    const trailer_real_t _t87 = _t11*_t66;
-    const trailer_real_t _t88 = _ms69*_t14 - _ms69*_t16 + _t19*_t66;
-    const trailer_real_t _t89 = -_ms76*_t13 - _ms79*_t15 - _t88;
-    const trailer_real_t _t90 = _t6*_t89;
-    const trailer_real_t _t91 = _ms75*_ms87 + _ms84*_ms88 + _ms87*_t90 - _ms88*_t87;
-    const trailer_real_t _t92 = -_ms69*_t17 - _ms69*_t18 + _t20*_t66;
-    const trailer_real_t _t93 = _ms76*_t15 - _ms79*_t13 - _t92;
-    const trailer_real_t _t94 = _t7*_t93 + _t8*_t89;
-    const trailer_real_t _t95 = J_theta_cart_right*_t94;
-    const trailer_real_t _t96 = _t10*_t89 + _t9*_t93;
-    const trailer_real_t _t97 = J_theta_cart_left*_t96;
-    const trailer_real_t _t98 = J_theta_cart*_t90 + _ms76*_ms88 - _ms79*_ms87;
-    const trailer_real_t _t99 = _ms119*_t69 + _ms120*_t74 + _ms123*_t64 + _ms59*_t98 + _ms60*_t95
-            + _ms61*_t97 + _t91;
-    const trailer_real_t _t100 = _ms75*_ms88 - _ms84*_ms87 + _ms87*_t87 + _ms88*_t90;
-    const trailer_real_t _t101 = -TRAILER_LIT(0.3)*_t100;
-    const trailer_real_t _t102 = _ms119*_t70 + _ms120*_t75 + _ms123*_t65 + _ms64*_t98 + _ms65*_t95
-            + _ms66*_t97 + _t101;
-    const trailer_real_t _t103 = J_theta_cart_right*_t69;
-    const trailer_real_t _t104 = J_theta_cart_left*_t74;
-    const trailer_real_t _t105 = _ms59*_ms88 + _ms87*_t64;
-    const trailer_real_t _t106 = J_theta_cart*_t64 + _ms88;
-    const trailer_real_t _t107 = _ms59*_t106 + _ms60*_t103 + _ms61*_t104 + _t105 + _t32*_t69
-            + _t33*_t74 + _t36*_t64;
-    const trailer_real_t _t108 = _t107*_t39 - TRAILER_LIT(2.0)*_t29*_t83 + _t37*_t86;
-    const trailer_real_t _t109 = -_t108*_t41*_t41;
-    const trailer_real_t _t110 = _t102*_t43 + _t109*(-_t29*_t47 + _t39*_t44) + _t45*_t86 - _t46*_t99
-            - _t48*_t83;
-    const trailer_real_t _t111 = -_t102*_t49 + _t107*_t48 + _t109*(-_t29*_t44 + _t37*_t47)
-            + _t43*_t99 - _t45*_t83;
-    const trailer_real_t _t112 = _t0*_t110 + _t111*_t22;
-    const trailer_real_t _t113 = _t11*_t67;
-    const trailer_real_t _t114 = _ms12*_t50;
-    const trailer_real_t _t115 = TRAILER_LIT(0.3)*_t114;
-    const trailer_real_t _t116 = -_ms12*_ms67 - _ms34*_ms68;
-    const trailer_real_t _t117 = -_t116*_t51;
-    const trailer_real_t _t118 = -TRAILER_LIT(0.3)*_ms12;
-    const trailer_real_t _t119 = -_ms34*_t53 - _t118*_t52 + _t19*_t67;
-    const trailer_real_t _t120 = _t115*_t15 - _t117*_t13 - _t119;
-    const trailer_real_t _t121 = _t120*_t6;
-    const trailer_real_t _t122 = _ms87*_t121 - _ms88*_t113;
-    const trailer_real_t _t123 = K_theta_tractor_x_tractor*_t114 + _t122;
-    const trailer_real_t _t124 = _ms34*_t52 - _t118*_t53 + _t20*_t67;
-    const trailer_real_t _t125 = _t115*_t13 + _t117*_t15 - _t124;
-    const trailer_real_t _t126 = _t120*_t8 + _t125*_t7;
-    const trailer_real_t _t127 = J_theta_cart_right*_t126;
-    const trailer_real_t _t128 = _t10*_t120 + _t125*_t9;
-    const trailer_real_t _t129 = J_theta_cart_left*_t128;
-    const trailer_real_t _t130 = J_theta_cart*_t121 + _ms87*_t115 + _ms88*_t117;
-    const trailer_real_t _t131 = _ms59*_t130 + _ms60*_t127 + _ms61*_t129 + _t123;
-    const trailer_real_t _t132 = _ms87*_t113 + _ms88*_t121;
-    const trailer_real_t _t133 = -K_theta_tractor_x_tractor*_t117 - TRAILER_LIT(0.3)*_t132;
-    const trailer_real_t _t134 = _ms64*_t130 + _ms65*_t127 + _ms66*_t129 + _t133;
-    const trailer_real_t _t135 = -_t131*_t46 + _t134*_t43;
-    const trailer_real_t _t136 = _t131*_t29*_t42 - _t134*_t49;
-    const trailer_real_t _t137 = _t0*_t135 + _t136*_t22;
-    const trailer_real_t _t138 = _t11*_t68;
-    const trailer_real_t _t139 = _ms13*_t50;
-    const trailer_real_t _t140 = TRAILER_LIT(0.3)*_t139;
-    const trailer_real_t _t141 = -_ms13*_ms67 - _ms35*_ms68;
-    const trailer_real_t _t142 = -_t141*_t51;
-    const trailer_real_t _t143 = -TRAILER_LIT(0.3)*_ms13;
-    const trailer_real_t _t144 = -_ms35*_t53 - _t143*_t52 + _t19*_t68;
-    const trailer_real_t _t145 = -_t13*_t142 + _t140*_t15 - _t144;
-    const trailer_real_t _t146 = _t145*_t6;
-    const trailer_real_t _t147 = _ms87*_t146 - _ms88*_t138;
-    const trailer_real_t _t148 = K_theta_tractor_x_tractor*_t139 + _t147;
-    const trailer_real_t _t149 = _ms35*_t52 - _t143*_t53 + _t20*_t68;
-    const trailer_real_t _t150 = _t13*_t140 + _t142*_t15 - _t149;
-    const trailer_real_t _t151 = _t145*_t8 + _t150*_t7;
-    const trailer_real_t _t152 = J_theta_cart_right*_t151;
-    const trailer_real_t _t153 = _t10*_t145 + _t150*_t9;
-    const trailer_real_t _t154 = J_theta_cart_left*_t153;
-    const trailer_real_t _t155 = J_theta_cart*_t146 + _ms87*_t140 + _ms88*_t142;
-    const trailer_real_t _t156 = _ms59*_t155 + _ms60*_t152 + _ms61*_t154 + _t148;
-    const trailer_real_t _t157 = _ms87*_t138 + _ms88*_t146;
-    const trailer_real_t _t158 = -K_theta_tractor_x_tractor*_t142 - TRAILER_LIT(0.3)*_t157;
-    const trailer_real_t _t159 = _ms64*_t155 + _ms65*_t152 + _ms66*_t154 + _t158;
-    const trailer_real_t _t160 = -_t156*_t46 + _t159*_t43;
-    const trailer_real_t _t161 = _t156*_t29*_t42 - _t159*_t49;
-    const trailer_real_t _t162 = _t0*_t160 + _t161*_t22;
-    const trailer_real_t _t163 = _t1*_t110 + _t111*_t24;
-    const trailer_real_t _t164 = _t1*_t135 + _t136*_t24;
-    const trailer_real_t _t165 = _t1*_t160 + _t161*_t24;
-    const trailer_real_t _t166 = _t0*_t39*_t42 - _t22*_t43;
-    const trailer_real_t _t167 = -_t0*_t43 + _t22*_t49;
-    const trailer_real_t _t168 = _t0*_t166 + _t167*_t22;
-    const trailer_real_t _t169 = _t1*_t39*_t42 - _t24*_t43;
-    const trailer_real_t _t170 = -_t1*_t43 + _t24*_t49;
-    const trailer_real_t _t171 = _t0*_t169 + _t170*_t22;
-    const trailer_real_t _t172 = _t1*_t166 + _t167*_t24;
-    const trailer_real_t _t173 = _t1*_t169 + _t170*_t24;
+    const trailer_real_t _t36 = -_ms99 + _t0*tau_right + _t1*tau_left;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t37 = J_theta_cart_left*_ms61*_ms61 + J_theta_cart_right*_ms60*_ms60
+            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
+    const trailer_real_t _t38 = J_theta_cart*_ms59*_ms59 + _ms59*_t2 + _t37;
+    const trailer_real_t _t39 = TRAILER_LIT(0.207)*_t0;
+    const trailer_real_t _t40 = -TRAILER_LIT(0.207)*_t1;
+    const trailer_real_t _t41 = J_theta_left*_t1*_t40 + J_theta_right*_t0*_t39 + _ms65*_t4
+            + _ms66*_t3;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t42 = K_theta_tractor_x_tractor_2 + _t41;
+    const trailer_real_t _t43 = -_ms59*_t6 + _ms64*_t7 + _t42 + _t5;
+    const trailer_real_t _t44 = J_theta_cart_left*_ms66*_ms66 + J_theta_cart_right*_ms65*_ms65
+            + J_theta_left*_t40*_t40 + J_theta_right*_t39*_t39;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t45 = J_theta_tractor + _t44;
+    const trailer_real_t _t46 = J_theta_cart*_ms64*_ms64 + _t45 - TRAILER_LIT(0.6)*_t8;
+    const trailer_real_t _t47 = _t38*_t46 - _t43*_t43;
+    const trailer_real_t _t48 = TRAILER_LIT(1.0)/_t47;
+    const trailer_real_t _t49 = _t48;
+    const trailer_real_t _t50 = _t36*_t49;
+    const trailer_real_t _t51 = _t43*_t49;
+    const trailer_real_t _t52 = -_ms102 + _t39*tau_right + _t40*tau_left;
+    const trailer_real_t _t53 = _t49*_t52;
+    const trailer_real_t _t54 = _t46*_t49;
+    const trailer_real_t _t55 = _t38*_t49;
+    const trailer_real_t _t56 = TRAILER_LIT(2.0)*_ms68;
+    const trailer_real_t _t57 = _ms48*_ms49;
+    const trailer_real_t _t58 = _ms69*_t20;
+    const trailer_real_t _t59 = _ms69*_t18;
+    const trailer_real_t _t60 = _ms59*_ms87;
+    const trailer_real_t _t61 = _ms12*_t39 + _ms34*_t0;
+    const trailer_real_t _t62 = _ms12*_t40 + _ms34*_t1;
+    const trailer_real_t _t63 = _ms13*_t39 + _ms35*_t0;
+    const trailer_real_t _t64 = _ms13*_t40 + _ms35*_t1;
+    const trailer_real_t _t65 = _ms67*_t9;
+    const trailer_real_t _t66 = _ms67*_t10;
+    const trailer_real_t _t67 = _ms34*_t9;
+    const trailer_real_t _t68 = _ms35*_t9;
+    const trailer_real_t _t69 = _ms34*_t10;
+    const trailer_real_t _t70 = _ms35*_t10;
+    const trailer_real_t _t71 = -_ms31*_t11;
+    const trailer_real_t _t72 = _ms33*_t11;
+    const trailer_real_t _t73 = _ms67*_t71 + _ms68*_t72;
+    const trailer_real_t _t74 = _ms12*_ms64 + _ms34*_ms59;
+    const trailer_real_t _t75 = _ms13*_ms64 + _ms35*_ms59;
+    const trailer_real_t _t76 = -_ms30*_t12 - _ms31*_t13;
+    const trailer_real_t _t77 = -_ms32*_t12 + _ms33*_ms53*_ms58;
+    const trailer_real_t _t78 = _ms67*_t76 + _ms68*_t77;
+    const trailer_real_t _t79 = _ms12*_ms65 + _ms34*_ms60;
+    const trailer_real_t _t80 = _ms13*_ms65 + _ms35*_ms60;
+    const trailer_real_t _t81 = -_ms30*_t14 - _ms31*_t15;
+    const trailer_real_t _t82 = -_ms32*_t14 + _ms33*_ms55*_ms58;
+    const trailer_real_t _t83 = _ms67*_t81 + _ms68*_t82;
+    const trailer_real_t _t84 = _ms12*_ms66 + _ms34*_ms61;
+    const trailer_real_t _t85 = _ms13*_ms66 + _ms35*_ms61;
+    const trailer_real_t _t86 = _t16*_t73;
+    const trailer_real_t _t87 = _ms69*_t19 - _ms69*_t21 + _t24*_t73;
+    const trailer_real_t _t88 = -_ms76*_t18 - _ms79*_t20 - _t87;
+    const trailer_real_t _t89 = _t11*_t88;
+    const trailer_real_t _t90 = -_ms69*_t22 - _ms69*_t23 + _t25*_t73;
+    const trailer_real_t _t91 = _ms76*_t20 - _ms79*_t18 - _t90;
+    const trailer_real_t _t92 = _t12*_t91 + _t13*_t88;
+    const trailer_real_t _t93 = _t14*_t91 + _t15*_t88;
+    const trailer_real_t _t94 = _t26*_t81 + _t27*_t76 + _t3*_t93 + _t4*_t92;
+    const trailer_real_t _t95 = -_ms87*(_ms59*_ms79 - _ms75) - _ms88*_t86
+            + _ms88*(_ms59*_ms76 + _ms84) + _t28*_t89 + _t29*_t71 + _t94;
+    const trailer_real_t _t96 = _t26*_t82 + _t27*_t77 + _t30*_t93 + _t31*_t92;
+    const trailer_real_t _t97 = -_ms87*(_ms64*_ms79 - TRAILER_LIT(0.3)*_ms84)
+            + _ms88*(_ms64*_ms76 - TRAILER_LIT(0.3)*_ms75) + _t29*_t72 - _t32*_t86 + _t34*_t89
+            + _t96;
+    const trailer_real_t _t98 = TRAILER_LIT(2.0)*_t3*_t81 + TRAILER_LIT(2.0)*_t4*_t76;
+    const trailer_real_t _t99 = TRAILER_LIT(2.0)*_t35 + _t71*(_t2 + TRAILER_LIT(2.0)*_t7) + _t98;
+    const trailer_real_t _t100 = _t3*_t82 + _t30*_t81 + _t31*_t76 + _t4*_t77;
+    const trailer_real_t _t101 = _ms59*_t32 + _t100 + _t28*_t72 + _t34*_t71 + _t8;
+    const trailer_real_t _t102 = TRAILER_LIT(2.0)*_t30*_t82 + TRAILER_LIT(2.0)*_t31*_t77;
+    const trailer_real_t _t103 = _t102 + TRAILER_LIT(0.6)*_t5 + _t72*(-TRAILER_LIT(0.6)*_ms88
+            + TRAILER_LIT(2.0)*_t33);
+    const trailer_real_t _t104 = -TRAILER_LIT(2.0)*_t101*_t43 + _t103*_t38 + _t46*_t99;
+    const trailer_real_t _t105 = -_t104*_t48*_t48;
+    const trailer_real_t _t106 = -_t101*_t53 + _t103*_t50 + _t105*(_t36*_t46 - _t43*_t52)
+            + _t51*_t97 - _t54*_t95;
+    const trailer_real_t _t107 = -_t101*_t50 + _t105*(-_t36*_t43 + _t38*_t52) + _t51*_t95
+            + _t53*_t99 - _t55*_t97;
+    const trailer_real_t _t108 = _t0*_t106 + _t107*_t39;
+    const trailer_real_t _t109 = _t16*_t74;
+    const trailer_real_t _t110 = _ms12*_t56;
+    const trailer_real_t _t111 = TRAILER_LIT(0.3)*_t110;
+    const trailer_real_t _t112 = -_ms12*_ms67 - _ms34*_ms68;
+    const trailer_real_t _t113 = -_t112*_t57;
+    const trailer_real_t _t114 = -TRAILER_LIT(0.3)*_ms12;
+    const trailer_real_t _t115 = -_ms34*_t59 - _t114*_t58 + _t24*_t74;
+    const trailer_real_t _t116 = _t111*_t20 - _t113*_t18 - _t115;
+    const trailer_real_t _t117 = _t11*_t116;
+    const trailer_real_t _t118 = _ms34*_t58 - _t114*_t59 + _t25*_t74;
+    const trailer_real_t _t119 = _t111*_t18 + _t113*_t20 - _t118;
+    const trailer_real_t _t120 = _t116*_t13 + _t119*_t12;
+    const trailer_real_t _t121 = _t116*_t15 + _t119*_t14;
+    const trailer_real_t _t122 = _t120*_t4 + _t121*_t3;
+    const trailer_real_t _t123 = K_theta_tractor_x_tractor*_t110 + _t122;
+    const trailer_real_t _t124 = -_ms88*_t109 + _t111*_t60 + _t113*_t35 + _t117*_t28 + _t123;
+    const trailer_real_t _t125 = _t120*_t31 + _t121*_t30;
+    const trailer_real_t _t126 = -K_theta_tractor_x_tractor*_t113 + _t125;
+    const trailer_real_t _t127 = -_t109*_t32 + _t111*_t5 + _t113*_t8 + _t117*_t34 + _t126;
+    const trailer_real_t _t128 = -_t124*_t54 + _t127*_t43*_t49;
+    const trailer_real_t _t129 = _t124*_t51 - _t127*_t55;
+    const trailer_real_t _t130 = _t0*_t128 + _t129*_t39;
+    const trailer_real_t _t131 = _t16*_t75;
+    const trailer_real_t _t132 = _ms13*_t56;
+    const trailer_real_t _t133 = TRAILER_LIT(0.3)*_t132;
+    const trailer_real_t _t134 = -_ms13*_ms67 - _ms35*_ms68;
+    const trailer_real_t _t135 = -_t134*_t57;
+    const trailer_real_t _t136 = -TRAILER_LIT(0.3)*_ms13;
+    const trailer_real_t _t137 = -_ms35*_t59 - _t136*_t58 + _t24*_t75;
+    const trailer_real_t _t138 = _t133*_t20 - _t135*_t18 - _t137;
+    const trailer_real_t _t139 = _t11*_t138;
+    const trailer_real_t _t140 = _ms35*_t58 - _t136*_t59 + _t25*_t75;
+    const trailer_real_t _t141 = _t133*_t18 + _t135*_t20 - _t140;
+    const trailer_real_t _t142 = _t12*_t141 + _t13*_t138;
+    const trailer_real_t _t143 = _t138*_t15 + _t14*_t141;
+    const trailer_real_t _t144 = _t142*_t4 + _t143*_t3;
+    const trailer_real_t _t145 = K_theta_tractor_x_tractor*_t132 + _t144;
+    const trailer_real_t _t146 = -_ms88*_t131 + _t133*_t60 + _t135*_t35 + _t139*_t28 + _t145;
+    const trailer_real_t _t147 = _t142*_t31 + _t143*_t30;
+    const trailer_real_t _t148 = -K_theta_tractor_x_tractor*_t135 + _t147;
+    const trailer_real_t _t149 = -_t131*_t32 + _t133*_t5 + _t135*_t8 + _t139*_t34 + _t148;
+    const trailer_real_t _t150 = -_t146*_t54 + _t149*_t43*_t49;
+    const trailer_real_t _t151 = _t146*_t51 - _t149*_t55;
+    const trailer_real_t _t152 = _t0*_t150 + _t151*_t39;
+    const trailer_real_t _t153 = _t1*_t106 + _t107*_t40;
+    const trailer_real_t _t154 = _t1*_t128 + _t129*_t40;
+    const trailer_real_t _t155 = _t1*_t150 + _t151*_t40;
+    const trailer_real_t _t156 = _t0*_t54 - _t39*_t51;
+    const trailer_real_t _t157 = -_t0*_t51 + _t38*_t39*_t49;
+    const trailer_real_t _t158 = _t0*_t156 + _t157*_t39;
+    const trailer_real_t _t159 = _t1*_t54 - _t40*_t51;
+    const trailer_real_t _t160 = -_t1*_t51 + _t38*_t40*_t49;
+    const trailer_real_t _t161 = _t0*_t159 + _t160*_t39;
+    const trailer_real_t _t162 = _t1*_t156 + _t157*_t40;
+    const trailer_real_t _t163 = _t1*_t159 + _t160*_t40;
     A[0] = TRAILER_LIT(0.0);
     A[1] = TRAILER_LIT(0.0);
-    A[2] = -_t59;
+    A[2] = -_t66;
     A[3] = TRAILER_LIT(0.0);
     A[4] = TRAILER_LIT(0.0);
     A[5] = TRAILER_LIT(0.0);
     A[6] = TRAILER_LIT(0.0);
     A[7] = TRAILER_LIT(0.0);
-    A[8] = _t60;
-    A[9] = _t61;
+    A[8] = _t67;
+    A[9] = _t68;
     A[10] = TRAILER_LIT(0.0);
     A[11] = TRAILER_LIT(0.0);
-    A[12] = _t58;
+    A[12] = _t65;
     A[13] = TRAILER_LIT(0.0);
     A[14] = TRAILER_LIT(0.0);
     A[15] = TRAILER_LIT(0.0);
     A[16] = TRAILER_LIT(0.0);
     A[17] = TRAILER_LIT(0.0);
-    A[18] = _t62;
-    A[19] = _t63;
+    A[18] = _t69;
+    A[19] = _t70;
     A[20] = TRAILER_LIT(0.0);
     A[21] = TRAILER_LIT(0.0);
     A[22] = TRAILER_LIT(0.0);
@@ -997,14 +963,14 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[29] = _ms13;
     A[30] = TRAILER_LIT(0.0);
     A[31] = TRAILER_LIT(0.0);
-    A[32] = _t66;
-    A[33] = -_t66;
+    A[32] = _t73;
+    A[33] = -_t73;
     A[34] = TRAILER_LIT(0.0);
     A[35] = TRAILER_LIT(0.0);
     A[36] = TRAILER_LIT(0.0);
     A[37] = TRAILER_LIT(0.0);
-    A[38] = _t67;
-    A[39] = _t68;
+    A[38] = _t74;
+    A[39] = _t75;
     A[40] = TRAILER_LIT(0.0);
     A[41] = TRAILER_LIT(0.0);
     A[42] = TRAILER_LIT(0.0);
@@ -1013,8 +979,8 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[45] = TRAILER_LIT(0.0);
     A[46] = TRAILER_LIT(0.0);
     A[47] = TRAILER_LIT(0.0);
-    A[48] = _t54;
-    A[49] = _t56;
+    A[48] = _t61;
+    A[49] = _t63;
     A[50] = TRAILER_LIT(0.0);
     A[51] = TRAILER_LIT(0.0);
     A[52] = TRAILER_LIT(0.0);
@@ -1023,48 +989,48 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[55] = TRAILER_LIT(0.0);
     A[56] = TRAILER_LIT(0.0);
     A[57] = TRAILER_LIT(0.0);
-    A[58] = _t55;
-    A[59] = _t57;
+    A[58] = _t62;
+    A[59] = _t64;
     A[60] = TRAILER_LIT(0.0);
     A[61] = TRAILER_LIT(0.0);
-    A[62] = _t71;
-    A[63] = -_t71;
+    A[62] = _t78;
+    A[63] = -_t78;
     A[64] = TRAILER_LIT(0.0);
     A[65] = TRAILER_LIT(0.0);
     A[66] = TRAILER_LIT(0.0);
     A[67] = TRAILER_LIT(0.0);
-    A[68] = _t72;
-    A[69] = _t73;
+    A[68] = _t79;
+    A[69] = _t80;
     A[70] = TRAILER_LIT(0.0);
     A[71] = TRAILER_LIT(0.0);
-    A[72] = _t76;
-    A[73] = -_t76;
+    A[72] = _t83;
+    A[73] = -_t83;
     A[74] = TRAILER_LIT(0.0);
     A[75] = TRAILER_LIT(0.0);
     A[76] = TRAILER_LIT(0.0);
     A[77] = TRAILER_LIT(0.0);
-    A[78] = _t77;
-    A[79] = _t78;
+    A[78] = _t84;
+    A[79] = _t85;
     A[80] = TRAILER_LIT(0.0);
     A[81] = TRAILER_LIT(0.0);
-    A[82] = _t112;
-    A[83] = -_t112;
+    A[82] = _t108;
+    A[83] = -_t108;
     A[84] = TRAILER_LIT(0.0);
     A[85] = TRAILER_LIT(0.0);
     A[86] = TRAILER_LIT(0.0);
     A[87] = TRAILER_LIT(0.0);
-    A[88] = _t137;
-    A[89] = _t162;
+    A[88] = _t130;
+    A[89] = _t152;
     A[90] = TRAILER_LIT(0.0);
     A[91] = TRAILER_LIT(0.0);
-    A[92] = _t163;
-    A[93] = -_t163;
+    A[92] = _t153;
+    A[93] = -_t153;
     A[94] = TRAILER_LIT(0.0);
     A[95] = TRAILER_LIT(0.0);
     A[96] = TRAILER_LIT(0.0);
     A[97] = TRAILER_LIT(0.0);
-    A[98] = _t164;
-    A[99] = _t165;
+    A[98] = _t154;
+    A[99] = _t155;
     B[0] = TRAILER_LIT(0.0);
     B[1] = TRAILER_LIT(0.0);
     B[2] = TRAILER_LIT(0.0);
@@ -1081,14 +1047,14 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     B[13] = TRAILER_LIT(0.0);
     B[14] = TRAILER_LIT(0.0);
     B[15] = TRAILER_LIT(0.0);
-    B[16] = _t168;
-    B[17] = _t171;
-    B[18] = _t172;
-    B[19] = _t173;
+    B[16] = _t158;
+    B[17] = _t161;
+    B[18] = _t162;
+    B[19] = _t163;
 }
 
 /* trailer_wheel_contact_forces: documented in trailer_model.h.
-   operations after CSE: 92 add, 172 mul, 5 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 92 add, 182 mul, 5 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,
     trailer_real_t *lateral)
@@ -1132,7 +1098,7 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     (void)K_theta_cart_x_tractor_2;
     (void)thetadot_left;
     (void)thetadot_right;
-    trailer_real_t _shared[50];
+    trailer_real_t _shared[47];
     trailer_staged_quantities(p, q, wheel_rates, _shared);
     const trailer_real_t _ms49 = _shared[9];
     const trailer_real_t _ms59 = _shared[17];
@@ -1149,72 +1115,65 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     const trailer_real_t _ms86 = _shared[38];
     const trailer_real_t _ms87 = _shared[39];
     const trailer_real_t _ms88 = _shared[40];
-    const trailer_real_t _ms124 = _shared[48];
-    const trailer_real_t _ms125 = _shared[49];
+    const trailer_real_t _ms99 = _shared[43];
+    const trailer_real_t _ms102 = _shared[46];
     const trailer_real_t _t0 = _ms49*radius_left;
     const trailer_real_t _t1 = _ms49*radius_right;
-    const trailer_real_t _t2 = J_theta_right*_t0;
-    const trailer_real_t _t3 = J_theta_left*_t1;
-    const trailer_real_t _t4 = J_theta_cart_right*_ms60;
-    const trailer_real_t _t5 = J_theta_cart_left*_ms61;
-    const trailer_real_t _t6 = _ms59*_ms87;
-    const trailer_real_t _t7 = J_x_tractor + _t6;
-    const trailer_real_t _t8 = J_theta_cart*_ms59 + _ms87;
-    const trailer_real_t _t9 = _ms59*_t8 + _ms60*_t4 + _ms61*_t5 + _t0*_t2 + _t1*_t3 + _t7;
-    const trailer_real_t _t10 = _ms64*_ms87;
-    const trailer_real_t _t11 = K_theta_tractor_x_tractor_2 + _t10;
-    const trailer_real_t _t12 = TRAILER_LIT(0.207)*_t0;
-    const trailer_real_t _t13 = J_theta_right*_t12;
-    const trailer_real_t _t14 = -TRAILER_LIT(0.207)*_t1;
-    const trailer_real_t _t15 = J_theta_left*_t14;
-    const trailer_real_t _t16 = J_theta_cart_right*_ms65;
-    const trailer_real_t _t17 = J_theta_cart_left*_ms66;
-    const trailer_real_t _t18 = J_theta_cart*_ms64 - TRAILER_LIT(0.3)*_ms88;
-    const trailer_real_t _t19 = _ms59*_t18 + _ms60*_t16 + _ms61*_t17 + _t0*_t13 + _t1*_t15 + _t11;
-    const trailer_real_t _t20 = _ms64*_ms88;
-    const trailer_real_t _t21 = J_theta_tractor - TRAILER_LIT(0.3)*_t20;
-    const trailer_real_t _t22 = _ms64*_t18 + _ms65*_t16 + _ms66*_t17 + _t12*_t13 + _t14*_t15 + _t21;
-    const trailer_real_t _t23 = -_t19*_t19 + _t22*_t9;
-    const trailer_real_t _t24 = theta_cart - theta_tractor;
-    const trailer_real_t _t25 = TRAILER_COS(_t24);
-    const trailer_real_t _t26 = TRAILER_SIN(_t24);
-    const trailer_real_t _t27 = -_ms124 + _t0*tau_right + _t1*tau_left;
-    const trailer_real_t _t28 = -_ms125 + _t12*tau_right + _t14*tau_left;
-    const trailer_real_t _t29 = TRAILER_LIT(1.0)/_t23;
-    const trailer_real_t _t30 = _t29*(-_t19*_t28 + _t22*_t27);
-    const trailer_real_t _t31 = _t29*(-_t19*_t27 + _t28*_t9);
-    const trailer_real_t _t32 = _ms59*_t30 + _ms64*_t31 + _ms84;
-    const trailer_real_t _t33 = -_ms75*_ms88 + _ms87*_t32;
-    const trailer_real_t _t34 = K_theta_tractor_x_tractor*_ms74 + K_theta_tractor_x_tractor_2*_t31
-            + _t33;
-    const trailer_real_t _t35 = J_x_tractor*_t30 + _t34;
-    const trailer_real_t _t36 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t37 = _ms60*_t30 + _ms65*_t31 + _ms85;
-    const trailer_real_t _t38 = J_theta_cart_right*_t37;
-    const trailer_real_t _t39 = -_t36*_t38;
-    const trailer_real_t _t40 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t41 = _ms61*_t30 + _ms66*_t31 + _ms86;
-    const trailer_real_t _t42 = J_theta_cart_left*_t41;
-    const trailer_real_t _t43 = -_t40*_t42;
-    const trailer_real_t _t44 = TRAILER_LIT(0.3)*_ms74 + _t30;
-    const trailer_real_t _t45 = _ms79 - TRAILER_LIT(0.3)*_t31;
-    const trailer_real_t _t46 = J_theta_cart*_t32 + _ms87*_t44 + _ms88*_t45;
-    const trailer_real_t _t47 = TRAILER_LIT(0.2)*_t39 - TRAILER_LIT(0.2)*_t43 - _t46;
-    const trailer_real_t _t48 = -TRAILER_LIT(1.6666666666666667)*_t47;
-    const trailer_real_t _t49 = _t25*_t39 + _t25*_t43 + _t26*_t48 - _t35;
-    const trailer_real_t _t50 = TRAILER_LIT(0.5)*_t49;
-    const trailer_real_t _t51 = _ms75*_ms87 + _ms88*_t32;
-    const trailer_real_t _t52 = J_theta_tractor*_t31 - K_theta_tractor_x_tractor*_ms79
-            + K_theta_tractor_x_tractor_2*_t30 - TRAILER_LIT(0.3)*_t51;
-    const trailer_real_t _t53 = TRAILER_LIT(0.3)*_t25*_t48 - TRAILER_LIT(0.3)*_t26*_t39
-            - TRAILER_LIT(0.3)*_t26*_t43 - _t52;
-    const trailer_real_t _t54 = TRAILER_LIT(2.4154589371980677)*_t53;
-    const trailer_real_t _t55 = -K_theta_tractor_x_tractor*_t31 + K_theta_tractor_x_tractor_2*_ms74
-            + _t51;
-    const trailer_real_t _t56 = J_x_tractor*_ms79 + _t55;
-    const trailer_real_t _t57 = -_t50 + _t54;
-    const trailer_real_t _t58 = -_t50 - _t54;
-    const trailer_real_t _t59 = -_t25*_t48 + _t26*_t39 + _t26*_t43 - _t56;
+    const trailer_real_t _t2 = J_theta_cart_left*_ms61*_ms61 + J_theta_cart_right*_ms60*_ms60
+            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
+    const trailer_real_t _t3 = J_theta_cart*_ms59*_ms59 + TRAILER_LIT(2.0)*_ms59*_ms87 + _t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.207)*_t0;
+    const trailer_real_t _t5 = -TRAILER_LIT(0.207)*_t1;
+    const trailer_real_t _t6 = J_theta_cart_left*_ms61*_ms66 + J_theta_cart_right*_ms60*_ms65
+            + J_theta_left*_t1*_t5 + J_theta_right*_t0*_t4;
+    const trailer_real_t _t7 = K_theta_tractor_x_tractor_2 + _t6;
+    const trailer_real_t _t8 = J_theta_cart*_ms59*_ms64 - TRAILER_LIT(0.3)*_ms59*_ms88 + _ms64*_ms87
+            + _t7;
+    const trailer_real_t _t9 = J_theta_cart_left*_ms66*_ms66 + J_theta_cart_right*_ms65*_ms65
+            + J_theta_left*_t5*_t5 + J_theta_right*_t4*_t4;
+    const trailer_real_t _t10 = J_theta_tractor + _t9;
+    const trailer_real_t _t11 = J_theta_cart*_ms64*_ms64 - TRAILER_LIT(0.6)*_ms64*_ms88 + _t10;
+    const trailer_real_t _t12 = _t11*_t3 - _t8*_t8;
+    const trailer_real_t _t13 = theta_cart - theta_tractor;
+    const trailer_real_t _t14 = TRAILER_COS(_t13);
+    const trailer_real_t _t15 = TRAILER_SIN(_t13);
+    const trailer_real_t _t16 = -_ms99 + _t0*tau_right + _t1*tau_left;
+    const trailer_real_t _t17 = -_ms102 + _t4*tau_right + _t5*tau_left;
+    const trailer_real_t _t18 = TRAILER_LIT(1.0)/_t12;
+    const trailer_real_t _t19 = _t18*(_t11*_t16 - _t17*_t8);
+    const trailer_real_t _t20 = _t18*(-_t16*_t8 + _t17*_t3);
+    const trailer_real_t _t21 = _ms59*_t19 + _ms64*_t20 + _ms84;
+    const trailer_real_t _t22 = -_ms75*_ms88 + _ms87*_t21;
+    const trailer_real_t _t23 = K_theta_tractor_x_tractor*_ms74 + K_theta_tractor_x_tractor_2*_t20
+            + _t22;
+    const trailer_real_t _t24 = J_x_tractor*_t19 + _t23;
+    const trailer_real_t _t25 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t26 = _ms60*_t19 + _ms65*_t20 + _ms85;
+    const trailer_real_t _t27 = J_theta_cart_right*_t26;
+    const trailer_real_t _t28 = -_t25*_t27;
+    const trailer_real_t _t29 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t30 = _ms61*_t19 + _ms66*_t20 + _ms86;
+    const trailer_real_t _t31 = J_theta_cart_left*_t30;
+    const trailer_real_t _t32 = -_t29*_t31;
+    const trailer_real_t _t33 = TRAILER_LIT(0.3)*_ms74 + _t19;
+    const trailer_real_t _t34 = _ms79 - TRAILER_LIT(0.3)*_t20;
+    const trailer_real_t _t35 = J_theta_cart*_t21 + _ms87*_t33 + _ms88*_t34;
+    const trailer_real_t _t36 = TRAILER_LIT(0.2)*_t28 - TRAILER_LIT(0.2)*_t32 - _t35;
+    const trailer_real_t _t37 = -TRAILER_LIT(1.6666666666666667)*_t36;
+    const trailer_real_t _t38 = _t14*_t28 + _t14*_t32 + _t15*_t37 - _t24;
+    const trailer_real_t _t39 = TRAILER_LIT(0.5)*_t38;
+    const trailer_real_t _t40 = _ms75*_ms87 + _ms88*_t21;
+    const trailer_real_t _t41 = J_theta_tractor*_t20 - K_theta_tractor_x_tractor*_ms79
+            + K_theta_tractor_x_tractor_2*_t19 - TRAILER_LIT(0.3)*_t40;
+    const trailer_real_t _t42 = TRAILER_LIT(0.3)*_t14*_t37 - TRAILER_LIT(0.3)*_t15*_t28
+            - TRAILER_LIT(0.3)*_t15*_t32 - _t41;
+    const trailer_real_t _t43 = TRAILER_LIT(2.4154589371980677)*_t42;
+    const trailer_real_t _t44 = -K_theta_tractor_x_tractor*_t20 + K_theta_tractor_x_tractor_2*_ms74
+            + _t40;
+    const trailer_real_t _t45 = J_x_tractor*_ms79 + _t44;
+    const trailer_real_t _t46 = -_t39 + _t43;
+    const trailer_real_t _t47 = -_t39 - _t43;
+    const trailer_real_t _t48 = -_t14*_t37 + _t15*_t28 + _t15*_t32 - _t45;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -1248,16 +1207,16 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t9 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t3 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t23 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t12 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t58;
-    const trailer_real_t r_1 = _t57;
-    const trailer_real_t r_2 = -_t59;
-    const trailer_real_t r_3 = -_t48;
+    const trailer_real_t r_0 = _t47;
+    const trailer_real_t r_1 = _t46;
+    const trailer_real_t r_2 = -_t48;
+    const trailer_real_t r_3 = -_t37;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;

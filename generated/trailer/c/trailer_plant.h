@@ -31,7 +31,7 @@ extern "C" {
  *     wheel torques after friction
  * @param[out] xdot [10] row-major (TRAILER_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
- * operations after CSE: 63 add, 140 mul, 3 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 63 add, 149 mul, 3 div, 4 sin/cos, 0 sqrt
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md): no current
  * certificate (the printed code changed since the

@@ -117,7 +117,7 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     Returns:
         H1hat: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 40 add, 86 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 39 add, 93 mul, 3 div, 2 sin/cos, 0 sqrt
     """
     _, _, qp2, qp3, _, _, _, _ = _flat(q_prev, 8, "q_prev")
     up0, up1 = _flat(u_prev, 2, "u_prev")
@@ -162,43 +162,32 @@ def minimal_tde(q_prev: ArrayLike, u_prev: ArrayLike, qdot_now: ArrayLike, qdot_
     _t21 = -0.6*radius_cart_right
     _t22 = 0.207*_t2
     _t23 = -0.207*_t3
-    _t24 = J_theta_right*_t2
-    _t25 = J_theta_left*_t3
-    _t26 = J_theta_right*_t22
-    _t27 = J_theta_left*_t23
-    _t28 = -0.3*_t7
-    _t29 = -0.3*_t6
-    _t30 = -_t10*_t6
-    _t31 = _t9*(-_t18*_t6 + _t19*_t7)
-    _t32 = _t9*(-_t20*_t6 + _t21*_t7)
-    _t33 = -_t10*_t28
-    _t34 = _t9*(-_t18*_t28 - _t19*_t29)
-    _t35 = _t9*(-_t20*_t28 - _t21*_t29)
-    _t36 = -K_theta_cart_x_tractor*_t6 + K_theta_cart_x_tractor_2*_t7
-    _t37 = -K_theta_cart_x_tractor*_t7 - K_theta_cart_x_tractor_2*_t6
-    _t38 = _t30*_t36
-    _t39 = J_theta_cart_right*_t31
-    _t40 = J_theta_cart_left*_t32
-    _t41 = J_x_tractor + _t38
-    _t42 = J_theta_cart*_t30 + _t36
-    _t43 = _t33*_t36
-    _t44 = _t33*_t37
-    _t45 = K_theta_tractor_x_tractor_2 + _t43
-    _t46 = J_theta_cart_right*_t34
-    _t47 = J_theta_cart_left*_t35
-    _t48 = J_theta_tractor - 0.3*_t44
-    _t49 = J_theta_cart*_t33 - 0.3*_t37
-    _t50 = _t2*_t24 + _t25*_t3 + _t30*_t42 + _t31*_t39 + _t32*_t40 + _t41
-    _t51 = _t2*_t26 + _t27*_t3 + _t30*_t49 + _t31*_t46 + _t32*_t47 + _t45
-    _t52 = _t22*_t26 + _t23*_t27 + _t33*_t49 + _t34*_t46 + _t35*_t47 + _t48
-    _t53 = _t14*_t51 + _t16*_t50
-    _t54 = _t15*_t51 + _t17*_t50
-    _t55 = _t14*_t52 + _t16*_t51
-    _t56 = _t15*_t52 + _t17*_t51
-    _t57 = _t14*_t55 + _t16*_t53
-    _t58 = _t14*_t56 + _t16*_t54
-    _t59 = _t15*_t56 + _t17*_t54
-    H1hat = np.array([-_t12*_t57 - _t13*_t58 + up0, -_t12*_t58 - _t13*_t59 + up1])
+    _t24 = -0.3*_t7
+    _t25 = -0.3*_t6
+    _t26 = -_t10*_t6
+    _t27 = _t9*(-_t18*_t6 + _t19*_t7)
+    _t28 = _t9*(-_t20*_t6 + _t21*_t7)
+    _t29 = -_t10*_t24
+    _t30 = _t9*(-_t18*_t24 - _t19*_t25)
+    _t31 = _t9*(-_t20*_t24 - _t21*_t25)
+    _t32 = -K_theta_cart_x_tractor*_t6 + K_theta_cart_x_tractor_2*_t7
+    _t33 = -K_theta_cart_x_tractor*_t7 - K_theta_cart_x_tractor_2*_t6
+    _t34 = J_theta_cart_left*_t28*_t28 + J_theta_cart_right*_t27*_t27 + J_theta_left*_t3*_t3 + J_theta_right*_t2*_t2 + J_x_tractor
+    _t35 = J_theta_cart*_t26*_t26 + 2.0*_t26*_t32 + _t34
+    _t36 = J_theta_cart_left*_t28*_t31 + J_theta_cart_right*_t27*_t30 + J_theta_left*_t23*_t3 + J_theta_right*_t2*_t22
+    _t37 = K_theta_tractor_x_tractor_2 + _t36
+    _t38 = J_theta_cart*_t26*_t29 - 0.3*_t26*_t33 + _t29*_t32 + _t37
+    _t39 = J_theta_cart_left*_t31*_t31 + J_theta_cart_right*_t30*_t30 + J_theta_left*_t23*_t23 + J_theta_right*_t22*_t22
+    _t40 = J_theta_tractor + _t39
+    _t41 = J_theta_cart*_t29*_t29 - 0.6*_t29*_t33 + _t40
+    _t42 = _t14*_t38 + _t16*_t35
+    _t43 = _t15*_t38 + _t17*_t35
+    _t44 = _t14*_t41 + _t16*_t38
+    _t45 = _t15*_t41 + _t17*_t38
+    _t46 = _t14*_t44 + _t16*_t42
+    _t47 = _t14*_t45 + _t16*_t43
+    _t48 = _t15*_t45 + _t17*_t43
+    H1hat = np.array([-_t12*_t46 - _t13*_t47 + up0, -_t12*_t47 - _t13*_t48 + up1])
     return H1hat
 
 
@@ -252,7 +241,7 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 37 add, 86 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fabs
+    operations after CSE: 36 add, 93 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fabs
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -285,50 +274,39 @@ def minimal_minv_norm(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t13 = -2.4154589371980677*radius_left
     _t14 = 0.5*radius_left
     _t15 = _t1*_t10
-    _t16 = 0.2*radius_cart_left
-    _t17 = -0.6*radius_cart_left
-    _t18 = _t9*(_t1*_t16 + _t17*_t2)
-    _t19 = -0.2*radius_cart_right
-    _t20 = -0.6*radius_cart_right
-    _t21 = _t9*(_t1*_t19 + _t2*_t20)
-    _t22 = J_theta_right*_t5
-    _t23 = J_theta_left*_t6
-    _t24 = J_theta_cart_right*_t18
-    _t25 = J_theta_cart_left*_t21
-    _t26 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t27 = _t15*_t26
-    _t28 = J_x_tractor + _t27
-    _t29 = J_theta_cart*_t15 + _t26
-    _t30 = _t15*_t29 + _t18*_t24 + _t21*_t25 + _t22*_t5 + _t23*_t6 + _t28
-    _t31 = -0.3*_t2
-    _t32 = -_t10*_t31
-    _t33 = _t26*_t32
+    _t16 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t17 = 0.2*radius_cart_left
+    _t18 = -0.6*radius_cart_left
+    _t19 = _t9*(_t1*_t17 + _t18*_t2)
+    _t20 = -0.2*radius_cart_right
+    _t21 = -0.6*radius_cart_right
+    _t22 = _t9*(_t1*_t20 + _t2*_t21)
+    _t23 = J_theta_cart_left*_t22*_t22 + J_theta_cart_right*_t19*_t19 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+    _t24 = J_theta_cart*_t15*_t15 + 2.0*_t15*_t16 + _t23
+    _t25 = -0.3*_t2
+    _t26 = -_t10*_t25
+    _t27 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+    _t28 = 0.207*_t5
+    _t29 = -0.207*_t6
+    _t30 = 0.3*_t1
+    _t31 = _t9*(-_t17*_t25 - _t18*_t30)
+    _t32 = _t9*(-_t20*_t25 - _t21*_t30)
+    _t33 = J_theta_cart_left*_t22*_t32 + J_theta_cart_right*_t19*_t31 + J_theta_left*_t29*_t6 + J_theta_right*_t28*_t5
     _t34 = K_theta_tractor_x_tractor_2 + _t33
-    _t35 = 0.207*_t5
-    _t36 = J_theta_right*_t35
-    _t37 = -0.207*_t6
-    _t38 = J_theta_left*_t37
-    _t39 = 0.3*_t1
-    _t40 = _t9*(-_t16*_t31 - _t17*_t39)
-    _t41 = J_theta_cart_right*_t40
-    _t42 = _t9*(-_t19*_t31 - _t20*_t39)
-    _t43 = J_theta_cart_left*_t42
-    _t44 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t45 = J_theta_cart*_t32 - 0.3*_t44
-    _t46 = _t15*_t45 + _t18*_t41 + _t21*_t43 + _t34 + _t36*_t5 + _t38*_t6
-    _t47 = _t13*_t46 + _t14*_t30
-    _t48 = _t32*_t44
-    _t49 = J_theta_tractor - 0.3*_t48
-    _t50 = _t32*_t45 + _t35*_t36 + _t37*_t38 + _t40*_t41 + _t42*_t43 + _t49
-    _t51 = _t13*_t50 + _t14*_t46
-    _t52 = _t11*_t51 + _t12*_t47
-    _t53 = _t52*_t52
-    _t54 = _t11*_t46 + _t12*_t30
-    _t55 = _t11*_t50 + _t12*_t46
-    _t56 = _t11*_t55 + _t12*_t54
-    _t57 = _t13*_t51 + _t14*_t47
+    _t35 = J_theta_cart*_t15*_t26 - 0.3*_t15*_t27 + _t16*_t26 + _t34
+    _t36 = _t13*_t35 + _t14*_t24
+    _t37 = J_theta_cart_left*_t32*_t32 + J_theta_cart_right*_t31*_t31 + J_theta_left*_t29*_t29 + J_theta_right*_t28*_t28
+    _t38 = J_theta_tractor + _t37
+    _t39 = J_theta_cart*_t26*_t26 - 0.6*_t26*_t27 + _t38
+    _t40 = _t13*_t39 + _t14*_t35
+    _t41 = _t11*_t40 + _t12*_t36
+    _t42 = _t41*_t41
+    _t43 = _t11*_t35 + _t12*_t24
+    _t44 = _t11*_t39 + _t12*_t35
+    _t45 = _t11*_t44 + _t12*_t43
+    _t46 = _t13*_t40 + _t14*_t36
     norm = np.array([
-        math.sqrt(2.0*_t53 + _t56*_t56 + _t57*_t57)*(1.0/abs(_t53 - _t56*_t57)),
+        math.sqrt(2.0*_t42 + _t45*_t45 + _t46*_t46)*(1.0/abs(_t42 - _t45*_t46)),
     ])
     return norm
 
@@ -517,7 +495,7 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     Returns:
         u: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 42 add, 88 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 41 add, 95 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -575,35 +553,24 @@ def minimal_tdc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Arra
     _t30 = _t9*(-_t15*_t21 - _t16*_t22)
     _t31 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
     _t32 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t33 = _t23*_t31
-    _t34 = J_theta_right*_t5
-    _t35 = J_theta_left*_t6
-    _t36 = J_theta_cart_right*_t24
-    _t37 = J_theta_cart_left*_t25
-    _t38 = J_x_tractor + _t33
-    _t39 = J_theta_cart*_t23 + _t31
-    _t40 = _t28*_t31
-    _t41 = _t28*_t32
-    _t42 = K_theta_tractor_x_tractor_2 + _t40
-    _t43 = J_theta_right*_t26
-    _t44 = J_theta_left*_t27
-    _t45 = J_theta_cart_right*_t29
-    _t46 = J_theta_cart_left*_t30
-    _t47 = J_theta_tractor - 0.3*_t41
-    _t48 = J_theta_cart*_t28 - 0.3*_t32
-    _t49 = _t23*_t39 + _t24*_t36 + _t25*_t37 + _t34*_t5 + _t35*_t6 + _t38
-    _t50 = _t23*_t48 + _t24*_t45 + _t25*_t46 + _t42 + _t43*_t5 + _t44*_t6
-    _t51 = _t26*_t43 + _t27*_t44 + _t28*_t48 + _t29*_t45 + _t30*_t46 + _t47
-    _t52 = _t13*_t50 + _t17*_t49
-    _t53 = _t14*_t50 + _t18*_t49
-    _t54 = _t13*_t51 + _t17*_t50
-    _t55 = _t14*_t51 + _t18*_t50
-    _t56 = _t13*_t54 + _t17*_t52
-    _t57 = _t13*_t55 + _t17*_t53
-    _t58 = _t14*_t55 + _t18*_t53
+    _t33 = J_theta_cart_left*_t25*_t25 + J_theta_cart_right*_t24*_t24 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+    _t34 = J_theta_cart*_t23*_t23 + 2.0*_t23*_t31 + _t33
+    _t35 = J_theta_cart_left*_t25*_t30 + J_theta_cart_right*_t24*_t29 + J_theta_left*_t27*_t6 + J_theta_right*_t26*_t5
+    _t36 = K_theta_tractor_x_tractor_2 + _t35
+    _t37 = J_theta_cart*_t23*_t28 - 0.3*_t23*_t32 + _t28*_t31 + _t36
+    _t38 = J_theta_cart_left*_t30*_t30 + J_theta_cart_right*_t29*_t29 + J_theta_left*_t27*_t27 + J_theta_right*_t26*_t26
+    _t39 = J_theta_tractor + _t38
+    _t40 = J_theta_cart*_t28*_t28 - 0.6*_t28*_t32 + _t39
+    _t41 = _t13*_t37 + _t17*_t34
+    _t42 = _t14*_t37 + _t18*_t34
+    _t43 = _t13*_t40 + _t17*_t37
+    _t44 = _t14*_t40 + _t18*_t37
+    _t45 = _t13*_t43 + _t17*_t41
+    _t46 = _t13*_t44 + _t17*_t42
+    _t47 = _t14*_t44 + _t18*_t42
     u = np.array([
-        H1hat0 + _t11*_t56 + _t12*_t57,
-        H1hat1 + _t11*_t57 + _t12*_t58,
+        H1hat0 + _t11*_t45 + _t12*_t46,
+        H1hat1 + _t11*_t46 + _t12*_t47,
     ])
     return u
 
@@ -677,7 +644,7 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
         s: array of 2 (shape 2x1, row-major)
         s_norm: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 49 add, 102 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 48 add, 109 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     e0, e1 = _flat(e, 2, "e")
@@ -743,35 +710,24 @@ def minimal_tdroc_law(q: ArrayLike, e: ArrayLike, edot: ArrayLike, qddot_des: Ar
     _t36 = _t9*(-_t21*_t27 - _t22*_t28)
     _t37 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
     _t38 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t39 = _t29*_t37
-    _t40 = J_theta_right*_t5
-    _t41 = J_theta_left*_t6
-    _t42 = J_theta_cart_right*_t30
-    _t43 = J_theta_cart_left*_t31
-    _t44 = J_x_tractor + _t39
-    _t45 = J_theta_cart*_t29 + _t37
-    _t46 = _t34*_t37
-    _t47 = _t34*_t38
-    _t48 = K_theta_tractor_x_tractor_2 + _t46
-    _t49 = J_theta_right*_t32
-    _t50 = J_theta_left*_t33
-    _t51 = J_theta_cart_right*_t35
-    _t52 = J_theta_cart_left*_t36
-    _t53 = J_theta_tractor - 0.3*_t47
-    _t54 = J_theta_cart*_t34 - 0.3*_t38
-    _t55 = _t29*_t45 + _t30*_t42 + _t31*_t43 + _t40*_t5 + _t41*_t6 + _t44
-    _t56 = _t29*_t54 + _t30*_t51 + _t31*_t52 + _t48 + _t49*_t5 + _t50*_t6
-    _t57 = _t32*_t49 + _t33*_t50 + _t34*_t54 + _t35*_t51 + _t36*_t52 + _t53
-    _t58 = _t19*_t56 + _t23*_t55
-    _t59 = _t20*_t56 + _t24*_t55
-    _t60 = _t19*_t57 + _t23*_t56
-    _t61 = _t20*_t57 + _t24*_t56
-    _t62 = _t19*_t60 + _t23*_t58
-    _t63 = _t19*_t61 + _t23*_t59
-    _t64 = _t20*_t61 + _t24*_t59
+    _t39 = J_theta_cart_left*_t31*_t31 + J_theta_cart_right*_t30*_t30 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+    _t40 = J_theta_cart*_t29*_t29 + 2.0*_t29*_t37 + _t39
+    _t41 = J_theta_cart_left*_t31*_t36 + J_theta_cart_right*_t30*_t35 + J_theta_left*_t33*_t6 + J_theta_right*_t32*_t5
+    _t42 = K_theta_tractor_x_tractor_2 + _t41
+    _t43 = J_theta_cart*_t29*_t34 - 0.3*_t29*_t38 + _t34*_t37 + _t42
+    _t44 = J_theta_cart_left*_t36*_t36 + J_theta_cart_right*_t35*_t35 + J_theta_left*_t33*_t33 + J_theta_right*_t32*_t32
+    _t45 = J_theta_tractor + _t44
+    _t46 = J_theta_cart*_t34*_t34 - 0.6*_t34*_t38 + _t45
+    _t47 = _t19*_t43 + _t23*_t40
+    _t48 = _t20*_t43 + _t24*_t40
+    _t49 = _t19*_t46 + _t23*_t43
+    _t50 = _t20*_t46 + _t24*_t43
+    _t51 = _t19*_t49 + _t23*_t47
+    _t52 = _t19*_t50 + _t23*_t48
+    _t53 = _t20*_t50 + _t24*_t48
     u = np.array([
-        H1hat0 + _t11*_t62 + _t12*_t63 + gain_1*(_t17*_t62 + _t18*_t63),
-        H1hat1 + _t11*_t63 + _t12*_t64 + gain_1*(_t17*_t63 + _t18*_t64),
+        H1hat0 + _t11*_t51 + _t12*_t52 + gain_1*(_t17*_t51 + _t18*_t52),
+        H1hat1 + _t11*_t52 + _t12*_t53 + gain_1*(_t17*_t52 + _t18*_t53),
     ])
     s = np.array([_t13, _t14])
     s_norm = np.array([_t15])
@@ -864,7 +820,7 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
         s_norm: array of 1 (shape 1x1, row-major)
         gain: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 79 add, 159 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+    operations after CSE: 79 add, 168 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -916,86 +872,77 @@ def minimal_roc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLike
     _t21 = _t13*_t20
     _t22 = -0.3*_t19
     _t23 = _t20*_t22
-    _t24 = e0*k1_0 + edot0*k2_0
-    _t25 = _t24 + qdd_des0
-    _t26 = e1*k1_1 + edot1*k2_1
-    _t27 = _t26 + qdd_des1
-    _t28 = e0*p12_0 + edot0*p22_0
-    _t29 = e1*p12_1 + edot1*p22_1
-    _t30 = _norm(_t28, _t29)
-    _t31 = 1.0/(max(_t30, eps_1))
-    _t32 = _t28*_t31
-    _t33 = _t29*_t31
-    _t34 = (alpha*(_norm(_t24, _t26) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
-    _t35 = 0.3*_t1
-    _t36 = 0.2*radius_cart_left
-    _t37 = -0.6*radius_cart_left
-    _t38 = -0.2*radius_cart_right
-    _t39 = -0.6*radius_cart_right
-    _t40 = _t9*(_t1*_t36 + _t2*_t37)
-    _t41 = _t9*(_t1*_t38 + _t2*_t39)
-    _t42 = 0.207*_t5
-    _t43 = -0.207*_t6
-    _t44 = _t9*(-_t15*_t36 - _t35*_t37)
-    _t45 = _t9*(-_t15*_t38 - _t35*_t39)
-    _t46 = _t19*_t19
-    _t47 = _t20*_t20
-    _t48 = 0.3*_t46
-    _t49 = -_t13*_t19
-    _t50 = -_t3*_t4*_t49
-    _t51 = -_t1*_t23 - _t2*_t21
-    _t52 = _t1*_t21 - _t2*_t23
-    _t53 = _t1*_t48 - _t2*_t50 - _t51
-    _t54 = _t1*_t50 + _t2*_t48 - _t52
-    _t55 = _t10*_t53
-    _t56 = _t9*(_t36*_t53 + _t37*_t54)
-    _t57 = _t9*(_t38*_t53 + _t39*_t54)
-    _t58 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t59 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t60 = _t14*_t58
-    _t61 = J_theta_right*_t5
-    _t62 = J_theta_left*_t6
-    _t63 = J_theta_cart_right*_t40
-    _t64 = J_theta_cart_left*_t41
-    _t65 = J_x_tractor + _t60
-    _t66 = J_theta_cart*_t14 + _t58
-    _t67 = _t16*_t58
-    _t68 = _t16*_t59
-    _t69 = K_theta_tractor_x_tractor_2 + _t67
-    _t70 = J_theta_right*_t42
-    _t71 = J_theta_left*_t43
-    _t72 = J_theta_cart_right*_t44
-    _t73 = J_theta_cart_left*_t45
-    _t74 = J_theta_tractor - 0.3*_t68
-    _t75 = J_theta_cart*_t16 - 0.3*_t59
-    _t76 = _t14*_t66 + _t40*_t63 + _t41*_t64 + _t5*_t61 + _t6*_t62 + _t65
-    _t77 = _t14*_t75 + _t40*_t72 + _t41*_t73 + _t5*_t70 + _t6*_t71 + _t69
-    _t78 = _t16*_t75 + _t42*_t70 + _t43*_t71 + _t44*_t72 + _t45*_t73 + _t74
-    _t79 = -_t47*_t59 + _t55*_t58
-    _t80 = _t47*_t58 + _t55*_t59
-    _t81 = K_theta_tractor_x_tractor*_t46 + _t79
-    _t82 = J_theta_cart_right*_t56
-    _t83 = J_theta_cart_left*_t57
-    _t84 = -K_theta_tractor_x_tractor*_t50 - 0.3*_t80
-    _t85 = J_theta_cart*_t55 + _t48*_t58 + _t50*_t59
-    _t86 = _t14*_t85 + _t40*_t82 + _t41*_t83 + _t81
-    _t87 = _t16*_t85 + _t44*_t82 + _t45*_t83 + _t84
-    _t88 = _t11*_t76 + _t17*_t77
-    _t89 = _t12*_t76 + _t18*_t77
-    _t90 = _t11*_t77 + _t17*_t78
-    _t91 = _t12*_t77 + _t18*_t78
-    _t92 = _t11*_t88 + _t17*_t90
-    _t93 = _t11*_t89 + _t17*_t91
-    _t94 = _t12*_t89 + _t18*_t91
-    _t95 = _t11*_t86 + _t17*_t87
-    _t96 = _t12*_t86 + _t18*_t87
+    _t24 = -0.2*radius_cart_right
+    _t25 = -0.6*radius_cart_right
+    _t26 = _t9*(_t1*_t24 + _t2*_t25)
+    _t27 = J_theta_cart_left*_t26
+    _t28 = 0.2*radius_cart_left
+    _t29 = -0.6*radius_cart_left
+    _t30 = _t9*(_t1*_t28 + _t2*_t29)
+    _t31 = J_theta_cart_right*_t30
+    _t32 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+    _t33 = 0.3*_t32
+    _t34 = J_theta_cart*_t14
+    _t35 = _t19*_t19
+    _t36 = 0.3*_t35
+    _t37 = -_t13*_t19
+    _t38 = -_t3*_t37*_t4
+    _t39 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t40 = _t32*_t38 + _t36*_t39
+    _t41 = e0*k1_0 + edot0*k2_0
+    _t42 = _t41 + qdd_des0
+    _t43 = e1*k1_1 + edot1*k2_1
+    _t44 = _t43 + qdd_des1
+    _t45 = e0*p12_0 + edot0*p22_0
+    _t46 = e1*p12_1 + edot1*p22_1
+    _t47 = _norm(_t45, _t46)
+    _t48 = 1.0/(max(_t47, eps_1))
+    _t49 = _t45*_t48
+    _t50 = _t46*_t48
+    _t51 = (alpha*(_norm(_t41, _t43) + _norm(qdd_des0, qdd_des1)) + phi)/(1.0 - alpha)
+    _t52 = 0.3*_t1
+    _t53 = 0.207*_t5
+    _t54 = -0.207*_t6
+    _t55 = _t9*(-_t15*_t28 - _t29*_t52)
+    _t56 = _t9*(-_t15*_t24 - _t25*_t52)
+    _t57 = _t20*_t20
+    _t58 = -_t1*_t23 - _t2*_t21
+    _t59 = _t1*_t21 - _t2*_t23
+    _t60 = _t1*_t36 - _t2*_t38 - _t58
+    _t61 = _t1*_t38 + _t2*_t36 - _t59
+    _t62 = _t10*_t60
+    _t63 = _t9*(_t28*_t60 + _t29*_t61)
+    _t64 = _t9*(_t24*_t60 + _t25*_t61)
+    _t65 = J_theta_cart_left*_t26*_t26 + J_theta_cart_right*_t30*_t30 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+    _t66 = J_theta_cart*_t14*_t14 + 2.0*_t14*_t39 + _t65
+    _t67 = J_theta_left*_t54*_t6 + J_theta_right*_t5*_t53 + _t27*_t56 + _t31*_t55
+    _t68 = K_theta_tractor_x_tractor_2 + _t67
+    _t69 = -_t14*_t33 + _t16*_t34 + _t16*_t39 + _t68
+    _t70 = J_theta_cart_left*_t56*_t56 + J_theta_cart_right*_t55*_t55 + J_theta_left*_t54*_t54 + J_theta_right*_t53*_t53
+    _t71 = J_theta_tractor + _t70
+    _t72 = J_theta_cart*_t16*_t16 - 0.6*_t16*_t32 + _t71
+    _t73 = _t27*_t64 + _t31*_t63
+    _t74 = K_theta_tractor_x_tractor*_t35 + _t73
+    _t75 = _t14*_t40 - _t32*_t57 + _t34*_t62 + _t39*_t62 + _t74
+    _t76 = J_theta_cart_left*_t56*_t64 + J_theta_cart_right*_t55*_t63
+    _t77 = -K_theta_tractor_x_tractor*_t38 + _t76
+    _t78 = J_theta_cart*_t16*_t62 + _t16*_t40 - _t33*_t62 - 0.3*_t39*_t57 + _t77
+    _t79 = _t11*_t66 + _t17*_t69
+    _t80 = _t12*_t66 + _t18*_t69
+    _t81 = _t11*_t69 + _t17*_t72
+    _t82 = _t12*_t69 + _t18*_t72
+    _t83 = _t11*_t79 + _t17*_t81
+    _t84 = _t11*_t80 + _t17*_t82
+    _t85 = _t12*_t80 + _t18*_t82
+    _t86 = _t11*_t75 + _t17*_t78
+    _t87 = _t12*_t75 + _t18*_t78
     u = np.array([
-        _t25*_t92 + _t27*_t93 + _t34*(_t32*_t92 + _t33*_t93) + _t95,
-        _t25*_t93 + _t27*_t94 + _t34*(_t32*_t93 + _t33*_t94) + _t96,
+        _t42*_t83 + _t44*_t84 + _t51*(_t49*_t83 + _t50*_t84) + _t86,
+        _t42*_t84 + _t44*_t85 + _t51*(_t49*_t84 + _t50*_t85) + _t87,
     ])
-    s = np.array([_t28, _t29])
-    s_norm = np.array([_t30])
-    gain = np.array([_t34])
+    s = np.array([_t45, _t46])
+    s_norm = np.array([_t47])
+    gain = np.array([_t51])
     return u, s, s_norm, gain
 
 
@@ -1027,7 +974,7 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
         s_norm: array of 1 (shape 1x1, row-major)
         gain_next: array of 1 (shape 1x1, row-major)
 
-    operations after CSE: 75 add, 156 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+    operations after CSE: 75 add, 165 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -1080,83 +1027,74 @@ def minimal_asmc_law(q: ArrayLike, qdot: ArrayLike, e: ArrayLike, edot: ArrayLik
     _t21 = _t13*_t20
     _t22 = -0.3*_t19
     _t23 = _t20*_t22
-    _t24 = e0*k1_0 + edot0*k2_0 + qdd_des0
-    _t25 = e1*k1_1 + edot1*k2_1 + qdd_des1
-    _t26 = e0*p12_0 + edot0*p22_0
-    _t27 = e1*p12_1 + edot1*p22_1
-    _t28 = _norm(_t26, _t27)
-    _t29 = 1.0/(max(_t28, eps_1))
-    _t30 = _t26*_t29
-    _t31 = _t27*_t29
-    _t32 = 0.3*_t1
-    _t33 = 0.2*radius_cart_left
-    _t34 = -0.6*radius_cart_left
-    _t35 = -0.2*radius_cart_right
-    _t36 = -0.6*radius_cart_right
-    _t37 = _t9*(_t1*_t33 + _t2*_t34)
-    _t38 = _t9*(_t1*_t35 + _t2*_t36)
-    _t39 = 0.207*_t5
-    _t40 = -0.207*_t6
-    _t41 = _t9*(-_t15*_t33 - _t32*_t34)
-    _t42 = _t9*(-_t15*_t35 - _t32*_t36)
-    _t43 = _t19*_t19
-    _t44 = _t20*_t20
-    _t45 = 0.3*_t43
-    _t46 = -_t13*_t19
-    _t47 = -_t3*_t4*_t46
-    _t48 = -_t1*_t23 - _t2*_t21
-    _t49 = _t1*_t21 - _t2*_t23
-    _t50 = _t1*_t45 - _t2*_t47 - _t48
-    _t51 = _t1*_t47 + _t2*_t45 - _t49
-    _t52 = _t10*_t50
-    _t53 = _t9*(_t33*_t50 + _t34*_t51)
-    _t54 = _t9*(_t35*_t50 + _t36*_t51)
-    _t55 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t56 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t57 = _t14*_t55
-    _t58 = J_theta_right*_t5
-    _t59 = J_theta_left*_t6
-    _t60 = J_theta_cart_right*_t37
-    _t61 = J_theta_cart_left*_t38
-    _t62 = J_x_tractor + _t57
-    _t63 = J_theta_cart*_t14 + _t55
-    _t64 = _t16*_t55
-    _t65 = _t16*_t56
-    _t66 = K_theta_tractor_x_tractor_2 + _t64
-    _t67 = J_theta_right*_t39
-    _t68 = J_theta_left*_t40
-    _t69 = J_theta_cart_right*_t41
-    _t70 = J_theta_cart_left*_t42
-    _t71 = J_theta_tractor - 0.3*_t65
-    _t72 = J_theta_cart*_t16 - 0.3*_t56
-    _t73 = _t14*_t63 + _t37*_t60 + _t38*_t61 + _t5*_t58 + _t59*_t6 + _t62
-    _t74 = _t14*_t72 + _t37*_t69 + _t38*_t70 + _t5*_t67 + _t6*_t68 + _t66
-    _t75 = _t16*_t72 + _t39*_t67 + _t40*_t68 + _t41*_t69 + _t42*_t70 + _t71
-    _t76 = -_t44*_t56 + _t52*_t55
-    _t77 = _t44*_t55 + _t52*_t56
-    _t78 = K_theta_tractor_x_tractor*_t43 + _t76
-    _t79 = J_theta_cart_right*_t53
-    _t80 = J_theta_cart_left*_t54
-    _t81 = -K_theta_tractor_x_tractor*_t47 - 0.3*_t77
-    _t82 = J_theta_cart*_t52 + _t45*_t55 + _t47*_t56
-    _t83 = _t14*_t82 + _t37*_t79 + _t38*_t80 + _t78
-    _t84 = _t16*_t82 + _t41*_t79 + _t42*_t80 + _t81
-    _t85 = _t11*_t73 + _t17*_t74
-    _t86 = _t12*_t73 + _t18*_t74
-    _t87 = _t11*_t74 + _t17*_t75
-    _t88 = _t12*_t74 + _t18*_t75
-    _t89 = _t11*_t85 + _t17*_t87
-    _t90 = _t11*_t86 + _t17*_t88
-    _t91 = _t12*_t86 + _t18*_t88
-    _t92 = _t11*_t83 + _t17*_t84
-    _t93 = _t12*_t83 + _t18*_t84
+    _t24 = -0.2*radius_cart_right
+    _t25 = -0.6*radius_cart_right
+    _t26 = _t9*(_t1*_t24 + _t2*_t25)
+    _t27 = J_theta_cart_left*_t26
+    _t28 = 0.2*radius_cart_left
+    _t29 = -0.6*radius_cart_left
+    _t30 = _t9*(_t1*_t28 + _t2*_t29)
+    _t31 = J_theta_cart_right*_t30
+    _t32 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+    _t33 = 0.3*_t32
+    _t34 = J_theta_cart*_t14
+    _t35 = _t19*_t19
+    _t36 = 0.3*_t35
+    _t37 = -_t13*_t19
+    _t38 = -_t3*_t37*_t4
+    _t39 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t40 = _t32*_t38 + _t36*_t39
+    _t41 = e0*k1_0 + edot0*k2_0 + qdd_des0
+    _t42 = e1*k1_1 + edot1*k2_1 + qdd_des1
+    _t43 = e0*p12_0 + edot0*p22_0
+    _t44 = e1*p12_1 + edot1*p22_1
+    _t45 = _norm(_t43, _t44)
+    _t46 = 1.0/(max(_t45, eps_1))
+    _t47 = _t43*_t46
+    _t48 = _t44*_t46
+    _t49 = 0.3*_t1
+    _t50 = 0.207*_t5
+    _t51 = -0.207*_t6
+    _t52 = _t9*(-_t15*_t28 - _t29*_t49)
+    _t53 = _t9*(-_t15*_t24 - _t25*_t49)
+    _t54 = _t20*_t20
+    _t55 = -_t1*_t23 - _t2*_t21
+    _t56 = _t1*_t21 - _t2*_t23
+    _t57 = _t1*_t36 - _t2*_t38 - _t55
+    _t58 = _t1*_t38 + _t2*_t36 - _t56
+    _t59 = _t10*_t57
+    _t60 = _t9*(_t28*_t57 + _t29*_t58)
+    _t61 = _t9*(_t24*_t57 + _t25*_t58)
+    _t62 = J_theta_cart_left*_t26*_t26 + J_theta_cart_right*_t30*_t30 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+    _t63 = J_theta_cart*_t14*_t14 + 2.0*_t14*_t39 + _t62
+    _t64 = J_theta_left*_t51*_t6 + J_theta_right*_t5*_t50 + _t27*_t53 + _t31*_t52
+    _t65 = K_theta_tractor_x_tractor_2 + _t64
+    _t66 = -_t14*_t33 + _t16*_t34 + _t16*_t39 + _t65
+    _t67 = J_theta_cart_left*_t53*_t53 + J_theta_cart_right*_t52*_t52 + J_theta_left*_t51*_t51 + J_theta_right*_t50*_t50
+    _t68 = J_theta_tractor + _t67
+    _t69 = J_theta_cart*_t16*_t16 - 0.6*_t16*_t32 + _t68
+    _t70 = _t27*_t61 + _t31*_t60
+    _t71 = K_theta_tractor_x_tractor*_t35 + _t70
+    _t72 = _t14*_t40 - _t32*_t54 + _t34*_t59 + _t39*_t59 + _t71
+    _t73 = J_theta_cart_left*_t53*_t61 + J_theta_cart_right*_t52*_t60
+    _t74 = -K_theta_tractor_x_tractor*_t38 + _t73
+    _t75 = J_theta_cart*_t16*_t59 + _t16*_t40 - _t33*_t59 - 0.3*_t39*_t54 + _t74
+    _t76 = _t11*_t63 + _t17*_t66
+    _t77 = _t12*_t63 + _t18*_t66
+    _t78 = _t11*_t66 + _t17*_t69
+    _t79 = _t12*_t66 + _t18*_t69
+    _t80 = _t11*_t76 + _t17*_t78
+    _t81 = _t11*_t77 + _t17*_t79
+    _t82 = _t12*_t77 + _t18*_t79
+    _t83 = _t11*_t72 + _t17*_t75
+    _t84 = _t12*_t72 + _t18*_t75
     u = np.array([
-        _t24*_t89 + _t25*_t90 + _t92 + gain_1*(_t30*_t89 + _t31*_t90),
-        _t24*_t90 + _t25*_t91 + _t93 + gain_1*(_t30*_t90 + _t31*_t91),
+        _t41*_t80 + _t42*_t81 + _t83 + gain_1*(_t47*_t80 + _t48*_t81),
+        _t41*_t81 + _t42*_t82 + _t84 + gain_1*(_t47*_t81 + _t48*_t82),
     ])
-    s = np.array([_t26, _t27])
-    s_norm = np.array([_t28])
-    gain_next = np.array([_t28*gamma*h + gain_1])
+    s = np.array([_t43, _t44])
+    s_norm = np.array([_t45])
+    gain_next = np.array([_t45*gamma*h + gain_1])
     return u, s, s_norm, gain_next
 
 

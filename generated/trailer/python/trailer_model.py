@@ -65,7 +65,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     Returns:
         qddot: array of 8 (shape 8x1, row-major)
 
-    operations after CSE: 67 add, 140 mul, 3 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 67 add, 149 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -112,74 +112,65 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         _t21 = _t13*_t20
         _t22 = -0.3*_t19
         _t23 = _t20*_t22
-        _t24 = 0.2*radius_cart_left
-        _t25 = -0.6*radius_cart_left
+        _t24 = -0.2*radius_cart_right
+        _t25 = -0.6*radius_cart_right
         _t26 = _t9*(_t1*_t24 + _t2*_t25)
-        _t27 = -0.2*radius_cart_right
-        _t28 = -0.6*radius_cart_right
-        _t29 = _t9*(_t1*_t27 + _t2*_t28)
-        _t30 = J_theta_right*_t5
-        _t31 = J_theta_left*_t6
-        _t32 = J_theta_cart_right*_t26
-        _t33 = J_theta_cart_left*_t29
-        _t34 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t35 = _t14*_t34
-        _t36 = J_x_tractor + _t35
-        _t37 = J_theta_cart*_t14 + _t34
-        _t38 = _t14*_t37 + _t26*_t32 + _t29*_t33 + _t30*_t5 + _t31*_t6 + _t36
-        _t39 = _t16*_t34
-        _t40 = K_theta_tractor_x_tractor_2 + _t39
-        _t41 = 0.207*_t5
-        _t42 = J_theta_right*_t41
-        _t43 = -0.207*_t6
-        _t44 = J_theta_left*_t43
+        _t27 = J_theta_cart_left*_t26
+        _t28 = 0.2*radius_cart_left
+        _t29 = -0.6*radius_cart_left
+        _t30 = _t9*(_t1*_t28 + _t2*_t29)
+        _t31 = J_theta_cart_right*_t30
+        _t32 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+        _t33 = 0.3*_t32
+        _t34 = J_theta_cart*_t14
+        _t35 = _t19*_t19
+        _t36 = 0.3*_t35
+        _t37 = -_t13*_t19
+        _t38 = -_t3*_t37*_t4
+        _t39 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+        _t40 = _t32*_t38 + _t36*_t39
+        _t41 = J_theta_cart_left*_t26*_t26 + J_theta_cart_right*_t30*_t30 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+        _t42 = J_theta_cart*_t14*_t14 + 2.0*_t14*_t39 + _t41
+        _t43 = 0.207*_t5
+        _t44 = -0.207*_t6
         _t45 = 0.3*_t1
-        _t46 = _t9*(-_t15*_t24 - _t25*_t45)
-        _t47 = J_theta_cart_right*_t46
-        _t48 = _t9*(-_t15*_t27 - _t28*_t45)
-        _t49 = J_theta_cart_left*_t48
-        _t50 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-        _t51 = J_theta_cart*_t16 - 0.3*_t50
-        _t52 = _t14*_t51 + _t26*_t47 + _t29*_t49 + _t40 + _t42*_t5 + _t44*_t6
-        _t53 = _t16*_t50
-        _t54 = J_theta_tractor - 0.3*_t53
-        _t55 = _t16*_t51 + _t41*_t42 + _t43*_t44 + _t46*_t47 + _t48*_t49 + _t54
-        _t56 = _t38*_t55 - _t52*_t52
-        _t57 = math.cos(theta_tractor)
-        _t58 = math.sin(theta_tractor)
-        _t59 = _t19*_t19
-        _t60 = _t20*_t20
-        _t61 = 0.3*_t59
-        _t62 = -_t13*_t19
-        _t63 = -_t3*_t4*_t62
-        _t64 = -_t1*_t23 - _t2*_t21
-        _t65 = _t1*_t21 - _t2*_t23
-        _t66 = _t1*_t61 - _t2*_t63 - _t64
-        _t67 = _t1*_t63 + _t2*_t61 - _t65
-        _t68 = _t10*_t66
-        _t69 = _t9*(_t24*_t66 + _t25*_t67)
-        _t70 = _t9*(_t27*_t66 + _t28*_t67)
-        _t71 = _t34*_t68 - _t50*_t60
-        _t72 = _t34*_t60 + _t50*_t68
-        _t73 = K_theta_tractor_x_tractor*_t59 + _t71
-        _t74 = J_theta_cart_right*_t69
-        _t75 = J_theta_cart_left*_t70
-        _t76 = -K_theta_tractor_x_tractor*_t63 - 0.3*_t72
-        _t77 = J_theta_cart*_t68 + _t34*_t61 + _t50*_t63
-        _t78 = _t14*_t77 + _t26*_t74 + _t29*_t75 + _t73
-        _t79 = _t16*_t77 + _t46*_t74 + _t48*_t75 + _t76
-        _t80 = _t5*tau_right + _t6*tau_left - _t78
-        _t81 = _t41*tau_right + _t43*tau_left - _t79
-        _t82 = 1.0/_t56
-        _t83 = _t82*(-_t52*_t81 + _t55*_t80)
-        _t84 = _t82*(_t38*_t81 - _t52*_t80)
-        _t85 = _t14*_t83 + _t16*_t84 + _t68
-        _t86 = _t41*_t84 + _t5*_t83
-        _t87 = _t43*_t84 + _t6*_t83
-        _t88 = _t26*_t83 + _t46*_t84 + _t69
-        _t89 = _t29*_t83 + _t48*_t84 + _t70
-        _t90 = _t57*_t83 - _t58*_t63
-        _t91 = _t57*_t63 + _t58*_t83
+        _t46 = _t9*(-_t15*_t28 - _t29*_t45)
+        _t47 = _t9*(-_t15*_t24 - _t25*_t45)
+        _t48 = J_theta_left*_t44*_t6 + J_theta_right*_t43*_t5 + _t27*_t47 + _t31*_t46
+        _t49 = K_theta_tractor_x_tractor_2 + _t48
+        _t50 = -_t14*_t33 + _t16*_t34 + _t16*_t39 + _t49
+        _t51 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t46*_t46 + J_theta_left*_t44*_t44 + J_theta_right*_t43*_t43
+        _t52 = J_theta_tractor + _t51
+        _t53 = J_theta_cart*_t16*_t16 - 0.6*_t16*_t32 + _t52
+        _t54 = _t42*_t53 - _t50*_t50
+        _t55 = math.cos(theta_tractor)
+        _t56 = math.sin(theta_tractor)
+        _t57 = _t20*_t20
+        _t58 = -_t1*_t23 - _t2*_t21
+        _t59 = _t1*_t21 - _t2*_t23
+        _t60 = _t1*_t36 - _t2*_t38 - _t58
+        _t61 = _t1*_t38 + _t2*_t36 - _t59
+        _t62 = _t10*_t60
+        _t63 = _t9*(_t28*_t60 + _t29*_t61)
+        _t64 = _t9*(_t24*_t60 + _t25*_t61)
+        _t65 = _t27*_t64 + _t31*_t63
+        _t66 = K_theta_tractor_x_tractor*_t35 + _t65
+        _t67 = _t14*_t40 - _t32*_t57 + _t34*_t62 + _t39*_t62 + _t66
+        _t68 = J_theta_cart_left*_t47*_t64 + J_theta_cart_right*_t46*_t63
+        _t69 = -K_theta_tractor_x_tractor*_t38 + _t68
+        _t70 = J_theta_cart*_t16*_t62 + _t16*_t40 - _t33*_t62 - 0.3*_t39*_t57 + _t69
+        _t71 = _t5*tau_right + _t6*tau_left - _t67
+        _t72 = _t43*tau_right + _t44*tau_left - _t70
+        _t73 = 1.0/_t54
+        _t74 = _t73*(-_t50*_t72 + _t53*_t71)
+        _t75 = _t73*(_t42*_t72 - _t50*_t71)
+        _t76 = _t14*_t74 + _t16*_t75 + _t62
+        _t77 = _t43*_t75 + _t5*_t74
+        _t78 = _t44*_t75 + _t6*_t74
+        _t79 = _t30*_t74 + _t46*_t75 + _t63
+        _t80 = _t26*_t74 + _t47*_t75 + _t64
+        _t81 = -_t38*_t56 + _t55*_t74
+        _t82 = _t38*_t55 + _t56*_t74
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -204,11 +195,11 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires J_x_tractor > 0")
-    if not (_t38 > 0.0):
+    if not (_t42 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t56 > 0.0):
+    if not (_t54 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    qddot = np.array([_t90, _t91, _t84, _t85, _t86, _t87, _t88, _t89])
+    qddot = np.array([_t81, _t82, _t75, _t76, _t77, _t78, _t79, _t80])
     if not np.all(np.isfinite(qddot)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of forward_dynamics is not finite")
     return qddot
@@ -281,7 +272,7 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         M: array of 4 (shape 2x2, row-major). 2x2 row-major
 
-    operations after CSE: 34 add, 80 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 33 add, 87 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -329,35 +320,24 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t28 = _t9*(-_t13*_t19 - _t14*_t20)
     _t29 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
     _t30 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t31 = _t21*_t29
-    _t32 = J_theta_right*_t5
-    _t33 = J_theta_left*_t6
-    _t34 = J_theta_cart_right*_t22
-    _t35 = J_theta_cart_left*_t23
-    _t36 = J_x_tractor + _t31
-    _t37 = J_theta_cart*_t21 + _t29
-    _t38 = _t26*_t29
-    _t39 = _t26*_t30
-    _t40 = K_theta_tractor_x_tractor_2 + _t38
-    _t41 = J_theta_right*_t24
-    _t42 = J_theta_left*_t25
-    _t43 = J_theta_cart_right*_t27
-    _t44 = J_theta_cart_left*_t28
-    _t45 = J_theta_tractor - 0.3*_t39
-    _t46 = J_theta_cart*_t26 - 0.3*_t30
-    _t47 = _t21*_t37 + _t22*_t34 + _t23*_t35 + _t32*_t5 + _t33*_t6 + _t36
-    _t48 = _t21*_t46 + _t22*_t43 + _t23*_t44 + _t40 + _t41*_t5 + _t42*_t6
-    _t49 = _t24*_t41 + _t25*_t42 + _t26*_t46 + _t27*_t43 + _t28*_t44 + _t45
-    _t50 = _t11*_t48 + _t15*_t47
-    _t51 = _t12*_t48 + _t16*_t47
-    _t52 = _t11*_t49 + _t15*_t48
-    _t53 = _t12*_t49 + _t16*_t48
-    _t54 = _t11*_t52 + _t15*_t50
-    _t55 = _t11*_t53 + _t15*_t51
-    _t56 = _t12*_t53 + _t16*_t51
+    _t31 = J_theta_cart_left*_t23*_t23 + J_theta_cart_right*_t22*_t22 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+    _t32 = J_theta_cart*_t21*_t21 + 2.0*_t21*_t29 + _t31
+    _t33 = J_theta_cart_left*_t23*_t28 + J_theta_cart_right*_t22*_t27 + J_theta_left*_t25*_t6 + J_theta_right*_t24*_t5
+    _t34 = K_theta_tractor_x_tractor_2 + _t33
+    _t35 = J_theta_cart*_t21*_t26 - 0.3*_t21*_t30 + _t26*_t29 + _t34
+    _t36 = J_theta_cart_left*_t28*_t28 + J_theta_cart_right*_t27*_t27 + J_theta_left*_t25*_t25 + J_theta_right*_t24*_t24
+    _t37 = J_theta_tractor + _t36
+    _t38 = J_theta_cart*_t26*_t26 - 0.6*_t26*_t30 + _t37
+    _t39 = _t11*_t35 + _t15*_t32
+    _t40 = _t12*_t35 + _t16*_t32
+    _t41 = _t11*_t38 + _t15*_t35
+    _t42 = _t12*_t38 + _t16*_t35
+    _t43 = _t11*_t41 + _t15*_t39
+    _t44 = _t11*_t42 + _t15*_t40
+    _t45 = _t12*_t42 + _t16*_t40
     M = np.array([
-        [_t54, _t55],
-        [_t55, _t56],
+        [_t43, _t44],
+        [_t44, _t45],
     ])
     return M
 
@@ -375,7 +355,7 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     Returns:
         H: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 32 add, 84 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 33 add, 87 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -409,43 +389,44 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     _t17 = _t16*_t9
     _t18 = -0.3*_t15
     _t19 = _t16*_t18
-    _t20 = 0.3*_t1
-    _t21 = radius_left*radius_right
-    _t22 = 1.0/_t21
-    _t23 = 0.2*radius_cart_left
-    _t24 = -0.6*radius_cart_left
-    _t25 = -0.2*radius_cart_right
-    _t26 = -0.6*radius_cart_right
-    _t27 = _t5*(_t1*_t23 + _t2*_t24)
-    _t28 = _t5*(_t1*_t25 + _t2*_t26)
-    _t29 = _t5*(-_t11*_t23 - _t20*_t24)
-    _t30 = _t5*(-_t11*_t25 - _t20*_t26)
-    _t31 = _t15*_t15
-    _t32 = _t16*_t16
-    _t33 = 0.3*_t31
-    _t34 = -_t15*_t9
-    _t35 = -_t21*_t22*_t34
-    _t36 = -_t1*_t19 - _t17*_t2
-    _t37 = _t1*_t17 - _t19*_t2
-    _t38 = _t1*_t33 - _t2*_t35 - _t36
-    _t39 = _t1*_t35 + _t2*_t33 - _t37
-    _t40 = _t38*_t6
-    _t41 = _t5*(_t23*_t38 + _t24*_t39)
-    _t42 = _t5*(_t25*_t38 + _t26*_t39)
-    _t43 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t44 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t45 = -_t32*_t44 + _t40*_t43
-    _t46 = _t32*_t43 + _t40*_t44
-    _t47 = K_theta_tractor_x_tractor*_t31 + _t45
-    _t48 = J_theta_cart_right*_t41
-    _t49 = J_theta_cart_left*_t42
-    _t50 = -K_theta_tractor_x_tractor*_t35 - 0.3*_t46
-    _t51 = J_theta_cart*_t40 + _t33*_t43 + _t35*_t44
-    _t52 = _t10*_t51 + _t27*_t48 + _t28*_t49 + _t47
-    _t53 = _t12*_t51 + _t29*_t48 + _t30*_t49 + _t50
-    _t54 = _t13*_t53 + _t52*_t7
-    _t55 = _t14*_t53 + _t52*_t8
-    H = np.array([_t54, _t55])
+    _t20 = -0.2*radius_cart_right
+    _t21 = -0.6*radius_cart_right
+    _t22 = _t15*_t15
+    _t23 = 0.3*_t22
+    _t24 = radius_left*radius_right
+    _t25 = 1.0/_t24
+    _t26 = -_t15*_t9
+    _t27 = -_t24*_t25*_t26
+    _t28 = -_t1*_t19 - _t17*_t2
+    _t29 = _t1*_t23 - _t2*_t27 - _t28
+    _t30 = _t1*_t17 - _t19*_t2
+    _t31 = _t1*_t27 + _t2*_t23 - _t30
+    _t32 = _t5*(_t20*_t29 + _t21*_t31)
+    _t33 = J_theta_cart_left*_t32
+    _t34 = 0.2*radius_cart_left
+    _t35 = -0.6*radius_cart_left
+    _t36 = _t5*(_t29*_t34 + _t31*_t35)
+    _t37 = J_theta_cart_right*_t36
+    _t38 = _t29*_t6
+    _t39 = J_theta_cart*_t38
+    _t40 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t41 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+    _t42 = _t23*_t40 + _t27*_t41
+    _t43 = 0.3*_t1
+    _t44 = _t5*(_t1*_t34 + _t2*_t35)
+    _t45 = _t5*(_t1*_t20 + _t2*_t21)
+    _t46 = _t5*(-_t11*_t34 - _t35*_t43)
+    _t47 = _t5*(-_t11*_t20 - _t21*_t43)
+    _t48 = _t16*_t16
+    _t49 = _t33*_t45 + _t37*_t44
+    _t50 = K_theta_tractor_x_tractor*_t22 + _t49
+    _t51 = _t10*_t39 + _t10*_t42 + _t38*_t40 - _t41*_t48 + _t50
+    _t52 = _t33*_t47 + _t37*_t46
+    _t53 = -K_theta_tractor_x_tractor*_t27 + _t52
+    _t54 = _t12*_t39 + _t12*_t42 - 0.3*_t38*_t41 - 0.3*_t40*_t48 + _t53
+    _t55 = _t13*_t54 + _t51*_t7
+    _t56 = _t14*_t54 + _t51*_t8
+    H = np.array([_t55, _t56])
     return H
 
 
@@ -463,7 +444,7 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
     Returns:
         wheel_accels: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 59 add, 130 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 59 add, 139 mul, 3 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -510,67 +491,58 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         _t21 = _t13*_t20
         _t22 = -0.3*_t19
         _t23 = _t20*_t22
-        _t24 = 0.2*radius_cart_left
-        _t25 = -0.6*radius_cart_left
+        _t24 = -0.2*radius_cart_right
+        _t25 = -0.6*radius_cart_right
         _t26 = _t9*(_t1*_t24 + _t2*_t25)
-        _t27 = -0.2*radius_cart_right
-        _t28 = -0.6*radius_cart_right
-        _t29 = _t9*(_t1*_t27 + _t2*_t28)
-        _t30 = J_theta_right*_t5
-        _t31 = J_theta_left*_t6
-        _t32 = J_theta_cart_right*_t26
-        _t33 = J_theta_cart_left*_t29
-        _t34 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t35 = _t14*_t34
-        _t36 = J_x_tractor + _t35
-        _t37 = J_theta_cart*_t14 + _t34
-        _t38 = _t14*_t37 + _t26*_t32 + _t29*_t33 + _t30*_t5 + _t31*_t6 + _t36
-        _t39 = _t16*_t34
-        _t40 = K_theta_tractor_x_tractor_2 + _t39
-        _t41 = 0.207*_t5
-        _t42 = J_theta_right*_t41
-        _t43 = -0.207*_t6
-        _t44 = J_theta_left*_t43
+        _t27 = J_theta_cart_left*_t26
+        _t28 = 0.2*radius_cart_left
+        _t29 = -0.6*radius_cart_left
+        _t30 = _t9*(_t1*_t28 + _t2*_t29)
+        _t31 = J_theta_cart_right*_t30
+        _t32 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+        _t33 = 0.3*_t32
+        _t34 = J_theta_cart*_t14
+        _t35 = _t19*_t19
+        _t36 = 0.3*_t35
+        _t37 = -_t13*_t19
+        _t38 = -_t3*_t37*_t4
+        _t39 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+        _t40 = _t32*_t38 + _t36*_t39
+        _t41 = J_theta_cart_left*_t26*_t26 + J_theta_cart_right*_t30*_t30 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+        _t42 = J_theta_cart*_t14*_t14 + 2.0*_t14*_t39 + _t41
+        _t43 = 0.207*_t5
+        _t44 = -0.207*_t6
         _t45 = 0.3*_t1
-        _t46 = _t9*(-_t15*_t24 - _t25*_t45)
-        _t47 = J_theta_cart_right*_t46
-        _t48 = _t9*(-_t15*_t27 - _t28*_t45)
-        _t49 = J_theta_cart_left*_t48
-        _t50 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-        _t51 = J_theta_cart*_t16 - 0.3*_t50
-        _t52 = _t14*_t51 + _t26*_t47 + _t29*_t49 + _t40 + _t42*_t5 + _t44*_t6
-        _t53 = _t16*_t50
-        _t54 = J_theta_tractor - 0.3*_t53
-        _t55 = _t16*_t51 + _t41*_t42 + _t43*_t44 + _t46*_t47 + _t48*_t49 + _t54
-        _t56 = _t38*_t55 - _t52*_t52
-        _t57 = _t19*_t19
-        _t58 = _t20*_t20
-        _t59 = 0.3*_t57
-        _t60 = -_t13*_t19
-        _t61 = -_t3*_t4*_t60
-        _t62 = -_t1*_t23 - _t2*_t21
-        _t63 = _t1*_t21 - _t2*_t23
-        _t64 = _t1*_t59 - _t2*_t61 - _t62
-        _t65 = _t1*_t61 + _t2*_t59 - _t63
-        _t66 = _t10*_t64
-        _t67 = _t9*(_t24*_t64 + _t25*_t65)
-        _t68 = _t9*(_t27*_t64 + _t28*_t65)
-        _t69 = _t34*_t66 - _t50*_t58
-        _t70 = _t34*_t58 + _t50*_t66
-        _t71 = K_theta_tractor_x_tractor*_t57 + _t69
-        _t72 = J_theta_cart_right*_t67
-        _t73 = J_theta_cart_left*_t68
-        _t74 = -K_theta_tractor_x_tractor*_t61 - 0.3*_t70
-        _t75 = J_theta_cart*_t66 + _t34*_t59 + _t50*_t61
-        _t76 = _t14*_t75 + _t26*_t72 + _t29*_t73 + _t71
-        _t77 = _t16*_t75 + _t46*_t72 + _t48*_t73 + _t74
-        _t78 = _t5*tau_right + _t6*tau_left - _t76
-        _t79 = _t41*tau_right + _t43*tau_left - _t77
-        _t80 = 1.0/_t56
-        _t81 = _t80*(-_t52*_t79 + _t55*_t78)
-        _t82 = _t80*(_t38*_t79 - _t52*_t78)
-        _t83 = _t41*_t82 + _t5*_t81
-        _t84 = _t43*_t82 + _t6*_t81
+        _t46 = _t9*(-_t15*_t28 - _t29*_t45)
+        _t47 = _t9*(-_t15*_t24 - _t25*_t45)
+        _t48 = J_theta_left*_t44*_t6 + J_theta_right*_t43*_t5 + _t27*_t47 + _t31*_t46
+        _t49 = K_theta_tractor_x_tractor_2 + _t48
+        _t50 = -_t14*_t33 + _t16*_t34 + _t16*_t39 + _t49
+        _t51 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t46*_t46 + J_theta_left*_t44*_t44 + J_theta_right*_t43*_t43
+        _t52 = J_theta_tractor + _t51
+        _t53 = J_theta_cart*_t16*_t16 - 0.6*_t16*_t32 + _t52
+        _t54 = _t42*_t53 - _t50*_t50
+        _t55 = _t20*_t20
+        _t56 = -_t1*_t23 - _t2*_t21
+        _t57 = _t1*_t21 - _t2*_t23
+        _t58 = _t1*_t36 - _t2*_t38 - _t56
+        _t59 = _t1*_t38 + _t2*_t36 - _t57
+        _t60 = _t10*_t58
+        _t61 = _t9*(_t28*_t58 + _t29*_t59)
+        _t62 = _t9*(_t24*_t58 + _t25*_t59)
+        _t63 = _t27*_t62 + _t31*_t61
+        _t64 = K_theta_tractor_x_tractor*_t35 + _t63
+        _t65 = _t14*_t40 - _t32*_t55 + _t34*_t60 + _t39*_t60 + _t64
+        _t66 = J_theta_cart_left*_t47*_t62 + J_theta_cart_right*_t46*_t61
+        _t67 = -K_theta_tractor_x_tractor*_t38 + _t66
+        _t68 = J_theta_cart*_t16*_t60 + _t16*_t40 - _t33*_t60 - 0.3*_t39*_t55 + _t67
+        _t69 = _t5*tau_right + _t6*tau_left - _t65
+        _t70 = _t43*tau_right + _t44*tau_left - _t68
+        _t71 = 1.0/_t54
+        _t72 = _t71*(-_t50*_t70 + _t53*_t69)
+        _t73 = _t71*(_t42*_t70 - _t50*_t69)
+        _t74 = _t43*_t73 + _t5*_t72
+        _t75 = _t44*_t73 + _t6*_t72
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -595,11 +567,11 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires J_x_tractor > 0")
-    if not (_t38 > 0.0):
+    if not (_t42 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t56 > 0.0):
+    if not (_t54 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    wheel_accels = np.array([_t83, _t84])
+    wheel_accels = np.array([_t74, _t75])
     if not np.all(np.isfinite(wheel_accels)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of minimal_forward_dynamics is not finite")
     return wheel_accels
@@ -622,7 +594,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         A: array of 100 (shape 10x10, row-major). 10x10 row-major
         B: array of 20 (shape 10x2, row-major). 10x2 row-major
 
-    operations after CSE: 198 add, 379 mul, 3 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 195 add, 379 mul, 3 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -679,206 +651,196 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t34 = -_t1*_t31 + _t2*_t33
     _t35 = _t1*_t33 + _t2*_t31
     _t36 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t37 = _t23*_t36
-    _t38 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t39 = _t23*_t38
-    _t40 = _t24*_t24
-    _t41 = _t25 - _t34
-    _t42 = _t10*_t41
-    _t43 = -_t36*_t42 + _t38*_t40
-    _t44 = _t36*_t40 + _t38*_t42
-    _t45 = math.cos(theta_tractor)
-    _t46 = math.sin(theta_tractor)
-    _t47 = -0.6*radius_cart_left
-    _t48 = _t47*_t9
-    _t49 = 0.2*radius_cart_left
-    _t50 = _t49*_t9
-    _t51 = -0.6*radius_cart_right
-    _t52 = _t51*_t9
-    _t53 = -0.2*radius_cart_right
-    _t54 = _t53*_t9
-    _t55 = 2.0*_t24
-    _t56 = -_t15 - _t20
-    _t57 = _t26 - _t28
-    _t58 = _t9*(_t1*_t49 + _t2*_t47)
-    _t59 = _t9*(_t1*_t53 + _t2*_t51)
-    _t60 = K_theta_tractor_x_tractor_2 + _t37
-    _t61 = 0.207*_t5
-    _t62 = J_theta_right*_t61
-    _t63 = -0.207*_t6
-    _t64 = J_theta_left*_t63
-    _t65 = 0.3*_t1
-    _t66 = _t9*(-_t22*_t49 - _t47*_t65)
-    _t67 = J_theta_cart_right*_t66
-    _t68 = _t9*(-_t22*_t53 - _t51*_t65)
-    _t69 = J_theta_cart_left*_t68
-    _t70 = J_theta_cart*_t23 - 0.3*_t38
-    _t71 = _t21*_t70 + _t5*_t62 + _t58*_t67 + _t59*_t69 + _t6*_t64 + _t60
-    _t72 = J_theta_right*_t5
-    _t73 = J_theta_left*_t6
-    _t74 = J_theta_cart_right*_t58
-    _t75 = J_theta_cart_left*_t59
-    _t76 = _t21*_t36
-    _t77 = J_x_tractor + _t76
-    _t78 = J_theta_cart*_t21 + _t36
-    _t79 = _t21*_t78 + _t5*_t72 + _t58*_t74 + _t59*_t75 + _t6*_t73 + _t77
-    _t80 = J_theta_tractor - 0.3*_t39
-    _t81 = _t23*_t70 + _t61*_t62 + _t63*_t64 + _t66*_t67 + _t68*_t69 + _t80
-    _t82 = -_t71*_t71 + _t79*_t81
-    _t83 = 1.0/_t82
-    _t84 = _t83
-    _t85 = _t71*_t84
-    _t86 = K_theta_tractor_x_tractor*_t30 - _t43
-    _t87 = _t27 - _t29
-    _t88 = _t35 - _t87
-    _t89 = _t9*(_t41*_t49 + _t47*_t88)
-    _t90 = J_theta_cart_right*_t89
-    _t91 = _t9*(_t41*_t53 + _t51*_t88)
-    _t92 = J_theta_cart_left*_t91
-    _t93 = J_theta_cart*_t42 + _t31*_t36 + _t33*_t38
-    _t94 = _t21*_t93 + _t58*_t90 + _t59*_t92 + _t86
-    _t95 = _t5*tau_right + _t6*tau_left - _t94
-    _t96 = _t84*_t95
-    _t97 = _t81*_t84
-    _t98 = -K_theta_tractor_x_tractor*_t33 - 0.3*_t44
-    _t99 = _t23*_t93 + _t66*_t90 + _t68*_t92 + _t98
-    _t100 = _t61*tau_right + _t63*tau_left - _t99
-    _t101 = _t100*_t84
-    _t102 = _t79*_t84
-    _t103 = 2.0*_t18
-    _t104 = _t1*_t24
-    _t105 = _t2*_t24
-    _t106 = _t12*_t5 + _t16*_t61
-    _t107 = _t12*_t6 + _t16*_t63
-    _t108 = _t13*_t5 + _t17*_t61
-    _t109 = _t13*_t6 + _t17*_t63
-    _t110 = _t14*_t45
-    _t111 = _t14*_t46
-    _t112 = _t12*_t45
-    _t113 = _t13*_t45
-    _t114 = _t12*_t46
-    _t115 = _t13*_t46
-    _t116 = -_t10*_t2
-    _t117 = _t10*_t65
-    _t118 = _t116*_t14 + _t117*_t18
-    _t119 = _t12*_t21 + _t16*_t23
-    _t120 = _t13*_t21 + _t17*_t23
-    _t121 = _t1*_t48 - _t2*_t50
-    _t122 = -_t22*_t48 + _t49*_t65*_t9
-    _t123 = _t121*_t14 + _t122*_t18
-    _t124 = _t12*_t58 + _t16*_t66
-    _t125 = _t13*_t58 + _t17*_t66
-    _t126 = _t1*_t52 - _t2*_t54
-    _t127 = -_t22*_t52 + _t53*_t65*_t9
-    _t128 = _t126*_t14 + _t127*_t18
-    _t129 = _t12*_t59 + _t16*_t68
-    _t130 = _t13*_t59 + _t17*_t68
-    _t131 = _t117*_t36 + _t39
-    _t132 = J_theta_cart_right*_t122
-    _t133 = J_theta_cart_left*_t127
-    _t134 = J_theta_cart*_t117 + 0.3*_t36
-    _t135 = _t116*_t70 + _t121*_t67 + _t126*_t69 + _t131 + _t132*_t58 + _t133*_t59 + _t134*_t21
-    _t136 = _t117*_t38 - _t37
-    _t137 = -0.3*_t136
-    _t138 = _t117*_t70 + _t122*_t67 + _t127*_t69 + _t132*_t66 + _t133*_t68 + _t134*_t23 + _t137
-    _t139 = _t118*_t55
-    _t140 = _t118*_t56 - _t27 + _t29
-    _t141 = -_t140 - _t35
-    _t142 = _t10*_t141
-    _t143 = -_t139*_t38 + _t142*_t36 + _t44
-    _t144 = _t118*_t57 - _t25
-    _t145 = -_t144 - _t34
-    _t146 = _t141*_t50 + _t145*_t48
-    _t147 = J_theta_cart_right*_t146
-    _t148 = _t141*_t54 + _t145*_t52
-    _t149 = J_theta_cart_left*_t148
-    _t150 = J_theta_cart*_t142 + _t31*_t38 - _t33*_t36
-    _t151 = _t116*_t93 + _t121*_t90 + _t126*_t92 + _t143 + _t147*_t58 + _t149*_t59 + _t150*_t21
-    _t152 = _t139*_t36 + _t142*_t38 + _t43
-    _t153 = -0.3*_t152
-    _t154 = _t117*_t93 + _t122*_t90 + _t127*_t92 + _t147*_t66 + _t149*_t68 + _t150*_t23 + _t153
-    _t155 = J_theta_cart_right*_t121
-    _t156 = J_theta_cart_left*_t126
-    _t157 = _t116*_t36 + _t21*_t38
-    _t158 = J_theta_cart*_t116 + _t38
-    _t159 = _t116*_t78 + _t121*_t74 + _t126*_t75 + _t155*_t58 + _t156*_t59 + _t157 + _t158*_t21
-    _t160 = -2.0*_t135*_t71 + _t138*_t79 + _t159*_t81
-    _t161 = -_t160*_t83*_t83
-    _t162 = -_t101*_t135 + _t138*_t96 - _t151*_t97 + _t154*_t85 + _t161*(-_t100*_t71 + _t81*_t95)
-    _t163 = _t101*_t159 - _t102*_t154 - _t135*_t96 + _t151*_t85 + _t161*(_t100*_t79 - _t71*_t95)
-    _t164 = _t162*_t5 + _t163*_t61
-    _t165 = _t119*_t55
-    _t166 = _t103*_t16
-    _t167 = 0.3*_t166
-    _t168 = -_t12*_t18 - _t14*_t16
-    _t169 = -_t11*_t168
-    _t170 = -0.3*_t16
-    _t171 = -_t104*_t170 - _t105*_t12 + _t119*_t56
-    _t172 = _t1*_t167 - _t169*_t2 - _t171
-    _t173 = _t10*_t172
-    _t174 = -_t165*_t38 + _t173*_t36
-    _t175 = K_theta_tractor_x_tractor*_t166 + _t174
-    _t176 = _t104*_t12 - _t105*_t170 + _t119*_t57
-    _t177 = _t1*_t169 + _t167*_t2 - _t176
-    _t178 = _t172*_t50 + _t177*_t48
-    _t179 = J_theta_cart_right*_t178
-    _t180 = _t172*_t54 + _t177*_t52
-    _t181 = J_theta_cart_left*_t180
-    _t182 = J_theta_cart*_t173 + _t167*_t36 + _t169*_t38
-    _t183 = _t175 + _t179*_t58 + _t181*_t59 + _t182*_t21
-    _t184 = _t165*_t36 + _t173*_t38
-    _t185 = -K_theta_tractor_x_tractor*_t169 - 0.3*_t184
-    _t186 = _t179*_t66 + _t181*_t68 + _t182*_t23 + _t185
-    _t187 = -_t183*_t97 + _t186*_t85
-    _t188 = -_t102*_t186 + _t183*_t71*_t84
-    _t189 = _t187*_t5 + _t188*_t61
-    _t190 = _t120*_t55
-    _t191 = _t103*_t17
-    _t192 = 0.3*_t191
-    _t193 = -_t13*_t18 - _t14*_t17
-    _t194 = -_t11*_t193
-    _t195 = -0.3*_t17
-    _t196 = -_t104*_t195 - _t105*_t13 + _t120*_t56
-    _t197 = _t1*_t192 - _t194*_t2 - _t196
-    _t198 = _t10*_t197
-    _t199 = -_t190*_t38 + _t198*_t36
-    _t200 = K_theta_tractor_x_tractor*_t191 + _t199
-    _t201 = _t104*_t13 - _t105*_t195 + _t120*_t57
-    _t202 = _t1*_t194 + _t192*_t2 - _t201
-    _t203 = _t197*_t50 + _t202*_t48
-    _t204 = J_theta_cart_right*_t203
-    _t205 = _t197*_t54 + _t202*_t52
-    _t206 = J_theta_cart_left*_t205
-    _t207 = J_theta_cart*_t198 + _t192*_t36 + _t194*_t38
-    _t208 = _t200 + _t204*_t58 + _t206*_t59 + _t207*_t21
-    _t209 = _t190*_t36 + _t198*_t38
-    _t210 = -K_theta_tractor_x_tractor*_t194 - 0.3*_t209
-    _t211 = _t204*_t66 + _t206*_t68 + _t207*_t23 + _t210
-    _t212 = -_t208*_t97 + _t211*_t85
-    _t213 = -_t102*_t211 + _t208*_t71*_t84
-    _t214 = _t212*_t5 + _t213*_t61
-    _t215 = _t162*_t6 + _t163*_t63
-    _t216 = _t187*_t6 + _t188*_t63
-    _t217 = _t212*_t6 + _t213*_t63
-    _t218 = _t5*_t81*_t84 - _t61*_t85
-    _t219 = _t102*_t61 - _t5*_t85
-    _t220 = _t218*_t5 + _t219*_t61
-    _t221 = _t6*_t81*_t84 - _t63*_t85
-    _t222 = _t102*_t63 - _t6*_t85
-    _t223 = _t221*_t5 + _t222*_t61
-    _t224 = _t218*_t6 + _t219*_t63
-    _t225 = _t221*_t6 + _t222*_t63
+    _t37 = 2.0*_t36
+    _t38 = -0.2*radius_cart_right
+    _t39 = -0.6*radius_cart_right
+    _t40 = _t9*(_t1*_t38 + _t2*_t39)
+    _t41 = J_theta_cart_left*_t40
+    _t42 = 0.2*radius_cart_left
+    _t43 = -0.6*radius_cart_left
+    _t44 = _t9*(_t1*_t42 + _t2*_t43)
+    _t45 = J_theta_cart_right*_t44
+    _t46 = _t23*_t36
+    _t47 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+    _t48 = 0.3*_t47
+    _t49 = J_theta_cart*_t21
+    _t50 = _t23*_t47
+    _t51 = _t25 - _t34
+    _t52 = _t10*_t51
+    _t53 = J_theta_cart*_t52
+    _t54 = _t31*_t36 + _t33*_t47
+    _t55 = _t27 - _t29
+    _t56 = _t35 - _t55
+    _t57 = _t9*(_t38*_t51 + _t39*_t56)
+    _t58 = J_theta_cart_left*_t57
+    _t59 = _t9*(_t42*_t51 + _t43*_t56)
+    _t60 = J_theta_cart_right*_t59
+    _t61 = _t24*_t24
+    _t62 = 0.3*_t61
+    _t63 = math.cos(theta_tractor)
+    _t64 = math.sin(theta_tractor)
+    _t65 = _t43*_t9
+    _t66 = _t42*_t9
+    _t67 = _t39*_t9
+    _t68 = _t38*_t9
+    _t69 = 2.0*_t24
+    _t70 = -_t15 - _t20
+    _t71 = _t26 - _t28
+    _t72 = _t36 + _t49
+    _t73 = _t53 + _t54
+    _t74 = 0.3*_t1
+    _t75 = _t9*(-_t22*_t38 - _t39*_t74)
+    _t76 = J_theta_cart_left*_t75
+    _t77 = _t9*(-_t22*_t42 - _t43*_t74)
+    _t78 = J_theta_cart_right*_t77
+    _t79 = 0.3*_t36
+    _t80 = J_theta_cart*_t23
+    _t81 = -_t48 + _t80
+    _t82 = _t21*_t47
+    _t83 = _t41*_t57 + _t45*_t59
+    _t84 = K_theta_tractor_x_tractor*_t30 + _t83
+    _t85 = _t21*_t53 + _t21*_t54 + _t36*_t52 - _t47*_t61 + _t84
+    _t86 = _t5*tau_right + _t6*tau_left - _t85
+    _t87 = J_theta_cart_left*_t40*_t40 + J_theta_cart_right*_t44*_t44 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
+    _t88 = J_theta_cart*_t21*_t21 + _t21*_t37 + _t87
+    _t89 = 0.207*_t5
+    _t90 = -0.207*_t6
+    _t91 = J_theta_left*_t6*_t90 + J_theta_right*_t5*_t89 + _t41*_t75 + _t45*_t77
+    _t92 = K_theta_tractor_x_tractor_2 + _t91
+    _t93 = -_t21*_t48 + _t23*_t49 + _t46 + _t92
+    _t94 = J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t77*_t77 + J_theta_left*_t90*_t90 + J_theta_right*_t89*_t89
+    _t95 = J_theta_tractor + _t94
+    _t96 = J_theta_cart*_t23*_t23 - 0.6*_t50 + _t95
+    _t97 = _t88*_t96 - _t93*_t93
+    _t98 = 1.0/_t97
+    _t99 = _t98
+    _t100 = _t86*_t99
+    _t101 = _t93*_t99
+    _t102 = _t58*_t75 + _t60*_t77
+    _t103 = -K_theta_tractor_x_tractor*_t33 + _t102
+    _t104 = _t103 + _t23*_t53 + _t23*_t54 - _t36*_t62 - _t48*_t52
+    _t105 = -_t104 + _t89*tau_right + _t90*tau_left
+    _t106 = _t105*_t99
+    _t107 = _t96*_t99
+    _t108 = _t88*_t99
+    _t109 = 2.0*_t18
+    _t110 = _t1*_t24
+    _t111 = _t2*_t24
+    _t112 = _t21*_t36
+    _t113 = _t12*_t5 + _t16*_t89
+    _t114 = _t12*_t6 + _t16*_t90
+    _t115 = _t13*_t5 + _t17*_t89
+    _t116 = _t13*_t6 + _t17*_t90
+    _t117 = _t14*_t63
+    _t118 = _t14*_t64
+    _t119 = _t12*_t63
+    _t120 = _t13*_t63
+    _t121 = _t12*_t64
+    _t122 = _t13*_t64
+    _t123 = -_t10*_t2
+    _t124 = _t10*_t74
+    _t125 = _t123*_t14 + _t124*_t18
+    _t126 = _t12*_t21 + _t16*_t23
+    _t127 = _t13*_t21 + _t17*_t23
+    _t128 = _t1*_t65 - _t2*_t66
+    _t129 = -_t22*_t65 + _t42*_t74*_t9
+    _t130 = _t128*_t14 + _t129*_t18
+    _t131 = _t12*_t44 + _t16*_t77
+    _t132 = _t13*_t44 + _t17*_t77
+    _t133 = _t1*_t67 - _t2*_t68
+    _t134 = -_t22*_t67 + _t38*_t74*_t9
+    _t135 = _t133*_t14 + _t134*_t18
+    _t136 = _t12*_t40 + _t16*_t75
+    _t137 = _t13*_t40 + _t17*_t75
+    _t138 = _t125*_t69
+    _t139 = _t125*_t70 - _t27 + _t29
+    _t140 = -_t139 - _t35
+    _t141 = _t10*_t140
+    _t142 = _t125*_t71 - _t25
+    _t143 = -_t142 - _t34
+    _t144 = _t140*_t66 + _t143*_t65
+    _t145 = _t140*_t68 + _t143*_t67
+    _t146 = _t128*_t60 + _t133*_t58 + _t144*_t45 + _t145*_t41
+    _t147 = _t123*_t73 - _t138*_t47 + _t141*_t72 + _t146 - _t36*(_t21*_t33 - _t61) + _t47*(_t21*_t31 + _t52)
+    _t148 = _t129*_t60 + _t134*_t58 + _t144*_t78 + _t145*_t76
+    _t149 = _t124*_t73 - _t138*_t79 + _t141*_t81 + _t148 - _t36*(_t23*_t33 - 0.3*_t52) + _t47*(_t23*_t31 - _t62)
+    _t150 = 2.0*_t128*_t45 + 2.0*_t133*_t41
+    _t151 = _t123*(_t37 + 2.0*_t49) + _t150 + 2.0*_t82
+    _t152 = _t128*_t78 + _t129*_t45 + _t133*_t76 + _t134*_t41
+    _t153 = _t123*_t81 + _t124*_t72 + _t152 + _t21*_t79 + _t50
+    _t154 = 2.0*_t129*_t78 + 2.0*_t134*_t76
+    _t155 = _t124*(-0.6*_t47 + 2.0*_t80) + _t154 + 0.6*_t46
+    _t156 = _t151*_t96 - 2.0*_t153*_t93 + _t155*_t88
+    _t157 = -_t156*_t98*_t98
+    _t158 = _t100*_t155 + _t101*_t149 - _t106*_t153 - _t107*_t147 + _t157*(-_t105*_t93 + _t86*_t96)
+    _t159 = -_t100*_t153 + _t101*_t147 + _t106*_t151 - _t108*_t149 + _t157*(_t105*_t88 - _t86*_t93)
+    _t160 = _t158*_t5 + _t159*_t89
+    _t161 = _t126*_t69
+    _t162 = _t109*_t16
+    _t163 = 0.3*_t162
+    _t164 = -_t12*_t18 - _t14*_t16
+    _t165 = -_t11*_t164
+    _t166 = -0.3*_t16
+    _t167 = -_t110*_t166 - _t111*_t12 + _t126*_t70
+    _t168 = _t1*_t163 - _t165*_t2 - _t167
+    _t169 = _t10*_t168
+    _t170 = _t110*_t12 - _t111*_t166 + _t126*_t71
+    _t171 = _t1*_t165 + _t163*_t2 - _t170
+    _t172 = _t168*_t66 + _t171*_t65
+    _t173 = _t168*_t68 + _t171*_t67
+    _t174 = _t172*_t45 + _t173*_t41
+    _t175 = K_theta_tractor_x_tractor*_t162 + _t174
+    _t176 = _t112*_t163 - _t161*_t47 + _t165*_t82 + _t169*_t72 + _t175
+    _t177 = _t172*_t78 + _t173*_t76
+    _t178 = -K_theta_tractor_x_tractor*_t165 + _t177
+    _t179 = -_t161*_t79 + _t163*_t46 + _t165*_t50 + _t169*_t81 + _t178
+    _t180 = -_t107*_t176 + _t179*_t93*_t99
+    _t181 = _t101*_t176 - _t108*_t179
+    _t182 = _t180*_t5 + _t181*_t89
+    _t183 = _t127*_t69
+    _t184 = _t109*_t17
+    _t185 = 0.3*_t184
+    _t186 = -_t13*_t18 - _t14*_t17
+    _t187 = -_t11*_t186
+    _t188 = -0.3*_t17
+    _t189 = -_t110*_t188 - _t111*_t13 + _t127*_t70
+    _t190 = _t1*_t185 - _t187*_t2 - _t189
+    _t191 = _t10*_t190
+    _t192 = _t110*_t13 - _t111*_t188 + _t127*_t71
+    _t193 = _t1*_t187 + _t185*_t2 - _t192
+    _t194 = _t190*_t66 + _t193*_t65
+    _t195 = _t190*_t68 + _t193*_t67
+    _t196 = _t194*_t45 + _t195*_t41
+    _t197 = K_theta_tractor_x_tractor*_t184 + _t196
+    _t198 = _t112*_t185 - _t183*_t47 + _t187*_t82 + _t191*_t72 + _t197
+    _t199 = _t194*_t78 + _t195*_t76
+    _t200 = -K_theta_tractor_x_tractor*_t187 + _t199
+    _t201 = -_t183*_t79 + _t185*_t46 + _t187*_t50 + _t191*_t81 + _t200
+    _t202 = -_t107*_t198 + _t201*_t93*_t99
+    _t203 = _t101*_t198 - _t108*_t201
+    _t204 = _t202*_t5 + _t203*_t89
+    _t205 = _t158*_t6 + _t159*_t90
+    _t206 = _t180*_t6 + _t181*_t90
+    _t207 = _t202*_t6 + _t203*_t90
+    _t208 = -_t101*_t89 + _t107*_t5
+    _t209 = -_t101*_t5 + _t88*_t89*_t99
+    _t210 = _t208*_t5 + _t209*_t89
+    _t211 = -_t101*_t90 + _t107*_t6
+    _t212 = -_t101*_t6 + _t88*_t90*_t99
+    _t213 = _t211*_t5 + _t212*_t89
+    _t214 = _t208*_t6 + _t209*_t90
+    _t215 = _t211*_t6 + _t212*_t90
     A = np.array([
-        [0.0, 0.0, -_t111, 0.0, 0.0, 0.0, 0.0, 0.0, _t112, _t113],
-        [0.0, 0.0, _t110, 0.0, 0.0, 0.0, 0.0, 0.0, _t114, _t115],
+        [0.0, 0.0, -_t118, 0.0, 0.0, 0.0, 0.0, 0.0, _t119, _t120],
+        [0.0, 0.0, _t117, 0.0, 0.0, 0.0, 0.0, 0.0, _t121, _t122],
         [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t16, _t17],
-        [0.0, 0.0, _t118, -_t118, 0.0, 0.0, 0.0, 0.0, _t119, _t120],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t106, _t108],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t107, _t109],
-        [0.0, 0.0, _t123, -_t123, 0.0, 0.0, 0.0, 0.0, _t124, _t125],
-        [0.0, 0.0, _t128, -_t128, 0.0, 0.0, 0.0, 0.0, _t129, _t130],
-        [0.0, 0.0, _t164, -_t164, 0.0, 0.0, 0.0, 0.0, _t189, _t214],
-        [0.0, 0.0, _t215, -_t215, 0.0, 0.0, 0.0, 0.0, _t216, _t217],
+        [0.0, 0.0, _t125, -_t125, 0.0, 0.0, 0.0, 0.0, _t126, _t127],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t113, _t115],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t114, _t116],
+        [0.0, 0.0, _t130, -_t130, 0.0, 0.0, 0.0, 0.0, _t131, _t132],
+        [0.0, 0.0, _t135, -_t135, 0.0, 0.0, 0.0, 0.0, _t136, _t137],
+        [0.0, 0.0, _t160, -_t160, 0.0, 0.0, 0.0, 0.0, _t182, _t204],
+        [0.0, 0.0, _t205, -_t205, 0.0, 0.0, 0.0, 0.0, _t206, _t207],
     ])
     B = np.array([
         [0.0, 0.0],
@@ -889,8 +851,8 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         [0.0, 0.0],
         [0.0, 0.0],
         [0.0, 0.0],
-        [_t220, _t223],
-        [_t224, _t225],
+        [_t210, _t213],
+        [_t214, _t215],
     ])
     return A, B
 
@@ -918,7 +880,7 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         longitudinal: array of 2 (shape 2x1, row-major). N, per driven wheel
         lateral: array of 2 (shape 2x1, row-major). N, per no-side-slip row (axle)
 
-    operations after CSE: 91 add, 165 mul, 5 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 91 add, 174 mul, 5 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -968,94 +930,85 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t24 = _t19*_t23
         _t25 = -0.3*_t14
         _t26 = _t23*_t25
-        _t27 = _t23*_t23
-        _t28 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-        _t29 = _t27*_t28
-        _t30 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t31 = _t27*_t30
-        _t32 = K_theta_tractor_x_tractor*_t15
-        _t33 = -_t14*_t19
-        _t34 = -_t33*_t4*_t5
-        _t35 = K_theta_tractor_x_tractor*_t34
-        _t36 = 0.2*radius_cart_left
-        _t37 = -0.6*radius_cart_left
-        _t38 = _t10*(_t1*_t36 + _t2*_t37)
-        _t39 = -0.2*radius_cart_right
-        _t40 = -0.6*radius_cart_right
-        _t41 = _t10*(_t1*_t39 + _t2*_t40)
-        _t42 = J_theta_right*_t6
-        _t43 = J_theta_left*_t7
-        _t44 = J_theta_cart_right*_t38
-        _t45 = J_theta_cart_left*_t41
-        _t46 = _t20*_t30
-        _t47 = J_x_tractor + _t46
-        _t48 = J_theta_cart*_t20 + _t30
-        _t49 = _t20*_t48 + _t38*_t44 + _t41*_t45 + _t42*_t6 + _t43*_t7 + _t47
-        _t50 = _t22*_t30
-        _t51 = K_theta_tractor_x_tractor_2 + _t50
-        _t52 = 0.207*_t6
-        _t53 = J_theta_right*_t52
-        _t54 = -0.207*_t7
-        _t55 = J_theta_left*_t54
-        _t56 = _t10*(-_t21*_t36 - _t3*_t37)
-        _t57 = J_theta_cart_right*_t56
-        _t58 = _t10*(-_t21*_t39 - _t3*_t40)
-        _t59 = J_theta_cart_left*_t58
-        _t60 = J_theta_cart*_t22 - 0.3*_t28
-        _t61 = _t20*_t60 + _t38*_t57 + _t41*_t59 + _t51 + _t53*_t6 + _t55*_t7
-        _t62 = _t22*_t28
-        _t63 = J_theta_tractor - 0.3*_t62
-        _t64 = _t22*_t60 + _t52*_t53 + _t54*_t55 + _t56*_t57 + _t58*_t59 + _t63
-        _t65 = _t49*_t64 - _t61*_t61
-        _t66 = -_t1*_t26 - _t2*_t24
-        _t67 = _t1*_t16 - _t2*_t34 - _t66
-        _t68 = _t11*_t67
-        _t69 = -_t29 + _t30*_t68
-        _t70 = _t32 + _t69
-        _t71 = _t1*_t24 - _t2*_t26
-        _t72 = _t1*_t34 + _t16*_t2 - _t71
-        _t73 = _t10*(_t36*_t67 + _t37*_t72)
-        _t74 = J_theta_cart_right*_t73
-        _t75 = _t10*(_t39*_t67 + _t40*_t72)
-        _t76 = J_theta_cart_left*_t75
-        _t77 = J_theta_cart*_t68 + _t16*_t30 + _t28*_t34
-        _t78 = _t20*_t77 + _t38*_t74 + _t41*_t76 + _t70
-        _t79 = _t6*tau_right + _t7*tau_left - _t78
-        _t80 = _t28*_t68 + _t31
-        _t81 = -_t35 - 0.3*_t80
-        _t82 = _t22*_t77 + _t56*_t74 + _t58*_t76 + _t81
-        _t83 = _t52*tau_right + _t54*tau_left - _t82
-        _t84 = 1.0/_t65
-        _t85 = _t84*(-_t61*_t83 + _t64*_t79)
-        _t86 = _t84*(_t49*_t83 - _t61*_t79)
-        _t87 = _t20*_t85 + _t22*_t86 + _t68
-        _t88 = -_t29 + _t30*_t87
-        _t89 = K_theta_tractor_x_tractor_2*_t86 + _t32 + _t88
-        _t90 = J_x_tractor*_t85 + _t89
-        _t91 = 1.0/radius_cart_right
-        _t92 = _t38*_t85 + _t56*_t86 + _t73
-        _t93 = J_theta_cart_right*_t92
-        _t94 = -_t91*_t93
-        _t95 = 1.0/radius_cart_left
-        _t96 = _t41*_t85 + _t58*_t86 + _t75
-        _t97 = J_theta_cart_left*_t96
-        _t98 = -_t95*_t97
-        _t99 = _t16 + _t85
-        _t100 = _t34 - 0.3*_t86
-        _t101 = J_theta_cart*_t87 + _t100*_t28 + _t30*_t99
-        _t102 = -_t101 + 0.2*_t94 - 0.2*_t98
-        _t103 = -1.6666666666666667*_t102
-        _t104 = _t1*_t103 + _t2*_t94 + _t2*_t98 - _t90
-        _t105 = 0.5*_t104
-        _t106 = _t28*_t87 + _t31
-        _t107 = J_theta_tractor*_t86 + K_theta_tractor_x_tractor_2*_t85 - 0.3*_t106 - _t35
-        _t108 = 0.3*_t103*_t2 - _t107 - _t3*_t94 - _t3*_t98
-        _t109 = 2.4154589371980677*_t108
-        _t110 = -K_theta_tractor_x_tractor*_t86 + K_theta_tractor_x_tractor_2*_t15 + _t106
-        _t111 = J_x_tractor*_t34 + _t110
-        _t112 = -_t105 + _t109
-        _t113 = -_t105 - _t109
-        _t114 = _t1*_t94 + _t1*_t98 - _t103*_t2 - _t111
+        _t27 = -0.2*radius_cart_right
+        _t28 = -0.6*radius_cart_right
+        _t29 = _t10*(_t1*_t27 + _t2*_t28)
+        _t30 = J_theta_cart_left*_t29
+        _t31 = 0.2*radius_cart_left
+        _t32 = -0.6*radius_cart_left
+        _t33 = _t10*(_t1*_t31 + _t2*_t32)
+        _t34 = J_theta_cart_right*_t33
+        _t35 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
+        _t36 = 0.3*_t35
+        _t37 = J_theta_cart*_t20
+        _t38 = K_theta_tractor_x_tractor*_t15
+        _t39 = _t23*_t23
+        _t40 = -_t35*_t39
+        _t41 = -_t14*_t19
+        _t42 = -_t4*_t41*_t5
+        _t43 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+        _t44 = _t16*_t43 + _t35*_t42
+        _t45 = K_theta_tractor_x_tractor*_t42
+        _t46 = _t39*_t43
+        _t47 = J_theta_cart_left*_t29*_t29 + J_theta_cart_right*_t33*_t33 + J_theta_left*_t7*_t7 + J_theta_right*_t6*_t6 + J_x_tractor
+        _t48 = J_theta_cart*_t20*_t20 + 2.0*_t20*_t43 + _t47
+        _t49 = 0.207*_t6
+        _t50 = -0.207*_t7
+        _t51 = _t10*(-_t21*_t31 - _t3*_t32)
+        _t52 = _t10*(-_t21*_t27 - _t28*_t3)
+        _t53 = J_theta_left*_t50*_t7 + J_theta_right*_t49*_t6 + _t30*_t52 + _t34*_t51
+        _t54 = K_theta_tractor_x_tractor_2 + _t53
+        _t55 = -_t20*_t36 + _t22*_t37 + _t22*_t43 + _t54
+        _t56 = J_theta_cart_left*_t52*_t52 + J_theta_cart_right*_t51*_t51 + J_theta_left*_t50*_t50 + J_theta_right*_t49*_t49
+        _t57 = J_theta_tractor + _t56
+        _t58 = J_theta_cart*_t22*_t22 - 0.6*_t22*_t35 + _t57
+        _t59 = _t48*_t58 - _t55*_t55
+        _t60 = -_t1*_t26 - _t2*_t24
+        _t61 = _t1*_t16 - _t2*_t42 - _t60
+        _t62 = _t11*_t61
+        _t63 = _t1*_t24 - _t2*_t26
+        _t64 = _t1*_t42 + _t16*_t2 - _t63
+        _t65 = _t10*(_t31*_t61 + _t32*_t64)
+        _t66 = _t10*(_t27*_t61 + _t28*_t64)
+        _t67 = _t30*_t66 + _t34*_t65
+        _t68 = _t38 + _t67
+        _t69 = _t20*_t44 + _t37*_t62 + _t40 + _t43*_t62 + _t68
+        _t70 = _t6*tau_right - _t69 + _t7*tau_left
+        _t71 = J_theta_cart_left*_t52*_t66 + J_theta_cart_right*_t51*_t65
+        _t72 = -_t45 + _t71
+        _t73 = J_theta_cart*_t22*_t62 + _t22*_t44 - _t36*_t62 - 0.3*_t46 + _t72
+        _t74 = _t49*tau_right + _t50*tau_left - _t73
+        _t75 = 1.0/_t59
+        _t76 = _t75*(-_t55*_t74 + _t58*_t70)
+        _t77 = _t75*(_t48*_t74 - _t55*_t70)
+        _t78 = _t20*_t76 + _t22*_t77 + _t62
+        _t79 = _t40 + _t43*_t78
+        _t80 = K_theta_tractor_x_tractor_2*_t77 + _t38 + _t79
+        _t81 = J_x_tractor*_t76 + _t80
+        _t82 = 1.0/radius_cart_right
+        _t83 = _t33*_t76 + _t51*_t77 + _t65
+        _t84 = J_theta_cart_right*_t83
+        _t85 = -_t82*_t84
+        _t86 = 1.0/radius_cart_left
+        _t87 = _t29*_t76 + _t52*_t77 + _t66
+        _t88 = J_theta_cart_left*_t87
+        _t89 = -_t86*_t88
+        _t90 = _t16 + _t76
+        _t91 = _t42 - 0.3*_t77
+        _t92 = J_theta_cart*_t78 + _t35*_t91 + _t43*_t90
+        _t93 = 0.2*_t85 - 0.2*_t89 - _t92
+        _t94 = -1.6666666666666667*_t93
+        _t95 = _t1*_t94 + _t2*_t85 + _t2*_t89 - _t81
+        _t96 = 0.5*_t95
+        _t97 = _t35*_t78 + _t46
+        _t98 = J_theta_tractor*_t77 + K_theta_tractor_x_tractor_2*_t76 - _t45 - 0.3*_t97
+        _t99 = 0.3*_t2*_t94 - _t3*_t85 - _t3*_t89 - _t98
+        _t100 = 2.4154589371980677*_t99
+        _t101 = -K_theta_tractor_x_tractor*_t77 + K_theta_tractor_x_tractor_2*_t15 + _t97
+        _t102 = J_x_tractor*_t42 + _t101
+        _t103 = _t100 - _t96
+        _t104 = -_t100 - _t96
+        _t105 = _t1*_t85 + _t1*_t89 - _t102 - _t2*_t94
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -1080,12 +1033,12 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires J_x_tractor > 0")
-    if not (_t49 > 0.0):
+    if not (_t48 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires (S^T M S)[0][0] > 0")
-    if not (_t65 > 0.0):
+    if not (_t59 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires det(S^T M S) > 0: a positive-definite model")
-    longitudinal = np.array([_t113, _t112])
-    lateral = np.array([-_t114, -_t103])
+    longitudinal = np.array([_t104, _t103])
+    lateral = np.array([-_t105, -_t94])
     if not np.all(np.isfinite(longitudinal)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
     if not np.all(np.isfinite(lateral)):

@@ -31,7 +31,7 @@ void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const traile
 }
 
 /* trailer2_minimal_tde: documented in trailer2_laws.h.
-   operations after CSE: 73 add, 152 mul, 4 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 72 add, 163 mul, 4 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_prev,
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
@@ -65,112 +65,104 @@ void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_p
     const trailer2_real_t _t17 = -TRAILER2_LIT(0.6)*_t5;
     const trailer2_real_t _t18 = TRAILER2_LIT(1.0)/_t17;
     const trailer2_real_t _t19 = _t18*_t5;
-    const trailer2_real_t span_1 = span[0];
-    const trailer2_real_t _t20 = TRAILER2_LIT(1.0)/span_1;
-    const trailer2_real_t qd_now0 = qdot_now[0];
-    const trailer2_real_t qd_then0 = qdot_then[0];
-    const trailer2_real_t _t21 = _t20*(qd_now0 - qd_then0);
-    const trailer2_real_t qd_now1 = qdot_now[1];
-    const trailer2_real_t qd_then1 = qdot_then[1];
-    const trailer2_real_t _t22 = _t20*(qd_now1 - qd_then1);
-    const trailer2_real_t _t23 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t24 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t25 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t26 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*radius_cart_left;
-    const trailer2_real_t _t28 = -TRAILER2_LIT(0.6)*radius_cart_left;
-    const trailer2_real_t _t29 = -TRAILER2_LIT(0.2)*radius_cart_right;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(0.6)*radius_cart_right;
-    const trailer2_real_t _t31 = TRAILER2_LIT(0.2)*radius_cart2_left;
-    const trailer2_real_t _t32 = -TRAILER2_LIT(0.6)*radius_cart2_left;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(0.2)*radius_cart2_right;
-    const trailer2_real_t _t34 = -TRAILER2_LIT(0.6)*radius_cart2_right;
-    const trailer2_real_t _t35 = TRAILER2_LIT(0.207)*_t2;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(0.207)*_t3;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t37 = J_theta_right*_t2;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t38 = J_theta_left*_t3;
-    const trailer2_real_t _t39 = J_theta_right*_t35;
-    const trailer2_real_t _t40 = J_theta_left*_t36;
-    const trailer2_real_t _t41 = -TRAILER2_LIT(0.3)*_t8;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(0.3)*_t7;
-    const trailer2_real_t _t43 = -_t11*_t7;
-    const trailer2_real_t _t44 = _t10*(-_t27*_t7 + _t28*_t8);
-    const trailer2_real_t _t45 = _t10*(-_t29*_t7 + _t30*_t8);
-    const trailer2_real_t _t46 = -_t12*_t43 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t47 = -_t13*_t43;
-    const trailer2_real_t _t48 = -_t15*_t46 - _t16*_t47;
-    const trailer2_real_t _t49 = -_t15*_t47 + _t16*_t46;
-    const trailer2_real_t _t50 = _t19*_t48;
-    const trailer2_real_t _t51 = _t18*(_t31*_t48 + _t32*_t49);
-    const trailer2_real_t _t52 = _t18*(_t33*_t48 + _t34*_t49);
-    const trailer2_real_t _t53 = -_t11*_t41;
-    const trailer2_real_t _t54 = _t10*(-_t27*_t41 - _t28*_t42);
-    const trailer2_real_t _t55 = _t10*(-_t29*_t41 - _t30*_t42);
-    const trailer2_real_t _t56 = -_t12*_t53;
-    const trailer2_real_t _t57 = -_t13*_t53 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t58 = -_t15*_t56 - _t16*_t57;
-    const trailer2_real_t _t59 = -_t15*_t57 + _t16*_t56;
-    const trailer2_real_t _t60 = _t19*_t58;
-    const trailer2_real_t _t61 = _t18*(_t31*_t58 + _t32*_t59);
-    const trailer2_real_t _t62 = _t18*(_t33*_t58 + _t34*_t59);
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t63 = -K_theta_cart_x_tractor*_t7 + K_theta_cart_x_tractor_2*_t8;
-    const trailer2_real_t _t64 = -K_theta_cart_x_tractor*_t8 - K_theta_cart_x_tractor_2*_t7;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t65 = -K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const trailer2_real_t _t66 = -K_theta_cart2_x_tractor*_t16 - K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t67 = _t50*_t65;
-    const trailer2_real_t _t68 = _t50*_t66;
-    const trailer2_real_t _t69 = _t43*_t63 + _t67;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t70 = J_theta_cart_right*_t44;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t71 = J_theta_cart_left*_t45;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t72 = J_theta_cart2_right*_t51;
+    const trailer2_real_t _t20 = -K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t21 = -_t11*_t7;
+    const trailer2_real_t _t22 = -_t12*_t21 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t23 = _t20*_t22;
+    const trailer2_real_t _t24 = -K_theta_cart2_x_tractor*_t16 - K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t25 = -_t13*_t21;
+    const trailer2_real_t _t26 = _t24*_t25;
+    const trailer2_real_t _t27 = -TRAILER2_LIT(0.3)*_t8;
+    const trailer2_real_t _t28 = -_t11*_t27;
+    const trailer2_real_t _t29 = -_t12*_t28;
+    const trailer2_real_t _t30 = _t20*_t29;
+    const trailer2_real_t _t31 = -_t13*_t28 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t32 = _t24*_t31;
+    const trailer2_real_t _t33 = _t30 + _t32;
+    const trailer2_real_t span_1 = span[0];
+    const trailer2_real_t _t34 = TRAILER2_LIT(1.0)/span_1;
+    const trailer2_real_t qd_now0 = qdot_now[0];
+    const trailer2_real_t qd_then0 = qdot_then[0];
+    const trailer2_real_t _t35 = _t34*(qd_now0 - qd_then0);
+    const trailer2_real_t qd_now1 = qdot_now[1];
+    const trailer2_real_t qd_then1 = qdot_then[1];
+    const trailer2_real_t _t36 = _t34*(qd_now1 - qd_then1);
+    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t40 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t42 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t44 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t45 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t46 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t47 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t48 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t49 = TRAILER2_LIT(0.207)*_t2;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(0.207)*_t3;
+    const trailer2_real_t _t51 = -TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t52 = _t10*(-_t41*_t7 + _t42*_t8);
+    const trailer2_real_t _t53 = _t10*(-_t43*_t7 + _t44*_t8);
+    const trailer2_real_t _t54 = -_t15*_t22 - _t16*_t25;
+    const trailer2_real_t _t55 = -_t15*_t25 + _t16*_t22;
+    const trailer2_real_t _t56 = _t19*_t54;
+    const trailer2_real_t _t57 = _t18*(_t45*_t54 + _t46*_t55);
+    const trailer2_real_t _t58 = _t18*(_t47*_t54 + _t48*_t55);
+    const trailer2_real_t _t59 = _t10*(-_t27*_t41 - _t42*_t51);
+    const trailer2_real_t _t60 = _t10*(-_t27*_t43 - _t44*_t51);
+    const trailer2_real_t _t61 = -_t15*_t29 - _t16*_t31;
+    const trailer2_real_t _t62 = -_t15*_t31 + _t16*_t29;
+    const trailer2_real_t _t63 = _t19*_t61;
+    const trailer2_real_t _t64 = _t18*(_t45*_t61 + _t46*_t62);
+    const trailer2_real_t _t65 = _t18*(_t47*_t61 + _t48*_t62);
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t66 = -K_theta_cart_x_tractor*_t7 + K_theta_cart_x_tractor_2*_t8;
+    const trailer2_real_t _t67 = -K_theta_cart_x_tractor*_t8 - K_theta_cart_x_tractor_2*_t7;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t73 = J_theta_cart2_left*_t52;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
     const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t74 = J_x_tractor + _t69;
+    const trailer2_real_t _t68 = J_theta_cart2_left*_t58*_t58 + J_theta_cart2_right*_t57*_t57
+            + J_theta_cart_left*_t53*_t53 + J_theta_cart_right*_t52*_t52 + J_theta_left*_t3*_t3
+            + J_theta_right*_t2*_t2 + J_x_tractor;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t75 = J_theta_cart*_t43 - _t12*_t67 - _t13*_t68 + _t63;
+    const trailer2_real_t _t69 = J_theta_cart*_t21*_t21 + TRAILER2_LIT(2.0)*_t21*_t66 + _t68;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t76 = J_theta_cart2*_t50 + _t46*_t65 + _t47*_t66;
-    const trailer2_real_t _t77 = _t60*_t65;
-    const trailer2_real_t _t78 = _t60*_t66;
-    const trailer2_real_t _t79 = _t53*_t63 + _t77;
-    const trailer2_real_t _t80 = _t53*_t64 + _t78;
+    const trailer2_real_t _t70 = J_theta_cart2*_t56*_t56 + _t23*_t56 + _t26*_t56
+            + _t56*(_t23 + _t26) + _t69;
+    const trailer2_real_t _t71 = J_theta_cart2_left*_t58*_t65 + J_theta_cart2_right*_t57*_t64
+            + J_theta_cart_left*_t53*_t60 + J_theta_cart_right*_t52*_t59 + J_theta_left*_t3*_t50
+            + J_theta_right*_t2*_t49;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t81 = K_theta_tractor_x_tractor_2 + _t79;
-    const trailer2_real_t _t82 = J_theta_cart_right*_t54;
-    const trailer2_real_t _t83 = J_theta_cart_left*_t55;
-    const trailer2_real_t _t84 = J_theta_cart2_right*_t61;
-    const trailer2_real_t _t85 = J_theta_cart2_left*_t62;
+    const trailer2_real_t _t72 = K_theta_tractor_x_tractor_2 + _t71;
+    const trailer2_real_t _t73 = J_theta_cart*_t21*_t28 - TRAILER2_LIT(0.3)*_t21*_t67 + _t28*_t66
+            + _t72;
+    const trailer2_real_t _t74 = J_theta_cart2*_t56*_t63 + _t23*_t63 + _t26*_t63 + _t33*_t56 + _t73;
+    const trailer2_real_t _t75 = J_theta_cart2_left*_t65*_t65 + J_theta_cart2_right*_t64*_t64
+            + J_theta_cart_left*_t60*_t60 + J_theta_cart_right*_t59*_t59 + J_theta_left*_t50*_t50
+            + J_theta_right*_t49*_t49;
     const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t86 = J_theta_tractor - TRAILER2_LIT(0.3)*_t80;
-    const trailer2_real_t _t87 = J_theta_cart*_t53 - _t12*_t77 - _t13*_t78 - TRAILER2_LIT(0.3)*_t64;
-    const trailer2_real_t _t88 = J_theta_cart2*_t60 + _t56*_t65 + _t57*_t66;
-    const trailer2_real_t _t89 = _t2*_t37 + _t3*_t38 + _t43*_t75 + _t44*_t70 + _t45*_t71 + _t50*_t76
-            + _t51*_t72 + _t52*_t73 + _t74;
-    const trailer2_real_t _t90 = _t2*_t39 + _t3*_t40 + _t43*_t87 + _t44*_t82 + _t45*_t83 + _t50*_t88
-            + _t51*_t84 + _t52*_t85 + _t81;
-    const trailer2_real_t _t91 = _t35*_t39 + _t36*_t40 + _t53*_t87 + _t54*_t82 + _t55*_t83
-            + _t60*_t88 + _t61*_t84 + _t62*_t85 + _t86;
-    const trailer2_real_t _t92 = _t23*_t90 + _t25*_t89;
-    const trailer2_real_t _t93 = _t24*_t90 + _t26*_t89;
-    const trailer2_real_t _t94 = _t23*_t91 + _t25*_t90;
-    const trailer2_real_t _t95 = _t24*_t91 + _t26*_t90;
-    const trailer2_real_t _t96 = _t23*_t94 + _t25*_t92;
-    const trailer2_real_t _t97 = _t23*_t95 + _t25*_t93;
-    const trailer2_real_t _t98 = _t24*_t95 + _t26*_t93;
+    const trailer2_real_t _t76 = J_theta_tractor + _t75;
+    const trailer2_real_t _t77 = J_theta_cart*_t28*_t28 - TRAILER2_LIT(0.6)*_t28*_t67 + _t76;
+    const trailer2_real_t _t78 = J_theta_cart2*_t63*_t63 + _t30*_t63 + _t32*_t63 + _t33*_t63 + _t77;
+    const trailer2_real_t _t79 = _t37*_t74 + _t39*_t70;
+    const trailer2_real_t _t80 = _t38*_t74 + _t40*_t70;
+    const trailer2_real_t _t81 = _t37*_t78 + _t39*_t74;
+    const trailer2_real_t _t82 = _t38*_t78 + _t40*_t74;
+    const trailer2_real_t _t83 = _t37*_t81 + _t39*_t79;
+    const trailer2_real_t _t84 = _t37*_t82 + _t39*_t80;
+    const trailer2_real_t _t85 = _t38*_t82 + _t40*_t80;
     const trailer2_real_t up0 = u_prev[0];
     const trailer2_real_t up1 = u_prev[1];
-    H1hat[0] = -_t21*_t96 - _t22*_t97 + up0;
-    H1hat[1] = -_t21*_t97 - _t22*_t98 + up1;
+    H1hat[0] = -_t35*_t83 - _t36*_t84 + up0;
+    H1hat[1] = -_t35*_t84 - _t36*_t85 + up1;
 }
 
 /* trailer2_minimal_tde_mhat: documented in trailer2_laws.h.
@@ -185,7 +177,7 @@ void trailer2_minimal_tde_mhat(const trailer2_params_t *p, const trailer2_real_t
 }
 
 /* trailer2_minimal_minv_norm: documented in trailer2_laws.h.
-   operations after CSE: 70 add, 152 mul, 4 div, 4 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 69 add, 163 mul, 4 div, 4 sin/cos, 1 sqrt, 1 fabs */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm)
 {
@@ -219,103 +211,95 @@ void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_
     const trailer2_real_t _t18 = -TRAILER2_LIT(0.6)*_t17;
     const trailer2_real_t _t19 = TRAILER2_LIT(1.0)/_t18;
     const trailer2_real_t _t20 = _t17*_t19;
-    const trailer2_real_t _t21 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t22 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t24 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t25 = _t11*_t2;
-    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*radius_cart_left;
-    const trailer2_real_t _t27 = -TRAILER2_LIT(0.6)*radius_cart_left;
-    const trailer2_real_t _t28 = _t10*(_t2*_t26 + _t27*_t3);
-    const trailer2_real_t _t29 = -TRAILER2_LIT(0.2)*radius_cart_right;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(0.6)*radius_cart_right;
-    const trailer2_real_t _t31 = _t10*(_t2*_t29 + _t3*_t30);
-    const trailer2_real_t _t32 = _t12*_t25 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t33 = -_t13*_t25;
-    const trailer2_real_t _t34 = _t15*_t32 - _t16*_t33;
-    const trailer2_real_t _t35 = _t20*_t34;
-    const trailer2_real_t _t36 = _t15*_t33 + _t16*_t32;
-    const trailer2_real_t _t37 = TRAILER2_LIT(0.2)*radius_cart2_left;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(0.6)*radius_cart2_left;
-    const trailer2_real_t _t39 = _t19*(_t34*_t37 + _t36*_t38);
-    const trailer2_real_t _t40 = -TRAILER2_LIT(0.2)*radius_cart2_right;
-    const trailer2_real_t _t41 = -TRAILER2_LIT(0.6)*radius_cart2_right;
-    const trailer2_real_t _t42 = _t19*(_t34*_t40 + _t36*_t41);
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t43 = J_theta_right*_t6;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t44 = J_theta_left*_t7;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t45 = J_theta_cart_right*_t28;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t46 = J_theta_cart_left*_t31;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t47 = J_theta_cart2_right*_t39;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t48 = J_theta_cart2_left*_t42;
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t50 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const trailer2_real_t _t51 = _t35*_t50;
-    const trailer2_real_t _t52 = _t25*_t49 + _t51;
+    const trailer2_real_t _t21 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t22 = _t11*_t2;
+    const trailer2_real_t _t23 = _t12*_t22 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t24 = _t21*_t23;
+    const trailer2_real_t _t25 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t26 = -_t13*_t22;
+    const trailer2_real_t _t27 = _t25*_t26;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t _t29 = -_t11*_t28;
+    const trailer2_real_t _t30 = _t12*_t29;
+    const trailer2_real_t _t31 = _t21*_t30;
+    const trailer2_real_t _t32 = -_t13*_t29 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t33 = _t25*_t32;
+    const trailer2_real_t _t34 = _t31 + _t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t36 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t37 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t38 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t39 = _t15*_t23 - _t16*_t26;
+    const trailer2_real_t _t40 = _t20*_t39;
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t41 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t42 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t44 = _t10*(_t2*_t42 + _t3*_t43);
+    const trailer2_real_t _t45 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t46 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t47 = _t10*(_t2*_t45 + _t3*_t46);
+    const trailer2_real_t _t48 = _t15*_t26 + _t16*_t23;
+    const trailer2_real_t _t49 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t51 = _t19*(_t39*_t49 + _t48*_t50);
+    const trailer2_real_t _t52 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t53 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t54 = _t19*(_t39*_t52 + _t48*_t53);
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
     const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t53 = J_x_tractor + _t52;
-    const trailer2_real_t _t54 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t55 = _t35*_t54;
+    const trailer2_real_t _t55 = J_theta_cart2_left*_t54*_t54 + J_theta_cart2_right*_t51*_t51
+            + J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t44*_t44 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t56 = J_theta_cart*_t25 + _t12*_t51 - _t13*_t55 + _t49;
+    const trailer2_real_t _t56 = J_theta_cart*_t22*_t22 + TRAILER2_LIT(2.0)*_t22*_t41 + _t55;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t57 = J_theta_cart2*_t35 + _t32*_t50 + _t33*_t54;
-    const trailer2_real_t _t58 = _t25*_t56 + _t28*_t45 + _t31*_t46 + _t35*_t57 + _t39*_t47
-            + _t42*_t48 + _t43*_t6 + _t44*_t7 + _t53;
-    const trailer2_real_t _t59 = -TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t _t60 = -_t11*_t59;
-    const trailer2_real_t _t61 = _t12*_t60;
-    const trailer2_real_t _t62 = -_t13*_t60 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t63 = _t15*_t61 - _t16*_t62;
-    const trailer2_real_t _t64 = _t20*_t63;
-    const trailer2_real_t _t65 = _t50*_t64;
-    const trailer2_real_t _t66 = _t49*_t60 + _t65;
+    const trailer2_real_t _t57 = J_theta_cart2*_t40*_t40 + _t24*_t40 + _t27*_t40
+            + _t40*(_t24 + _t27) + _t56;
+    const trailer2_real_t _t58 = _t15*_t30 - _t16*_t32;
+    const trailer2_real_t _t59 = _t20*_t58;
+    const trailer2_real_t _t60 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t _t61 = TRAILER2_LIT(0.207)*_t6;
+    const trailer2_real_t _t62 = -TRAILER2_LIT(0.207)*_t7;
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t64 = _t10*(-_t28*_t42 - _t43*_t63);
+    const trailer2_real_t _t65 = _t10*(-_t28*_t45 - _t46*_t63);
+    const trailer2_real_t _t66 = _t15*_t32 + _t16*_t30;
+    const trailer2_real_t _t67 = _t19*(_t49*_t58 + _t50*_t66);
+    const trailer2_real_t _t68 = _t19*(_t52*_t58 + _t53*_t66);
+    const trailer2_real_t _t69 = J_theta_cart2_left*_t54*_t68 + J_theta_cart2_right*_t51*_t67
+            + J_theta_cart_left*_t47*_t65 + J_theta_cart_right*_t44*_t64 + J_theta_left*_t62*_t7
+            + J_theta_right*_t6*_t61;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t67 = K_theta_tractor_x_tractor_2 + _t66;
-    const trailer2_real_t _t68 = TRAILER2_LIT(0.207)*_t6;
-    const trailer2_real_t _t69 = J_theta_right*_t68;
-    const trailer2_real_t _t70 = -TRAILER2_LIT(0.207)*_t7;
-    const trailer2_real_t _t71 = J_theta_left*_t70;
-    const trailer2_real_t _t72 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t73 = _t10*(-_t26*_t59 - _t27*_t72);
-    const trailer2_real_t _t74 = J_theta_cart_right*_t73;
-    const trailer2_real_t _t75 = _t10*(-_t29*_t59 - _t30*_t72);
-    const trailer2_real_t _t76 = J_theta_cart_left*_t75;
-    const trailer2_real_t _t77 = _t15*_t62 + _t16*_t61;
-    const trailer2_real_t _t78 = _t19*(_t37*_t63 + _t38*_t77);
-    const trailer2_real_t _t79 = J_theta_cart2_right*_t78;
-    const trailer2_real_t _t80 = _t19*(_t40*_t63 + _t41*_t77);
-    const trailer2_real_t _t81 = J_theta_cart2_left*_t80;
-    const trailer2_real_t _t82 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const trailer2_real_t _t83 = _t54*_t64;
-    const trailer2_real_t _t84 = J_theta_cart*_t60 + _t12*_t65 - _t13*_t83 - TRAILER2_LIT(0.3)*_t82;
-    const trailer2_real_t _t85 = J_theta_cart2*_t64 + _t50*_t61 + _t54*_t62;
-    const trailer2_real_t _t86 = _t25*_t84 + _t28*_t74 + _t31*_t76 + _t35*_t85 + _t39*_t79
-            + _t42*_t81 + _t6*_t69 + _t67 + _t7*_t71;
-    const trailer2_real_t _t87 = _t23*_t86 + _t24*_t58;
-    const trailer2_real_t _t88 = _t60*_t82 + _t83;
+    const trailer2_real_t _t70 = K_theta_tractor_x_tractor_2 + _t69;
+    const trailer2_real_t _t71 = J_theta_cart*_t22*_t29 - TRAILER2_LIT(0.3)*_t22*_t60 + _t29*_t41
+            + _t70;
+    const trailer2_real_t _t72 = J_theta_cart2*_t40*_t59 + _t24*_t59 + _t27*_t59 + _t34*_t40 + _t71;
+    const trailer2_real_t _t73 = _t37*_t72 + _t38*_t57;
+    const trailer2_real_t _t74 = J_theta_cart2_left*_t68*_t68 + J_theta_cart2_right*_t67*_t67
+            + J_theta_cart_left*_t65*_t65 + J_theta_cart_right*_t64*_t64 + J_theta_left*_t62*_t62
+            + J_theta_right*_t61*_t61;
     const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t89 = J_theta_tractor - TRAILER2_LIT(0.3)*_t88;
-    const trailer2_real_t _t90 = _t60*_t84 + _t64*_t85 + _t68*_t69 + _t70*_t71 + _t73*_t74
-            + _t75*_t76 + _t78*_t79 + _t80*_t81 + _t89;
-    const trailer2_real_t _t91 = _t23*_t90 + _t24*_t86;
-    const trailer2_real_t _t92 = _t21*_t91 + _t22*_t87;
-    const trailer2_real_t _t93 = _t92*_t92;
-    const trailer2_real_t _t94 = _t21*_t86 + _t22*_t58;
-    const trailer2_real_t _t95 = _t21*_t90 + _t22*_t86;
-    const trailer2_real_t _t96 = _t21*_t95 + _t22*_t94;
-    const trailer2_real_t _t97 = _t23*_t91 + _t24*_t87;
-    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t93 + _t96*_t96
-            + _t97*_t97)*(TRAILER2_LIT(1.0)/TRAILER2_FABS(_t93 - _t96*_t97));
+    const trailer2_real_t _t75 = J_theta_tractor + _t74;
+    const trailer2_real_t _t76 = J_theta_cart*_t29*_t29 - TRAILER2_LIT(0.6)*_t29*_t60 + _t75;
+    const trailer2_real_t _t77 = J_theta_cart2*_t59*_t59 + _t31*_t59 + _t33*_t59 + _t34*_t59 + _t76;
+    const trailer2_real_t _t78 = _t37*_t77 + _t38*_t72;
+    const trailer2_real_t _t79 = _t35*_t78 + _t36*_t73;
+    const trailer2_real_t _t80 = _t79*_t79;
+    const trailer2_real_t _t81 = _t35*_t72 + _t36*_t57;
+    const trailer2_real_t _t82 = _t35*_t77 + _t36*_t72;
+    const trailer2_real_t _t83 = _t35*_t82 + _t36*_t81;
+    const trailer2_real_t _t84 = _t37*_t78 + _t38*_t73;
+    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t80 + _t83*_t83
+            + _t84*_t84)*(TRAILER2_LIT(1.0)/TRAILER2_FABS(_t80 - _t83*_t84));
 }
 
 /* trailer2_minimal_minv_norm_mhat: documented in trailer2_laws.h.
@@ -327,10 +311,10 @@ void trailer2_minimal_minv_norm_mhat(const trailer2_params_t *p, const trailer2_
 }
 
 /* trailer2_minimal_mhat: documented in trailer2_laws.h.
-   operations after CSE: 67 add, 146 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 66 add, 157 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_mhat(const trailer2_params_t *p, const trailer2_real_t *q, trailer2_real_t *M)
 {
-    trailer2_real_t kept[32];
+    trailer2_real_t kept[31];
     trailer2_k_minimal_mhat_keep(p, kept);
     trailer2_k_minimal_mhat(kept, q, M);
 }
@@ -398,7 +382,7 @@ void trailer2_minimal_omega_difference(const trailer2_real_t *newer, const trail
 }
 
 /* trailer2_minimal_tdc_law: documented in trailer2_laws.h.
-   operations after CSE: 75 add, 154 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 74 add, 165 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -436,116 +420,108 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
     const trailer2_real_t _t18 = -TRAILER2_LIT(0.6)*_t17;
     const trailer2_real_t _t19 = TRAILER2_LIT(1.0)/_t18;
     const trailer2_real_t _t20 = _t17*_t19;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t21 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t22 = _t11*_t2;
+    const trailer2_real_t _t23 = _t12*_t22 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t24 = _t21*_t23;
+    const trailer2_real_t _t25 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t26 = -_t13*_t22;
+    const trailer2_real_t _t27 = _t25*_t26;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t _t29 = -_t11*_t28;
+    const trailer2_real_t _t30 = _t12*_t29;
+    const trailer2_real_t _t31 = _t21*_t30;
+    const trailer2_real_t _t32 = -_t13*_t29 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t33 = _t25*_t32;
+    const trailer2_real_t _t34 = _t31 + _t33;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t21 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t35 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer2_real_t e1 = e[1];
     const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t22 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer2_real_t _t23 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t24 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t _t26 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t28 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t29 = TRAILER2_LIT(0.2)*radius_cart_left;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(0.6)*radius_cart_left;
-    const trailer2_real_t _t31 = -TRAILER2_LIT(0.2)*radius_cart_right;
-    const trailer2_real_t _t32 = -TRAILER2_LIT(0.6)*radius_cart_right;
-    const trailer2_real_t _t33 = _t11*_t2;
-    const trailer2_real_t _t34 = _t10*(_t2*_t29 + _t3*_t30);
-    const trailer2_real_t _t35 = _t10*(_t2*_t31 + _t3*_t32);
-    const trailer2_real_t _t36 = _t12*_t33 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t37 = -_t13*_t33;
-    const trailer2_real_t _t38 = _t15*_t36 - _t16*_t37;
-    const trailer2_real_t _t39 = _t15*_t37 + _t16*_t36;
-    const trailer2_real_t _t40 = TRAILER2_LIT(0.2)*radius_cart2_left;
-    const trailer2_real_t _t41 = -TRAILER2_LIT(0.6)*radius_cart2_left;
-    const trailer2_real_t _t42 = -TRAILER2_LIT(0.2)*radius_cart2_right;
-    const trailer2_real_t _t43 = -TRAILER2_LIT(0.6)*radius_cart2_right;
-    const trailer2_real_t _t44 = _t20*_t38;
-    const trailer2_real_t _t45 = _t19*(_t38*_t40 + _t39*_t41);
-    const trailer2_real_t _t46 = _t19*(_t38*_t42 + _t39*_t43);
-    const trailer2_real_t _t47 = TRAILER2_LIT(0.207)*_t6;
-    const trailer2_real_t _t48 = -TRAILER2_LIT(0.207)*_t7;
-    const trailer2_real_t _t49 = -_t11*_t25;
-    const trailer2_real_t _t50 = _t10*(-_t25*_t29 - _t26*_t30);
-    const trailer2_real_t _t51 = _t10*(-_t25*_t31 - _t26*_t32);
-    const trailer2_real_t _t52 = _t12*_t49;
-    const trailer2_real_t _t53 = -_t13*_t49 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t54 = _t15*_t52 - _t16*_t53;
-    const trailer2_real_t _t55 = _t15*_t53 + _t16*_t52;
-    const trailer2_real_t _t56 = _t20*_t54;
-    const trailer2_real_t _t57 = _t19*(_t40*_t54 + _t41*_t55);
-    const trailer2_real_t _t58 = _t19*(_t42*_t54 + _t43*_t55);
+    const trailer2_real_t _t36 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t40 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t42 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t44 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t45 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t46 = _t10*(_t2*_t42 + _t3*_t43);
+    const trailer2_real_t _t47 = _t10*(_t2*_t44 + _t3*_t45);
+    const trailer2_real_t _t48 = _t15*_t23 - _t16*_t26;
+    const trailer2_real_t _t49 = _t15*_t26 + _t16*_t23;
+    const trailer2_real_t _t50 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t51 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t52 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t53 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t54 = _t20*_t48;
+    const trailer2_real_t _t55 = _t19*(_t48*_t50 + _t49*_t51);
+    const trailer2_real_t _t56 = _t19*(_t48*_t52 + _t49*_t53);
+    const trailer2_real_t _t57 = TRAILER2_LIT(0.207)*_t6;
+    const trailer2_real_t _t58 = -TRAILER2_LIT(0.207)*_t7;
+    const trailer2_real_t _t59 = _t10*(-_t28*_t42 - _t39*_t43);
+    const trailer2_real_t _t60 = _t10*(-_t28*_t44 - _t39*_t45);
+    const trailer2_real_t _t61 = _t15*_t30 - _t16*_t32;
+    const trailer2_real_t _t62 = _t15*_t32 + _t16*_t30;
+    const trailer2_real_t _t63 = _t20*_t61;
+    const trailer2_real_t _t64 = _t19*(_t50*_t61 + _t51*_t62);
+    const trailer2_real_t _t65 = _t19*(_t52*_t61 + _t53*_t62);
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t59 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t60 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const trailer2_real_t _t62 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t63 = _t44*_t61;
-    const trailer2_real_t _t64 = _t44*_t62;
-    const trailer2_real_t _t65 = _t33*_t59 + _t63;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t66 = J_theta_right*_t6;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t67 = J_theta_left*_t7;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t68 = J_theta_cart_right*_t34;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t69 = J_theta_cart_left*_t35;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t70 = J_theta_cart2_right*_t45;
+    const trailer2_real_t _t66 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t67 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t71 = J_theta_cart2_left*_t46;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
     const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t72 = J_x_tractor + _t65;
+    const trailer2_real_t _t68 = J_theta_cart2_left*_t56*_t56 + J_theta_cart2_right*_t55*_t55
+            + J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t46*_t46 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t73 = J_theta_cart*_t33 + _t12*_t63 - _t13*_t64 + _t59;
+    const trailer2_real_t _t69 = J_theta_cart*_t22*_t22 + TRAILER2_LIT(2.0)*_t22*_t66 + _t68;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t74 = J_theta_cart2*_t44 + _t36*_t61 + _t37*_t62;
-    const trailer2_real_t _t75 = _t56*_t61;
-    const trailer2_real_t _t76 = _t56*_t62;
-    const trailer2_real_t _t77 = _t49*_t59 + _t75;
-    const trailer2_real_t _t78 = _t49*_t60 + _t76;
+    const trailer2_real_t _t70 = J_theta_cart2*_t54*_t54 + _t24*_t54 + _t27*_t54
+            + _t54*(_t24 + _t27) + _t69;
+    const trailer2_real_t _t71 = J_theta_cart2_left*_t56*_t65 + J_theta_cart2_right*_t55*_t64
+            + J_theta_cart_left*_t47*_t60 + J_theta_cart_right*_t46*_t59 + J_theta_left*_t58*_t7
+            + J_theta_right*_t57*_t6;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t79 = K_theta_tractor_x_tractor_2 + _t77;
-    const trailer2_real_t _t80 = J_theta_right*_t47;
-    const trailer2_real_t _t81 = J_theta_left*_t48;
-    const trailer2_real_t _t82 = J_theta_cart_right*_t50;
-    const trailer2_real_t _t83 = J_theta_cart_left*_t51;
-    const trailer2_real_t _t84 = J_theta_cart2_right*_t57;
-    const trailer2_real_t _t85 = J_theta_cart2_left*_t58;
+    const trailer2_real_t _t72 = K_theta_tractor_x_tractor_2 + _t71;
+    const trailer2_real_t _t73 = J_theta_cart*_t22*_t29 - TRAILER2_LIT(0.3)*_t22*_t67 + _t29*_t66
+            + _t72;
+    const trailer2_real_t _t74 = J_theta_cart2*_t54*_t63 + _t24*_t63 + _t27*_t63 + _t34*_t54 + _t73;
+    const trailer2_real_t _t75 = J_theta_cart2_left*_t65*_t65 + J_theta_cart2_right*_t64*_t64
+            + J_theta_cart_left*_t60*_t60 + J_theta_cart_right*_t59*_t59 + J_theta_left*_t58*_t58
+            + J_theta_right*_t57*_t57;
     const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t86 = J_theta_tractor - TRAILER2_LIT(0.3)*_t78;
-    const trailer2_real_t _t87 = J_theta_cart*_t49 + _t12*_t75 - _t13*_t76 - TRAILER2_LIT(0.3)*_t60;
-    const trailer2_real_t _t88 = J_theta_cart2*_t56 + _t52*_t61 + _t53*_t62;
-    const trailer2_real_t _t89 = _t33*_t73 + _t34*_t68 + _t35*_t69 + _t44*_t74 + _t45*_t70
-            + _t46*_t71 + _t6*_t66 + _t67*_t7 + _t72;
-    const trailer2_real_t _t90 = _t33*_t87 + _t34*_t82 + _t35*_t83 + _t44*_t88 + _t45*_t84
-            + _t46*_t85 + _t6*_t80 + _t7*_t81 + _t79;
-    const trailer2_real_t _t91 = _t47*_t80 + _t48*_t81 + _t49*_t87 + _t50*_t82 + _t51*_t83
-            + _t56*_t88 + _t57*_t84 + _t58*_t85 + _t86;
-    const trailer2_real_t _t92 = _t23*_t90 + _t27*_t89;
-    const trailer2_real_t _t93 = _t24*_t90 + _t28*_t89;
-    const trailer2_real_t _t94 = _t23*_t91 + _t27*_t90;
-    const trailer2_real_t _t95 = _t24*_t91 + _t28*_t90;
-    const trailer2_real_t _t96 = _t23*_t94 + _t27*_t92;
-    const trailer2_real_t _t97 = _t23*_t95 + _t27*_t93;
-    const trailer2_real_t _t98 = _t24*_t95 + _t28*_t93;
+    const trailer2_real_t _t76 = J_theta_tractor + _t75;
+    const trailer2_real_t _t77 = J_theta_cart*_t29*_t29 - TRAILER2_LIT(0.6)*_t29*_t67 + _t76;
+    const trailer2_real_t _t78 = J_theta_cart2*_t63*_t63 + _t31*_t63 + _t33*_t63 + _t34*_t63 + _t77;
+    const trailer2_real_t _t79 = _t37*_t74 + _t40*_t70;
+    const trailer2_real_t _t80 = _t38*_t74 + _t41*_t70;
+    const trailer2_real_t _t81 = _t37*_t78 + _t40*_t74;
+    const trailer2_real_t _t82 = _t38*_t78 + _t41*_t74;
+    const trailer2_real_t _t83 = _t37*_t81 + _t40*_t79;
+    const trailer2_real_t _t84 = _t37*_t82 + _t40*_t80;
+    const trailer2_real_t _t85 = _t38*_t82 + _t41*_t80;
     const trailer2_real_t H1hat0 = H1hat[0];
     const trailer2_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t21*_t96 + _t22*_t97;
-    u[1] = H1hat1 + _t21*_t97 + _t22*_t98;
+    u[0] = H1hat0 + _t35*_t83 + _t36*_t84;
+    u[1] = H1hat1 + _t35*_t84 + _t36*_t85;
 }
 
 /* trailer2_minimal_tdc_law_mhat: documented in trailer2_laws.h.
@@ -559,7 +535,7 @@ void trailer2_minimal_tdc_law_mhat(const trailer2_params_t *p, const trailer2_re
 }
 
 /* trailer2_minimal_tdroc_law: documented in trailer2_laws.h.
-   operations after CSE: 82 add, 168 mul, 4 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 81 add, 179 mul, 4 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -596,131 +572,123 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
     const trailer2_real_t _t18 = -TRAILER2_LIT(0.6)*_t17;
     const trailer2_real_t _t19 = TRAILER2_LIT(1.0)/_t18;
     const trailer2_real_t _t20 = _t17*_t19;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t21 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t22 = _t11*_t2;
+    const trailer2_real_t _t23 = _t12*_t22 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t24 = _t21*_t23;
+    const trailer2_real_t _t25 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t26 = -_t13*_t22;
+    const trailer2_real_t _t27 = _t25*_t26;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t _t29 = -_t11*_t28;
+    const trailer2_real_t _t30 = _t12*_t29;
+    const trailer2_real_t _t31 = _t21*_t30;
+    const trailer2_real_t _t32 = -_t13*_t29 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t33 = _t25*_t32;
+    const trailer2_real_t _t34 = _t31 + _t33;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t21 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t35 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer2_real_t e1 = e[1];
     const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t22 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t _t36 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer2_real_t p12_0 = p12[0];
     const trailer2_real_t p22_0 = p22[0];
-    const trailer2_real_t _t23 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t _t37 = e0*p12_0 + edot0*p22_0;
     const trailer2_real_t p12_1 = p12[1];
     const trailer2_real_t p22_1 = p22[1];
-    const trailer2_real_t _t24 = e1*p12_1 + edot1*p22_1;
-    const trailer2_real_t _t25 = trailer2_norm2(_t23, _t24);
+    const trailer2_real_t _t38 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t39 = trailer2_norm2(_t37, _t38);
     const trailer2_real_t eps_1 = eps[0];
-    const trailer2_real_t _t26 = TRAILER2_LIT(1.0)/(TRAILER2_FMAX(_t25, eps_1));
-    const trailer2_real_t _t27 = _t23*_t26;
-    const trailer2_real_t _t28 = _t24*_t26;
-    const trailer2_real_t _t29 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t31 = -TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t _t32 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t33 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t34 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t35 = TRAILER2_LIT(0.2)*radius_cart_left;
-    const trailer2_real_t _t36 = -TRAILER2_LIT(0.6)*radius_cart_left;
-    const trailer2_real_t _t37 = -TRAILER2_LIT(0.2)*radius_cart_right;
-    const trailer2_real_t _t38 = -TRAILER2_LIT(0.6)*radius_cart_right;
-    const trailer2_real_t _t39 = _t11*_t2;
-    const trailer2_real_t _t40 = _t10*(_t2*_t35 + _t3*_t36);
-    const trailer2_real_t _t41 = _t10*(_t2*_t37 + _t3*_t38);
-    const trailer2_real_t _t42 = _t12*_t39 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t43 = -_t13*_t39;
-    const trailer2_real_t _t44 = _t15*_t42 - _t16*_t43;
-    const trailer2_real_t _t45 = _t15*_t43 + _t16*_t42;
-    const trailer2_real_t _t46 = TRAILER2_LIT(0.2)*radius_cart2_left;
-    const trailer2_real_t _t47 = -TRAILER2_LIT(0.6)*radius_cart2_left;
-    const trailer2_real_t _t48 = -TRAILER2_LIT(0.2)*radius_cart2_right;
-    const trailer2_real_t _t49 = -TRAILER2_LIT(0.6)*radius_cart2_right;
-    const trailer2_real_t _t50 = _t20*_t44;
-    const trailer2_real_t _t51 = _t19*(_t44*_t46 + _t45*_t47);
-    const trailer2_real_t _t52 = _t19*(_t44*_t48 + _t45*_t49);
-    const trailer2_real_t _t53 = TRAILER2_LIT(0.207)*_t6;
-    const trailer2_real_t _t54 = -TRAILER2_LIT(0.207)*_t7;
-    const trailer2_real_t _t55 = -_t11*_t31;
-    const trailer2_real_t _t56 = _t10*(-_t31*_t35 - _t32*_t36);
-    const trailer2_real_t _t57 = _t10*(-_t31*_t37 - _t32*_t38);
-    const trailer2_real_t _t58 = _t12*_t55;
-    const trailer2_real_t _t59 = -_t13*_t55 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t60 = _t15*_t58 - _t16*_t59;
-    const trailer2_real_t _t61 = _t15*_t59 + _t16*_t58;
-    const trailer2_real_t _t62 = _t20*_t60;
-    const trailer2_real_t _t63 = _t19*(_t46*_t60 + _t47*_t61);
-    const trailer2_real_t _t64 = _t19*(_t48*_t60 + _t49*_t61);
+    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/(TRAILER2_FMAX(_t39, eps_1));
+    const trailer2_real_t _t41 = _t37*_t40;
+    const trailer2_real_t _t42 = _t38*_t40;
+    const trailer2_real_t _t43 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t44 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t45 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t46 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t48 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t49 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t51 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t52 = _t10*(_t2*_t48 + _t3*_t49);
+    const trailer2_real_t _t53 = _t10*(_t2*_t50 + _t3*_t51);
+    const trailer2_real_t _t54 = _t15*_t23 - _t16*_t26;
+    const trailer2_real_t _t55 = _t15*_t26 + _t16*_t23;
+    const trailer2_real_t _t56 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t57 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t58 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t59 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t60 = _t20*_t54;
+    const trailer2_real_t _t61 = _t19*(_t54*_t56 + _t55*_t57);
+    const trailer2_real_t _t62 = _t19*(_t54*_t58 + _t55*_t59);
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.207)*_t6;
+    const trailer2_real_t _t64 = -TRAILER2_LIT(0.207)*_t7;
+    const trailer2_real_t _t65 = _t10*(-_t28*_t48 - _t45*_t49);
+    const trailer2_real_t _t66 = _t10*(-_t28*_t50 - _t45*_t51);
+    const trailer2_real_t _t67 = _t15*_t30 - _t16*_t32;
+    const trailer2_real_t _t68 = _t15*_t32 + _t16*_t30;
+    const trailer2_real_t _t69 = _t20*_t67;
+    const trailer2_real_t _t70 = _t19*(_t56*_t67 + _t57*_t68);
+    const trailer2_real_t _t71 = _t19*(_t58*_t67 + _t59*_t68);
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t65 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t66 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t67 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const trailer2_real_t _t68 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t69 = _t50*_t67;
-    const trailer2_real_t _t70 = _t50*_t68;
-    const trailer2_real_t _t71 = _t39*_t65 + _t69;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t72 = J_theta_right*_t6;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t73 = J_theta_left*_t7;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t74 = J_theta_cart_right*_t40;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t75 = J_theta_cart_left*_t41;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t76 = J_theta_cart2_right*_t51;
+    const trailer2_real_t _t72 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t73 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t77 = J_theta_cart2_left*_t52;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
     const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t78 = J_x_tractor + _t71;
+    const trailer2_real_t _t74 = J_theta_cart2_left*_t62*_t62 + J_theta_cart2_right*_t61*_t61
+            + J_theta_cart_left*_t53*_t53 + J_theta_cart_right*_t52*_t52 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t79 = J_theta_cart*_t39 + _t12*_t69 - _t13*_t70 + _t65;
+    const trailer2_real_t _t75 = J_theta_cart*_t22*_t22 + TRAILER2_LIT(2.0)*_t22*_t72 + _t74;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t80 = J_theta_cart2*_t50 + _t42*_t67 + _t43*_t68;
-    const trailer2_real_t _t81 = _t62*_t67;
-    const trailer2_real_t _t82 = _t62*_t68;
-    const trailer2_real_t _t83 = _t55*_t65 + _t81;
-    const trailer2_real_t _t84 = _t55*_t66 + _t82;
+    const trailer2_real_t _t76 = J_theta_cart2*_t60*_t60 + _t24*_t60 + _t27*_t60
+            + _t60*(_t24 + _t27) + _t75;
+    const trailer2_real_t _t77 = J_theta_cart2_left*_t62*_t71 + J_theta_cart2_right*_t61*_t70
+            + J_theta_cart_left*_t53*_t66 + J_theta_cart_right*_t52*_t65 + J_theta_left*_t64*_t7
+            + J_theta_right*_t6*_t63;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t85 = K_theta_tractor_x_tractor_2 + _t83;
-    const trailer2_real_t _t86 = J_theta_right*_t53;
-    const trailer2_real_t _t87 = J_theta_left*_t54;
-    const trailer2_real_t _t88 = J_theta_cart_right*_t56;
-    const trailer2_real_t _t89 = J_theta_cart_left*_t57;
-    const trailer2_real_t _t90 = J_theta_cart2_right*_t63;
-    const trailer2_real_t _t91 = J_theta_cart2_left*_t64;
+    const trailer2_real_t _t78 = K_theta_tractor_x_tractor_2 + _t77;
+    const trailer2_real_t _t79 = J_theta_cart*_t22*_t29 - TRAILER2_LIT(0.3)*_t22*_t73 + _t29*_t72
+            + _t78;
+    const trailer2_real_t _t80 = J_theta_cart2*_t60*_t69 + _t24*_t69 + _t27*_t69 + _t34*_t60 + _t79;
+    const trailer2_real_t _t81 = J_theta_cart2_left*_t71*_t71 + J_theta_cart2_right*_t70*_t70
+            + J_theta_cart_left*_t66*_t66 + J_theta_cart_right*_t65*_t65 + J_theta_left*_t64*_t64
+            + J_theta_right*_t63*_t63;
     const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t92 = J_theta_tractor - TRAILER2_LIT(0.3)*_t84;
-    const trailer2_real_t _t93 = J_theta_cart*_t55 + _t12*_t81 - _t13*_t82 - TRAILER2_LIT(0.3)*_t66;
-    const trailer2_real_t _t94 = J_theta_cart2*_t62 + _t58*_t67 + _t59*_t68;
-    const trailer2_real_t _t95 = _t39*_t79 + _t40*_t74 + _t41*_t75 + _t50*_t80 + _t51*_t76
-            + _t52*_t77 + _t6*_t72 + _t7*_t73 + _t78;
-    const trailer2_real_t _t96 = _t39*_t93 + _t40*_t88 + _t41*_t89 + _t50*_t94 + _t51*_t90
-            + _t52*_t91 + _t6*_t86 + _t7*_t87 + _t85;
-    const trailer2_real_t _t97 = _t53*_t86 + _t54*_t87 + _t55*_t93 + _t56*_t88 + _t57*_t89
-            + _t62*_t94 + _t63*_t90 + _t64*_t91 + _t92;
-    const trailer2_real_t _t98 = _t29*_t96 + _t33*_t95;
-    const trailer2_real_t _t99 = _t30*_t96 + _t34*_t95;
-    const trailer2_real_t _t100 = _t29*_t97 + _t33*_t96;
-    const trailer2_real_t _t101 = _t30*_t97 + _t34*_t96;
-    const trailer2_real_t _t102 = _t100*_t29 + _t33*_t98;
-    const trailer2_real_t _t103 = _t101*_t29 + _t33*_t99;
-    const trailer2_real_t _t104 = _t101*_t30 + _t34*_t99;
+    const trailer2_real_t _t82 = J_theta_tractor + _t81;
+    const trailer2_real_t _t83 = J_theta_cart*_t29*_t29 - TRAILER2_LIT(0.6)*_t29*_t73 + _t82;
+    const trailer2_real_t _t84 = J_theta_cart2*_t69*_t69 + _t31*_t69 + _t33*_t69 + _t34*_t69 + _t83;
+    const trailer2_real_t _t85 = _t43*_t80 + _t46*_t76;
+    const trailer2_real_t _t86 = _t44*_t80 + _t47*_t76;
+    const trailer2_real_t _t87 = _t43*_t84 + _t46*_t80;
+    const trailer2_real_t _t88 = _t44*_t84 + _t47*_t80;
+    const trailer2_real_t _t89 = _t43*_t87 + _t46*_t85;
+    const trailer2_real_t _t90 = _t43*_t88 + _t46*_t86;
+    const trailer2_real_t _t91 = _t44*_t88 + _t47*_t86;
     const trailer2_real_t H1hat0 = H1hat[0];
     const trailer2_real_t H1hat1 = H1hat[1];
     const trailer2_real_t gain_1 = gain[0];
-    u[0] = H1hat0 + _t102*_t21 + _t103*_t22 + gain_1*(_t102*_t27 + _t103*_t28);
-    u[1] = H1hat1 + _t103*_t21 + _t104*_t22 + gain_1*(_t103*_t27 + _t104*_t28);
-    s[0] = _t23;
-    s[1] = _t24;
-    s_norm[0] = _t25;
+    u[0] = H1hat0 + _t35*_t89 + _t36*_t90 + gain_1*(_t41*_t89 + _t42*_t90);
+    u[1] = H1hat1 + _t35*_t90 + _t36*_t91 + gain_1*(_t41*_t90 + _t42*_t91);
+    s[0] = _t37;
+    s[1] = _t38;
+    s_norm[0] = _t39;
 }
 
 /* trailer2_minimal_tdroc_law_mhat: documented in trailer2_laws.h.
@@ -736,7 +704,7 @@ void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_
 }
 
 /* trailer2_minimal_roc_law: documented in trailer2_laws.h.
-   operations after CSE: 145 add, 272 mul, 5 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 146 add, 289 mul, 5 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -744,14 +712,14 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
     const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm,
     trailer2_real_t *gain)
 {
-    trailer2_real_t kept[34];
+    trailer2_real_t kept[33];
     trailer2_k_minimal_roc_law_keep(p, kept);
     trailer2_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u,
             s, s_norm, gain);
 }
 
 /* trailer2_minimal_asmc_law: documented in trailer2_laws.h.
-   operations after CSE: 141 add, 269 mul, 4 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 142 add, 286 mul, 4 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -759,7 +727,7 @@ void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t
     const trailer2_real_t *eps, const trailer2_real_t *adapt, trailer2_real_t *u,
     trailer2_real_t *s, trailer2_real_t *s_norm, trailer2_real_t *gain_next)
 {
-    trailer2_real_t kept[34];
+    trailer2_real_t kept[33];
     trailer2_k_minimal_roc_law_keep(p, kept);
     trailer2_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps,
             adapt, u, s, s_norm, gain_next);

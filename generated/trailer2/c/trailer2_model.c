@@ -9,7 +9,7 @@
 /* trailer2_staged_quantities: The quantities minimal_bias_forces, minimal_forward_dynamics,
    linearization, wheel_contact_forces all read.
    Each caller's documented operations include these:
-   operations after CSE: 76 add, 166 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 78 add, 173 mul, 3 div, 4 sin/cos, 0 sqrt */
 static void trailer2_staged_quantities(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *shared_quantities)
 {
@@ -67,185 +67,186 @@ static void trailer2_staged_quantities(const trailer2_params_t *p, const trailer
     const trailer2_real_t _t40 = _t38*_t39;
     const trailer2_real_t _t41 = -_t26*_t9 + _t28;
     const trailer2_real_t _t42 = _t38*_t41;
-    const trailer2_real_t _t43 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t44 = radius_left*radius_right;
-    const trailer2_real_t _t45 = TRAILER2_LIT(1.0)/_t44;
-    const trailer2_real_t _t46 = TRAILER2_LIT(0.2)*radius_cart_left;
-    const trailer2_real_t _t47 = -TRAILER2_LIT(0.6)*radius_cart_left;
-    const trailer2_real_t _t48 = -TRAILER2_LIT(0.2)*radius_cart_right;
-    const trailer2_real_t _t49 = -TRAILER2_LIT(0.6)*radius_cart_right;
-    const trailer2_real_t _t50 = _t6*(_t2*_t46 + _t3*_t47);
-    const trailer2_real_t _t51 = _t6*(_t2*_t48 + _t3*_t49);
-    const trailer2_real_t _t52 = _t11*_t31 + _t12*_t30;
-    const trailer2_real_t _t53 = TRAILER2_LIT(0.2)*radius_cart2_left;
-    const trailer2_real_t _t54 = -TRAILER2_LIT(0.6)*radius_cart2_left;
-    const trailer2_real_t _t55 = -TRAILER2_LIT(0.2)*radius_cart2_right;
-    const trailer2_real_t _t56 = -TRAILER2_LIT(0.6)*radius_cart2_right;
-    const trailer2_real_t _t57 = _t15*(_t32*_t53 + _t52*_t54);
-    const trailer2_real_t _t58 = _t15*(_t32*_t55 + _t52*_t56);
-    const trailer2_real_t _t59 = _t6*(-_t21*_t46 - _t43*_t47);
-    const trailer2_real_t _t60 = _t6*(-_t21*_t48 - _t43*_t49);
-    const trailer2_real_t _t61 = _t11*_t35 + _t12*_t34;
-    const trailer2_real_t _t62 = _t15*(_t36*_t53 + _t54*_t61);
-    const trailer2_real_t _t63 = _t15*(_t36*_t55 + _t56*_t61);
-    const trailer2_real_t _t64 = _t25*_t25;
-    const trailer2_real_t _t65 = _t26*_t26;
-    const trailer2_real_t _t66 = _t38*_t38;
-    const trailer2_real_t _t67 = TRAILER2_LIT(0.3)*_t64;
-    const trailer2_real_t _t68 = _t65*_t9;
-    const trailer2_real_t _t69 = _t65*_t8;
-    const trailer2_real_t _t70 = -_t19*_t25;
-    const trailer2_real_t _t71 = -_t44*_t45*_t70;
-    const trailer2_real_t _t72 = -_t2*_t29 - _t27*_t3;
-    const trailer2_real_t _t73 = _t2*_t27 - _t29*_t3;
-    const trailer2_real_t _t74 = _t2*_t67 - _t3*_t71 - _t72;
-    const trailer2_real_t _t75 = _t2*_t71 + _t3*_t67 - _t73;
-    const trailer2_real_t _t76 = _t7*_t74;
-    const trailer2_real_t _t77 = _t6*(_t46*_t74 + _t47*_t75);
-    const trailer2_real_t _t78 = _t6*(_t48*_t74 + _t49*_t75);
-    const trailer2_real_t _t79 = -_t11*_t42 - _t12*_t40;
-    const trailer2_real_t _t80 = _t11*_t40 - _t12*_t42;
-    const trailer2_real_t _t81 = _t67 + _t68 + _t76*_t8;
-    const trailer2_real_t _t82 = _t69 + _t71 - _t76*_t9;
-    const trailer2_real_t _t83 = _t11*_t81 - _t12*_t82 - _t79;
-    const trailer2_real_t _t84 = _t11*_t82 + _t12*_t81 - _t80;
-    const trailer2_real_t _t85 = _t16*_t83;
-    const trailer2_real_t _t86 = _t15*(_t53*_t83 + _t54*_t84);
-    const trailer2_real_t _t87 = _t15*(_t55*_t83 + _t56*_t84);
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t44 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t45 = -_t11*_t42 - _t12*_t40;
+    const trailer2_real_t _t46 = _t25*_t25;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.3)*_t46;
+    const trailer2_real_t _t48 = _t26*_t26;
+    const trailer2_real_t _t49 = _t48*_t9;
+    const trailer2_real_t _t50 = radius_left*radius_right;
+    const trailer2_real_t _t51 = TRAILER2_LIT(1.0)/_t50;
+    const trailer2_real_t _t52 = -_t19*_t25;
+    const trailer2_real_t _t53 = -_t50*_t51*_t52;
+    const trailer2_real_t _t54 = -_t2*_t29 - _t27*_t3;
+    const trailer2_real_t _t55 = _t2*_t47 - _t3*_t53 - _t54;
+    const trailer2_real_t _t56 = _t55*_t7;
+    const trailer2_real_t _t57 = _t47 + _t49 + _t56*_t8;
+    const trailer2_real_t _t58 = _t48*_t8;
+    const trailer2_real_t _t59 = _t53 - _t56*_t9 + _t58;
+    const trailer2_real_t _t60 = _t11*_t57 - _t12*_t59 - _t45;
+    const trailer2_real_t _t61 = _t11*_t40 - _t12*_t42;
+    const trailer2_real_t _t62 = _t11*_t59 + _t12*_t57 - _t61;
+    const trailer2_real_t _t63 = _t15*(_t43*_t60 + _t44*_t62);
+    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer2_real_t _t64 = J_theta_cart2_left*_t63;
+    const trailer2_real_t _t65 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t66 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t67 = _t15*(_t60*_t65 + _t62*_t66);
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t _t68 = J_theta_cart2_right*_t67;
+    const trailer2_real_t _t69 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t70 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t71 = _t2*_t27 - _t29*_t3;
+    const trailer2_real_t _t72 = _t2*_t53 + _t3*_t47 - _t71;
+    const trailer2_real_t _t73 = _t6*(_t55*_t69 + _t70*_t72);
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t _t74 = J_theta_cart_left*_t73;
+    const trailer2_real_t _t75 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t76 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t77 = _t6*(_t55*_t75 + _t72*_t76);
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t _t78 = J_theta_cart_right*_t77;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t79 = J_theta_cart*_t56;
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t88 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t89 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t _t80 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t81 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t _t82 = _t47*_t80 + _t53*_t81;
+    const trailer2_real_t _t83 = _t16*_t60;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t84 = J_theta_cart2*_t83;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t90 = K_theta_cart2_x_tractor*_t11 + K_theta_cart2_x_tractor_2*_t12;
-    const trailer2_real_t _t91 = -K_theta_cart2_x_tractor*_t12 + K_theta_cart2_x_tractor_2*_t11;
-    const trailer2_real_t _t92 = _t65*_t9 + _t67 + _t76*_t8;
-    const trailer2_real_t _t93 = _t65*_t8 + _t71 - _t76*_t9;
-    const trailer2_real_t _t94 = -_t66*_t91 + _t85*_t90;
-    const trailer2_real_t _t95 = _t66*_t90 + _t85*_t91;
-    const trailer2_real_t _t96 = -_t65*_t89 + _t76*_t88 + _t94;
-    const trailer2_real_t _t97 = _t65*_t88 + _t76*_t89 + _t95;
+    const trailer2_real_t _t85 = K_theta_cart2_x_tractor*_t11 + K_theta_cart2_x_tractor_2*_t12;
+    const trailer2_real_t _t86 = -K_theta_cart2_x_tractor*_t12 + K_theta_cart2_x_tractor_2*_t11;
+    const trailer2_real_t _t87 = _t47 + _t48*_t9 + _t56*_t8;
+    const trailer2_real_t _t88 = _t48*_t8 + _t53 - _t56*_t9;
+    const trailer2_real_t _t89 = _t85*_t87 + _t86*_t88;
+    const trailer2_real_t _t90 = _t38*_t38;
+    const trailer2_real_t _t91 = _t83*_t86 + _t85*_t90;
+    const trailer2_real_t _t92 = _t83*_t85 - _t86*_t90;
+    const trailer2_real_t _t93 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t94 = _t6*(_t2*_t75 + _t3*_t76);
+    const trailer2_real_t _t95 = _t6*(_t2*_t69 + _t3*_t70);
+    const trailer2_real_t _t96 = _t11*_t31 + _t12*_t30;
+    const trailer2_real_t _t97 = _t15*(_t32*_t65 + _t66*_t96);
+    const trailer2_real_t _t98 = _t15*(_t32*_t43 + _t44*_t96);
+    const trailer2_real_t _t99 = _t6*(-_t21*_t75 - _t76*_t93);
+    const trailer2_real_t _t100 = _t6*(-_t21*_t69 - _t70*_t93);
+    const trailer2_real_t _t101 = _t11*_t35 + _t12*_t34;
+    const trailer2_real_t _t102 = _t15*(_t101*_t66 + _t36*_t65);
+    const trailer2_real_t _t103 = _t15*(_t101*_t44 + _t36*_t43);
+    const trailer2_real_t _t104 = _t64*_t98 + _t68*_t97 + _t74*_t95 + _t78*_t94;
     const trailer2_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer2_real_t _t98 = K_theta_tractor_x_tractor*_t64 + _t96;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t99 = J_theta_cart_right*_t77;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t100 = J_theta_cart_left*_t78;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t101 = J_theta_cart2_right*_t86;
-    const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t102 = J_theta_cart2_left*_t87;
-    const trailer2_real_t _t103 = -K_theta_tractor_x_tractor*_t71 - TRAILER2_LIT(0.3)*_t97;
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t104 = J_theta_cart*_t76 + _t67*_t88 + _t71*_t89 + _t8*_t94 - _t9*_t95;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t105 = J_theta_cart2*_t85 + _t90*_t92 + _t91*_t93;
-    const trailer2_real_t _t106 = _t100*_t51 + _t101*_t57 + _t102*_t58 + _t104*_t20 + _t105*_t33
-            + _t50*_t99 + _t98;
-    const trailer2_real_t _t107 = _t100*_t60 + _t101*_t62 + _t102*_t63 + _t103 + _t104*_t22
-            + _t105*_t37 + _t59*_t99;
+    const trailer2_real_t _t105 = K_theta_tractor_x_tractor*_t46 + _t104;
+    const trailer2_real_t _t106 = _t105 + _t20*_t79 + _t20*_t82 - _t48*_t81 + _t56*_t80;
+    const trailer2_real_t _t107 = _t106 + _t30*_t92 + _t31*_t91 + _t33*_t84 + _t33*_t89;
+    const trailer2_real_t _t108 = _t100*_t74 + _t102*_t68 + _t103*_t64 + _t78*_t99;
+    const trailer2_real_t _t109 = -K_theta_tractor_x_tractor*_t53 + _t108;
+    const trailer2_real_t _t110 = _t109 + _t22*_t79 + _t22*_t82 - TRAILER2_LIT(0.3)*_t48*_t80
+            - TRAILER2_LIT(0.3)*_t56*_t81;
+    const trailer2_real_t _t111 = _t110 + _t34*_t92 + _t35*_t91 + _t37*_t84 + _t37*_t89;
     shared_quantities[0] = _t23;
     shared_quantities[1] = _t24;
     shared_quantities[2] = -_t2;
     shared_quantities[3] = _t3;
     shared_quantities[4] = _t21;
-    shared_quantities[5] = _t43;
+    shared_quantities[5] = _t93;
     shared_quantities[6] = _t17;
     shared_quantities[7] = _t18;
-    shared_quantities[8] = _t44;
-    shared_quantities[9] = _t45;
+    shared_quantities[8] = _t50;
+    shared_quantities[9] = _t51;
     shared_quantities[10] = _t4;
-    shared_quantities[11] = _t46;
-    shared_quantities[12] = _t47;
-    shared_quantities[13] = _t48;
-    shared_quantities[14] = _t49;
+    shared_quantities[11] = _t75;
+    shared_quantities[12] = _t76;
+    shared_quantities[13] = _t69;
+    shared_quantities[14] = _t70;
     shared_quantities[15] = _t5;
     shared_quantities[16] = _t6;
     shared_quantities[17] = _t20;
-    shared_quantities[18] = _t50;
-    shared_quantities[19] = _t51;
+    shared_quantities[18] = _t94;
+    shared_quantities[19] = _t95;
     shared_quantities[20] = _t30;
     shared_quantities[21] = _t31;
     shared_quantities[22] = _t32;
-    shared_quantities[23] = _t52;
+    shared_quantities[23] = _t96;
     shared_quantities[24] = _t13;
-    shared_quantities[25] = _t53;
-    shared_quantities[26] = _t54;
-    shared_quantities[27] = _t55;
-    shared_quantities[28] = _t56;
+    shared_quantities[25] = _t65;
+    shared_quantities[26] = _t66;
+    shared_quantities[27] = _t43;
+    shared_quantities[28] = _t44;
     shared_quantities[29] = _t14;
     shared_quantities[30] = _t15;
     shared_quantities[31] = _t33;
-    shared_quantities[32] = _t57;
-    shared_quantities[33] = _t58;
+    shared_quantities[32] = _t97;
+    shared_quantities[33] = _t98;
     shared_quantities[34] = _t22;
-    shared_quantities[35] = _t59;
-    shared_quantities[36] = _t60;
+    shared_quantities[35] = _t99;
+    shared_quantities[36] = _t100;
     shared_quantities[37] = _t34;
     shared_quantities[38] = _t35;
     shared_quantities[39] = _t36;
-    shared_quantities[40] = _t61;
+    shared_quantities[40] = _t101;
     shared_quantities[41] = _t37;
-    shared_quantities[42] = _t62;
-    shared_quantities[43] = _t63;
+    shared_quantities[42] = _t102;
+    shared_quantities[43] = _t103;
     shared_quantities[44] = _t19;
     shared_quantities[45] = _t25;
     shared_quantities[46] = _t26;
     shared_quantities[47] = _t38;
-    shared_quantities[48] = _t64;
-    shared_quantities[49] = _t65;
-    shared_quantities[50] = _t66;
-    shared_quantities[51] = _t67;
-    shared_quantities[52] = _t68;
-    shared_quantities[53] = _t69;
+    shared_quantities[48] = _t46;
+    shared_quantities[49] = _t48;
+    shared_quantities[50] = _t90;
+    shared_quantities[51] = _t47;
+    shared_quantities[52] = _t49;
+    shared_quantities[53] = _t58;
     shared_quantities[54] = _t28;
     shared_quantities[55] = _t39;
     shared_quantities[56] = _t41;
-    shared_quantities[57] = _t70;
-    shared_quantities[58] = _t71;
-    shared_quantities[59] = _t72;
-    shared_quantities[60] = _t73;
-    shared_quantities[61] = _t74;
-    shared_quantities[62] = _t75;
-    shared_quantities[63] = _t76;
+    shared_quantities[57] = _t52;
+    shared_quantities[58] = _t53;
+    shared_quantities[59] = _t54;
+    shared_quantities[60] = _t71;
+    shared_quantities[61] = _t55;
+    shared_quantities[62] = _t72;
+    shared_quantities[63] = _t56;
     shared_quantities[64] = _t77;
-    shared_quantities[65] = _t78;
-    shared_quantities[66] = _t79;
-    shared_quantities[67] = _t80;
-    shared_quantities[68] = _t81;
-    shared_quantities[69] = _t82;
-    shared_quantities[70] = _t83;
-    shared_quantities[71] = _t84;
-    shared_quantities[72] = _t85;
-    shared_quantities[73] = _t86;
-    shared_quantities[74] = _t87;
-    shared_quantities[75] = _t88;
-    shared_quantities[76] = _t89;
-    shared_quantities[77] = _t90;
-    shared_quantities[78] = _t91;
+    shared_quantities[65] = _t73;
+    shared_quantities[66] = _t45;
+    shared_quantities[67] = _t61;
+    shared_quantities[68] = _t57;
+    shared_quantities[69] = _t59;
+    shared_quantities[70] = _t60;
+    shared_quantities[71] = _t62;
+    shared_quantities[72] = _t83;
+    shared_quantities[73] = _t67;
+    shared_quantities[74] = _t63;
+    shared_quantities[75] = _t80;
+    shared_quantities[76] = _t81;
+    shared_quantities[77] = _t85;
+    shared_quantities[78] = _t86;
     shared_quantities[79] = _t8;
-    shared_quantities[80] = -_t9;
-    shared_quantities[81] = _t92;
-    shared_quantities[82] = _t93;
-    shared_quantities[83] = _t94;
-    shared_quantities[84] = _t95;
-    shared_quantities[85] = _t96;
-    shared_quantities[86] = _t97;
-    shared_quantities[87] = _t98;
-    shared_quantities[88] = _t99;
-    shared_quantities[89] = _t100;
-    shared_quantities[90] = _t101;
-    shared_quantities[91] = _t102;
-    shared_quantities[92] = _t103;
-    shared_quantities[93] = _t104;
-    shared_quantities[94] = _t105;
-    shared_quantities[95] = _t106;
-    shared_quantities[96] = _t107;
+    shared_quantities[80] = _t30;
+    shared_quantities[81] = -_t9;
+    shared_quantities[82] = _t31;
+    shared_quantities[83] = _t34;
+    shared_quantities[84] = _t35;
+    shared_quantities[85] = _t87;
+    shared_quantities[86] = _t88;
+    shared_quantities[87] = _t104;
+    shared_quantities[88] = _t105;
+    shared_quantities[89] = _t106;
+    shared_quantities[90] = _t107;
+    shared_quantities[91] = _t108;
+    shared_quantities[92] = _t109;
+    shared_quantities[93] = _t110;
+    shared_quantities[94] = _t111;
 }
 
 /* trailer2_forward_dynamics: documented in trailer2_model.h.
-   operations after CSE: 139 add, 259 mul, 4 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 138 add, 268 mul, 4 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *tau, trailer2_real_t *qddot)
 {
@@ -271,7 +272,7 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
 }
 
 /* trailer2_model_prepare: documented in trailer2_model.h.
-   operations after CSE: 3 add, 34 mul, 3 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 36 mul, 3 div, 0 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
     trailer2_model_prepared_t *prepared)
 {
@@ -330,24 +331,20 @@ trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
     const trailer2_real_t _t13 = TRAILER2_LIT(0.5)*radius_left;
     const trailer2_real_t _t14 = TRAILER2_LIT(2.4154589371980677)*radius_right;
     const trailer2_real_t _t15 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t16 = TRAILER2_LIT(0.2)*radius_cart_left;
-    const trailer2_real_t _t17 = -TRAILER2_LIT(0.6)*radius_cart_left;
-    const trailer2_real_t _t18 = -TRAILER2_LIT(0.2)*radius_cart_right;
-    const trailer2_real_t _t19 = -TRAILER2_LIT(0.6)*radius_cart_right;
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.2)*radius_cart2_left;
-    const trailer2_real_t _t21 = -TRAILER2_LIT(0.6)*radius_cart2_left;
-    const trailer2_real_t _t22 = -TRAILER2_LIT(0.2)*radius_cart2_right;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(0.6)*radius_cart2_right;
-    const trailer2_real_t _t24 = J_theta_right*_t2;
-    const trailer2_real_t _t25 = J_theta_left*_t3;
-    const trailer2_real_t _t26 = _t2*_t24 + _t25*_t3;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.207)*_t2;
-    const trailer2_real_t _t28 = J_theta_right*_t27;
-    const trailer2_real_t _t29 = -TRAILER2_LIT(0.207)*_t3;
-    const trailer2_real_t _t30 = J_theta_left*_t29;
-    const trailer2_real_t _t31 = _t2*_t28 + _t3*_t30;
-    const trailer2_real_t _t32 = _t27*_t28 + _t29*_t30;
-    const trailer2_real_t _t33 = _t0*_t1;
+    const trailer2_real_t _t16 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t17 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t18 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t19 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t20 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t21 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t22 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t23 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t24 = _t0*_t1;
+    const trailer2_real_t _t25 = J_theta_left*_t3*_t3 + J_theta_right*_t2*_t2 + J_x_tractor;
+    const trailer2_real_t _t26 = TRAILER2_LIT(0.207)*_t2;
+    const trailer2_real_t _t27 = -TRAILER2_LIT(0.207)*_t3;
+    const trailer2_real_t _t28 = J_theta_left*_t27*_t3 + J_theta_right*_t2*_t26;
+    const trailer2_real_t _t29 = J_theta_left*_t27*_t27 + J_theta_right*_t26*_t26;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -404,42 +401,41 @@ trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
     prepared->forward_dynamics[4] = J_theta_cart_left;
     prepared->forward_dynamics[5] = J_theta_cart_right;
     prepared->forward_dynamics[6] = J_theta_tractor;
-    prepared->forward_dynamics[7] = J_x_tractor;
-    prepared->forward_dynamics[8] = K_theta_cart_x_tractor;
-    prepared->forward_dynamics[9] = K_theta_cart_x_tractor_2;
-    prepared->forward_dynamics[10] = K_theta_cart2_x_tractor;
-    prepared->forward_dynamics[11] = K_theta_cart2_x_tractor_2;
-    prepared->forward_dynamics[12] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[13] = K_theta_tractor_x_tractor_2;
-    prepared->forward_dynamics[14] = _t2;
-    prepared->forward_dynamics[15] = _t3;
-    prepared->forward_dynamics[16] = _t6;
-    prepared->forward_dynamics[17] = _t7;
-    prepared->forward_dynamics[18] = _t10;
-    prepared->forward_dynamics[19] = _t11;
-    prepared->forward_dynamics[20] = _t12;
-    prepared->forward_dynamics[21] = _t13;
-    prepared->forward_dynamics[22] = _t14;
-    prepared->forward_dynamics[23] = _t15;
-    prepared->forward_dynamics[24] = _t16;
-    prepared->forward_dynamics[25] = _t17;
-    prepared->forward_dynamics[26] = _t18;
-    prepared->forward_dynamics[27] = _t19;
-    prepared->forward_dynamics[28] = _t20;
-    prepared->forward_dynamics[29] = _t21;
-    prepared->forward_dynamics[30] = _t22;
-    prepared->forward_dynamics[31] = _t23;
-    prepared->forward_dynamics[32] = _t26;
-    prepared->forward_dynamics[33] = _t27;
-    prepared->forward_dynamics[34] = _t29;
-    prepared->forward_dynamics[35] = _t31;
-    prepared->forward_dynamics[36] = _t32;
-    prepared->forward_dynamics[37] = _t33;
+    prepared->forward_dynamics[7] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[8] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[9] = K_theta_cart2_x_tractor;
+    prepared->forward_dynamics[10] = K_theta_cart2_x_tractor_2;
+    prepared->forward_dynamics[11] = K_theta_tractor_x_tractor;
+    prepared->forward_dynamics[12] = K_theta_tractor_x_tractor_2;
+    prepared->forward_dynamics[13] = _t2;
+    prepared->forward_dynamics[14] = _t3;
+    prepared->forward_dynamics[15] = _t6;
+    prepared->forward_dynamics[16] = _t7;
+    prepared->forward_dynamics[17] = _t10;
+    prepared->forward_dynamics[18] = _t11;
+    prepared->forward_dynamics[19] = _t12;
+    prepared->forward_dynamics[20] = _t13;
+    prepared->forward_dynamics[21] = _t14;
+    prepared->forward_dynamics[22] = _t15;
+    prepared->forward_dynamics[23] = _t16;
+    prepared->forward_dynamics[24] = _t17;
+    prepared->forward_dynamics[25] = _t18;
+    prepared->forward_dynamics[26] = _t19;
+    prepared->forward_dynamics[27] = _t20;
+    prepared->forward_dynamics[28] = _t21;
+    prepared->forward_dynamics[29] = _t22;
+    prepared->forward_dynamics[30] = _t23;
+    prepared->forward_dynamics[31] = _t24;
+    prepared->forward_dynamics[32] = _t25;
+    prepared->forward_dynamics[33] = _t26;
+    prepared->forward_dynamics[34] = _t27;
+    prepared->forward_dynamics[35] = _t28;
+    prepared->forward_dynamics[36] = _t29;
     return TRAILER2_OK;
 }
 
 /* trailer2_forward_dynamics_prepared: documented in trailer2_model.h.
-   operations after CSE: 136 add, 225 mul, 1 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 134 add, 232 mul, 1 div, 6 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepared_t *prepared,
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *tau,
     trailer2_real_t *qddot)
@@ -451,8 +447,8 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
     if (((trailer2_exp_carry(theta_tractor)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t106 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t107 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t122 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t123 = TRAILER2_COS(theta_tractor);
     const trailer2_real_t theta_cart = q[3];
     const trailer2_real_t theta_cart2 = q[4];
     const trailer2_real_t thetadot_right = qdot[5];
@@ -465,194 +461,189 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
             & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_INPUT;
     }
-    const trailer2_real_t _t34 = -theta_tractor;
-    const trailer2_real_t _t35 = _t34 + theta_cart;
-    const trailer2_real_t _t36 = TRAILER2_SIN(_t35);
-    const trailer2_real_t _t37 = TRAILER2_COS(_t35);
-    const trailer2_real_t _t38 = TRAILER2_LIT(0.85)*_t36;
-    const trailer2_real_t _t39 = TRAILER2_LIT(0.85)*_t37;
-    const trailer2_real_t _t40 = _t34 + theta_cart2;
-    const trailer2_real_t _t41 = TRAILER2_SIN(_t40);
-    const trailer2_real_t _t42 = TRAILER2_COS(_t40);
-    const trailer2_real_t _t12 = prepared->forward_dynamics[20];
-    const trailer2_real_t _t13 = prepared->forward_dynamics[21];
-    const trailer2_real_t _t43 = _t12*thetadot_right + _t13*thetadot_left;
-    const trailer2_real_t _t7 = prepared->forward_dynamics[17];
-    const trailer2_real_t _t44 = _t36*_t7;
-    const trailer2_real_t _t45 = -TRAILER2_LIT(0.3)*_t37;
-    const trailer2_real_t _t46 = -_t45*_t7;
-    const trailer2_real_t _t14 = prepared->forward_dynamics[22];
-    const trailer2_real_t _t15 = prepared->forward_dynamics[23];
-    const trailer2_real_t _t47 = _t14*thetadot_right + _t15*thetadot_left;
-    const trailer2_real_t _t48 = _t43*_t44 + _t46*_t47;
-    const trailer2_real_t _t49 = _t43*_t48;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(0.3)*_t47;
-    const trailer2_real_t _t51 = _t48*_t50;
-    const trailer2_real_t _t52 = _t38*_t44 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t53 = -_t39*_t44;
-    const trailer2_real_t _t54 = _t41*_t52 - _t42*_t53;
-    const trailer2_real_t _t11 = prepared->forward_dynamics[19];
+    const trailer2_real_t _t30 = -theta_tractor;
+    const trailer2_real_t _t31 = _t30 + theta_cart;
+    const trailer2_real_t _t32 = TRAILER2_SIN(_t31);
+    const trailer2_real_t _t33 = TRAILER2_COS(_t31);
+    const trailer2_real_t _t34 = TRAILER2_LIT(0.85)*_t32;
+    const trailer2_real_t _t35 = TRAILER2_LIT(0.85)*_t33;
+    const trailer2_real_t _t36 = _t30 + theta_cart2;
+    const trailer2_real_t _t37 = TRAILER2_SIN(_t36);
+    const trailer2_real_t _t38 = TRAILER2_COS(_t36);
+    const trailer2_real_t _t12 = prepared->forward_dynamics[19];
+    const trailer2_real_t _t13 = prepared->forward_dynamics[20];
+    const trailer2_real_t _t39 = _t12*thetadot_right + _t13*thetadot_left;
+    const trailer2_real_t _t7 = prepared->forward_dynamics[16];
+    const trailer2_real_t _t40 = _t32*_t7;
+    const trailer2_real_t _t41 = -TRAILER2_LIT(0.3)*_t33;
+    const trailer2_real_t _t42 = -_t41*_t7;
+    const trailer2_real_t _t14 = prepared->forward_dynamics[21];
+    const trailer2_real_t _t15 = prepared->forward_dynamics[22];
+    const trailer2_real_t _t43 = _t14*thetadot_right + _t15*thetadot_left;
+    const trailer2_real_t _t44 = _t39*_t40 + _t42*_t43;
+    const trailer2_real_t _t45 = _t39*_t44;
+    const trailer2_real_t _t46 = -TRAILER2_LIT(0.3)*_t43;
+    const trailer2_real_t _t47 = _t44*_t46;
+    const trailer2_real_t _t48 = _t34*_t40 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t49 = -_t35*_t40;
+    const trailer2_real_t _t50 = _t37*_t48 - _t38*_t49;
+    const trailer2_real_t _t11 = prepared->forward_dynamics[18];
+    const trailer2_real_t _t51 = _t11*_t50;
+    const trailer2_real_t _t52 = _t34*_t42;
+    const trailer2_real_t _t53 = -_t35*_t42 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t54 = _t37*_t52 - _t38*_t53;
     const trailer2_real_t _t55 = _t11*_t54;
-    const trailer2_real_t _t56 = _t38*_t46;
-    const trailer2_real_t _t57 = -_t39*_t46 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t58 = _t41*_t56 - _t42*_t57;
-    const trailer2_real_t _t59 = _t11*_t58;
-    const trailer2_real_t _t60 = _t43*_t55 + _t47*_t59;
-    const trailer2_real_t _t61 = _t38*_t48 + _t43;
-    const trailer2_real_t _t62 = _t60*_t61;
-    const trailer2_real_t _t63 = -_t39*_t48 + _t50;
-    const trailer2_real_t _t64 = _t60*_t63;
-    const trailer2_real_t _t6 = prepared->forward_dynamics[16];
-    const trailer2_real_t _t16 = prepared->forward_dynamics[24];
-    const trailer2_real_t _t17 = prepared->forward_dynamics[25];
-    const trailer2_real_t _t65 = _t6*(_t16*_t36 + _t17*_t37);
-    const trailer2_real_t _t18 = prepared->forward_dynamics[26];
-    const trailer2_real_t _t19 = prepared->forward_dynamics[27];
-    const trailer2_real_t _t66 = _t6*(_t18*_t36 + _t19*_t37);
-    const trailer2_real_t _t67 = _t41*_t53 + _t42*_t52;
-    const trailer2_real_t _t10 = prepared->forward_dynamics[18];
-    const trailer2_real_t _t20 = prepared->forward_dynamics[28];
-    const trailer2_real_t _t21 = prepared->forward_dynamics[29];
-    const trailer2_real_t _t68 = _t10*(_t20*_t54 + _t21*_t67);
-    const trailer2_real_t _t22 = prepared->forward_dynamics[30];
-    const trailer2_real_t _t23 = prepared->forward_dynamics[31];
-    const trailer2_real_t _t69 = _t10*(_t22*_t54 + _t23*_t67);
-    const trailer2_real_t J_theta_cart_right = prepared->forward_dynamics[5];
-    const trailer2_real_t _t70 = J_theta_cart_right*_t65;
-    const trailer2_real_t J_theta_cart_left = prepared->forward_dynamics[4];
-    const trailer2_real_t _t71 = J_theta_cart_left*_t66;
-    const trailer2_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
-    const trailer2_real_t _t72 = J_theta_cart2_right*_t68;
+    const trailer2_real_t _t56 = _t39*_t51 + _t43*_t55;
+    const trailer2_real_t _t57 = _t34*_t44 + _t39;
+    const trailer2_real_t _t58 = _t56*_t57;
+    const trailer2_real_t _t59 = -_t35*_t44 + _t46;
+    const trailer2_real_t _t60 = _t56*_t59;
+    const trailer2_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[9];
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[10];
+    const trailer2_real_t _t61 = K_theta_cart2_x_tractor*_t37 + K_theta_cart2_x_tractor_2*_t38;
+    const trailer2_real_t _t62 = _t48*_t61;
+    const trailer2_real_t _t63 = -K_theta_cart2_x_tractor*_t38 + K_theta_cart2_x_tractor_2*_t37;
+    const trailer2_real_t _t64 = _t49*_t63;
+    const trailer2_real_t _t65 = _t37*_t49 + _t38*_t48;
+    const trailer2_real_t _t10 = prepared->forward_dynamics[17];
+    const trailer2_real_t _t16 = prepared->forward_dynamics[23];
+    const trailer2_real_t _t17 = prepared->forward_dynamics[24];
+    const trailer2_real_t _t66 = _t10*(_t16*_t50 + _t17*_t65);
     const trailer2_real_t J_theta_cart2_left = prepared->forward_dynamics[2];
-    const trailer2_real_t _t73 = J_theta_cart2_left*_t69;
-    const trailer2_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[8];
-    const trailer2_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[9];
-    const trailer2_real_t _t74 = K_theta_cart_x_tractor*_t36 + K_theta_cart_x_tractor_2*_t37;
-    const trailer2_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[10];
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[11];
-    const trailer2_real_t _t75 = K_theta_cart2_x_tractor*_t41 + K_theta_cart2_x_tractor_2*_t42;
-    const trailer2_real_t _t76 = _t55*_t75;
-    const trailer2_real_t _t77 = _t44*_t74 + _t76;
-    const trailer2_real_t J_x_tractor = prepared->forward_dynamics[7];
-    const trailer2_real_t _t78 = J_x_tractor + _t77;
-    const trailer2_real_t _t79 = -K_theta_cart2_x_tractor*_t42 + K_theta_cart2_x_tractor_2*_t41;
-    const trailer2_real_t _t80 = _t55*_t79;
+    const trailer2_real_t _t67 = J_theta_cart2_left*_t66;
+    const trailer2_real_t _t18 = prepared->forward_dynamics[25];
+    const trailer2_real_t _t19 = prepared->forward_dynamics[26];
+    const trailer2_real_t _t68 = _t10*(_t18*_t50 + _t19*_t65);
+    const trailer2_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
+    const trailer2_real_t _t69 = J_theta_cart2_right*_t68;
+    const trailer2_real_t _t6 = prepared->forward_dynamics[15];
+    const trailer2_real_t _t20 = prepared->forward_dynamics[27];
+    const trailer2_real_t _t21 = prepared->forward_dynamics[28];
+    const trailer2_real_t _t70 = _t6*(_t20*_t32 + _t21*_t33);
+    const trailer2_real_t J_theta_cart_left = prepared->forward_dynamics[4];
+    const trailer2_real_t _t71 = J_theta_cart_left*_t70;
+    const trailer2_real_t _t22 = prepared->forward_dynamics[29];
+    const trailer2_real_t _t23 = prepared->forward_dynamics[30];
+    const trailer2_real_t _t72 = _t6*(_t22*_t32 + _t23*_t33);
+    const trailer2_real_t J_theta_cart_right = prepared->forward_dynamics[5];
+    const trailer2_real_t _t73 = J_theta_cart_right*_t72;
+    const trailer2_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[7];
+    const trailer2_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[8];
+    const trailer2_real_t _t74 = -K_theta_cart_x_tractor*_t33 + K_theta_cart_x_tractor_2*_t32;
+    const trailer2_real_t _t75 = TRAILER2_LIT(0.3)*_t74;
     const trailer2_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer2_real_t _t81 = J_theta_cart*_t44 + _t38*_t76 - _t39*_t80 + _t74;
+    const trailer2_real_t _t76 = J_theta_cart*_t40;
     const trailer2_real_t J_theta_cart2 = prepared->forward_dynamics[1];
-    const trailer2_real_t _t82 = J_theta_cart2*_t55 + _t52*_t75 + _t53*_t79;
-    const trailer2_real_t _t26 = prepared->forward_dynamics[32];
-    const trailer2_real_t _t83 = _t26 + _t44*_t81 + _t55*_t82 + _t65*_t70 + _t66*_t71 + _t68*_t72
-            + _t69*_t73 + _t78;
-    const trailer2_real_t _t84 = _t59*_t75;
-    const trailer2_real_t _t85 = _t46*_t74 + _t84;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[13];
-    const trailer2_real_t _t86 = K_theta_tractor_x_tractor_2 + _t85;
-    const trailer2_real_t _t87 = TRAILER2_LIT(0.3)*_t36;
-    const trailer2_real_t _t88 = _t6*(-_t16*_t45 - _t17*_t87);
-    const trailer2_real_t _t89 = J_theta_cart_right*_t88;
-    const trailer2_real_t _t90 = _t6*(-_t18*_t45 - _t19*_t87);
-    const trailer2_real_t _t91 = J_theta_cart_left*_t90;
-    const trailer2_real_t _t92 = _t41*_t57 + _t42*_t56;
-    const trailer2_real_t _t93 = _t10*(_t20*_t58 + _t21*_t92);
-    const trailer2_real_t _t94 = J_theta_cart2_right*_t93;
-    const trailer2_real_t _t95 = _t10*(_t22*_t58 + _t23*_t92);
-    const trailer2_real_t _t96 = J_theta_cart2_left*_t95;
-    const trailer2_real_t _t97 = -K_theta_cart_x_tractor*_t37 + K_theta_cart_x_tractor_2*_t36;
-    const trailer2_real_t _t98 = _t59*_t79;
-    const trailer2_real_t _t99 = J_theta_cart*_t46 + _t38*_t84 - _t39*_t98 - TRAILER2_LIT(0.3)*_t97;
-    const trailer2_real_t _t100 = J_theta_cart2*_t59 + _t56*_t75 + _t57*_t79;
-    const trailer2_real_t _t31 = prepared->forward_dynamics[35];
-    const trailer2_real_t _t101 = _t100*_t55 + _t31 + _t44*_t99 + _t65*_t89 + _t66*_t91 + _t68*_t94
-            + _t69*_t96 + _t86;
-    const trailer2_real_t _t102 = _t46*_t97 + _t98;
+    const trailer2_real_t _t77 = J_theta_cart2*_t51;
+    const trailer2_real_t _t78 = _t52*_t61;
+    const trailer2_real_t _t79 = _t53*_t63;
+    const trailer2_real_t _t80 = _t78 + _t79;
+    const trailer2_real_t _t81 = _t43*_t43;
+    const trailer2_real_t _t82 = TRAILER2_LIT(0.3)*_t81;
+    const trailer2_real_t _t83 = -_t39*_t43;
+    const trailer2_real_t _t24 = prepared->forward_dynamics[31];
+    const trailer2_real_t _t84 = -_t24*_t83;
+    const trailer2_real_t _t85 = K_theta_cart_x_tractor*_t32 + K_theta_cart_x_tractor_2*_t33;
+    const trailer2_real_t _t86 = _t74*_t84 + _t82*_t85;
+    const trailer2_real_t _t87 = _t44*_t44;
+    const trailer2_real_t _t88 = -_t32*_t47 - _t33*_t45;
+    const trailer2_real_t _t89 = _t32*_t82 - _t33*_t84 - _t88;
+    const trailer2_real_t _t90 = _t7*_t89;
+    const trailer2_real_t _t91 = _t34*_t90 + _t35*_t87 + _t82;
+    const trailer2_real_t _t92 = _t34*_t87 - _t35*_t90 + _t84;
+    const trailer2_real_t _t93 = _t61*_t91 + _t63*_t92;
+    const trailer2_real_t _t94 = _t56*_t56;
+    const trailer2_real_t _t95 = -_t37*_t60 - _t38*_t58;
+    const trailer2_real_t _t96 = _t35*_t87;
+    const trailer2_real_t _t97 = _t34*_t90 + _t82 + _t96;
+    const trailer2_real_t _t98 = _t34*_t87;
+    const trailer2_real_t _t99 = -_t35*_t90 + _t84 + _t98;
+    const trailer2_real_t _t100 = _t37*_t97 - _t38*_t99 - _t95;
+    const trailer2_real_t _t101 = _t100*_t11;
+    const trailer2_real_t _t102 = _t101*_t63 + _t61*_t94;
+    const trailer2_real_t _t103 = _t101*_t61 - _t63*_t94;
+    const trailer2_real_t _t25 = prepared->forward_dynamics[32];
+    const trailer2_real_t _t104 = J_theta_cart2_left*_t66*_t66 + J_theta_cart2_right*_t68*_t68
+            + J_theta_cart_left*_t70*_t70 + J_theta_cart_right*_t72*_t72 + _t25;
+    const trailer2_real_t _t105 = J_theta_cart*_t40*_t40 + _t104 + TRAILER2_LIT(2.0)*_t40*_t85;
+    const trailer2_real_t _t106 = J_theta_cart2*_t51*_t51 + _t105
+            + _t51*(TRAILER2_LIT(2.0)*_t62 + TRAILER2_LIT(2.0)*_t64);
+    const trailer2_real_t _t107 = TRAILER2_LIT(0.3)*_t32;
+    const trailer2_real_t _t108 = _t6*(-_t107*_t23 - _t22*_t41);
+    const trailer2_real_t _t109 = _t6*(-_t107*_t21 - _t20*_t41);
+    const trailer2_real_t _t110 = _t37*_t53 + _t38*_t52;
+    const trailer2_real_t _t111 = _t10*(_t110*_t19 + _t18*_t54);
+    const trailer2_real_t _t112 = _t10*(_t110*_t17 + _t16*_t54);
+    const trailer2_real_t _t28 = prepared->forward_dynamics[35];
+    const trailer2_real_t _t113 = _t108*_t73 + _t109*_t71 + _t111*_t69 + _t112*_t67 + _t28;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[12];
+    const trailer2_real_t _t114 = K_theta_tractor_x_tractor_2 + _t113;
+    const trailer2_real_t _t115 = _t114 - _t40*_t75 + _t42*(_t76 + _t85);
+    const trailer2_real_t _t116 = _t115 + _t51*_t80 + _t55*(_t62 + _t64 + _t77);
+    const trailer2_real_t _t29 = prepared->forward_dynamics[36];
+    const trailer2_real_t _t117 = J_theta_cart2_left*_t112*_t112 + J_theta_cart2_right*_t111*_t111
+            + J_theta_cart_left*_t109*_t109 + J_theta_cart_right*_t108*_t108 + _t29;
     const trailer2_real_t J_theta_tractor = prepared->forward_dynamics[6];
-    const trailer2_real_t _t103 = J_theta_tractor - TRAILER2_LIT(0.3)*_t102;
-    const trailer2_real_t _t32 = prepared->forward_dynamics[36];
-    const trailer2_real_t _t104 = _t100*_t59 + _t103 + _t32 + _t46*_t99 + _t88*_t89 + _t90*_t91
-            + _t93*_t94 + _t95*_t96;
-    const trailer2_real_t _t105 = -_t101*_t101 + _t104*_t83;
-    const trailer2_real_t _t108 = _t47*_t47;
-    const trailer2_real_t _t109 = _t48*_t48;
-    const trailer2_real_t _t110 = _t60*_t60;
-    const trailer2_real_t _t111 = TRAILER2_LIT(0.3)*_t108;
-    const trailer2_real_t _t112 = _t109*_t39;
-    const trailer2_real_t _t113 = _t109*_t38;
-    const trailer2_real_t _t114 = -_t43*_t47;
-    const trailer2_real_t _t33 = prepared->forward_dynamics[37];
-    const trailer2_real_t _t115 = -_t114*_t33;
-    const trailer2_real_t _t116 = -_t36*_t51 - _t37*_t49;
-    const trailer2_real_t _t117 = _t36*_t49 - _t37*_t51;
-    const trailer2_real_t _t118 = _t111*_t36 - _t115*_t37 - _t116;
-    const trailer2_real_t _t119 = _t111*_t37 + _t115*_t36 - _t117;
-    const trailer2_real_t _t120 = _t118*_t7;
-    const trailer2_real_t _t121 = _t6*(_t118*_t16 + _t119*_t17);
-    const trailer2_real_t _t122 = _t6*(_t118*_t18 + _t119*_t19);
-    const trailer2_real_t _t123 = -_t41*_t64 - _t42*_t62;
-    const trailer2_real_t _t124 = _t41*_t62 - _t42*_t64;
-    const trailer2_real_t _t125 = _t111 + _t112 + _t120*_t38;
-    const trailer2_real_t _t126 = _t113 + _t115 - _t120*_t39;
-    const trailer2_real_t _t127 = -_t123 + _t125*_t41 - _t126*_t42;
-    const trailer2_real_t _t128 = -_t124 + _t125*_t42 + _t126*_t41;
-    const trailer2_real_t _t129 = _t11*_t127;
-    const trailer2_real_t _t130 = _t10*(_t127*_t20 + _t128*_t21);
-    const trailer2_real_t _t131 = _t10*(_t127*_t22 + _t128*_t23);
-    const trailer2_real_t _t132 = _t109*_t39 + _t111 + _t120*_t38;
-    const trailer2_real_t _t133 = _t109*_t38 + _t115 - _t120*_t39;
-    const trailer2_real_t _t134 = -_t110*_t79 + _t129*_t75;
-    const trailer2_real_t _t135 = _t110*_t75 + _t129*_t79;
-    const trailer2_real_t _t136 = -_t109*_t97 + _t120*_t74 + _t134;
-    const trailer2_real_t _t137 = _t109*_t74 + _t120*_t97 + _t135;
-    const trailer2_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[12];
-    const trailer2_real_t _t138 = K_theta_tractor_x_tractor*_t108 + _t136;
-    const trailer2_real_t _t139 = J_theta_cart_right*_t121;
-    const trailer2_real_t _t140 = J_theta_cart_left*_t122;
-    const trailer2_real_t _t141 = J_theta_cart2_right*_t130;
-    const trailer2_real_t _t142 = J_theta_cart2_left*_t131;
-    const trailer2_real_t _t143 = -K_theta_tractor_x_tractor*_t115 - TRAILER2_LIT(0.3)*_t137;
-    const trailer2_real_t _t144 = J_theta_cart*_t120 + _t111*_t74 + _t115*_t97 + _t134*_t38
-            - _t135*_t39;
-    const trailer2_real_t _t145 = J_theta_cart2*_t129 + _t132*_t75 + _t133*_t79;
-    const trailer2_real_t _t146 = _t138 + _t139*_t65 + _t140*_t66 + _t141*_t68 + _t142*_t69
-            + _t144*_t44 + _t145*_t55;
-    const trailer2_real_t _t147 = _t139*_t88 + _t140*_t90 + _t141*_t93 + _t142*_t95 + _t143
-            + _t144*_t46 + _t145*_t59;
-    const trailer2_real_t _t2 = prepared->forward_dynamics[14];
-    const trailer2_real_t _t3 = prepared->forward_dynamics[15];
-    const trailer2_real_t _t148 = -_t146 + _t2*tau_right + _t3*tau_left;
-    const trailer2_real_t _t27 = prepared->forward_dynamics[33];
-    const trailer2_real_t _t29 = prepared->forward_dynamics[34];
-    const trailer2_real_t _t149 = -_t147 + _t27*tau_right + _t29*tau_left;
-    const trailer2_real_t _t150 = TRAILER2_LIT(1.0)/_t105;
-    const trailer2_real_t _t151 = _t150*(-_t101*_t149 + _t104*_t148);
-    const trailer2_real_t _t152 = _t150*(-_t101*_t148 + _t149*_t83);
-    const trailer2_real_t _t153 = _t120 + _t151*_t44 + _t152*_t46;
-    const trailer2_real_t _t154 = _t129 + _t151*_t55 + _t152*_t59;
-    const trailer2_real_t _t155 = _t151*_t2 + _t152*_t27;
-    const trailer2_real_t _t156 = _t151*_t3 + _t152*_t29;
-    const trailer2_real_t _t157 = _t121 + _t151*_t65 + _t152*_t88;
-    const trailer2_real_t _t158 = _t122 + _t151*_t66 + _t152*_t90;
-    const trailer2_real_t _t159 = _t130 + _t151*_t68 + _t152*_t93;
-    const trailer2_real_t _t160 = _t131 + _t151*_t69 + _t152*_t95;
-    const trailer2_real_t _t161 = -_t106*_t115 + _t107*_t151;
-    const trailer2_real_t _t162 = _t106*_t151 + _t107*_t115;
-    if (!(_t83 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer2_real_t _t118 = J_theta_tractor + _t117;
+    const trailer2_real_t _t119 = J_theta_cart*_t42*_t42 + _t118 - TRAILER2_LIT(0.6)*_t42*_t74;
+    const trailer2_real_t _t120 = J_theta_cart2*_t55*_t55 + _t119 + _t55*(_t78 + _t79 + _t80);
+    const trailer2_real_t _t121 = _t106*_t120 - _t116*_t116;
+    const trailer2_real_t _t124 = _t32*_t45 - _t33*_t47;
+    const trailer2_real_t _t125 = -_t124 + _t32*_t84 + _t33*_t82;
+    const trailer2_real_t _t126 = _t6*(_t125*_t23 + _t22*_t89);
+    const trailer2_real_t _t127 = _t6*(_t125*_t21 + _t20*_t89);
+    const trailer2_real_t _t128 = _t37*_t58 - _t38*_t60;
+    const trailer2_real_t _t129 = -_t128 + _t37*_t99 + _t38*_t97;
+    const trailer2_real_t _t130 = _t10*(_t100*_t18 + _t129*_t19);
+    const trailer2_real_t _t131 = _t10*(_t100*_t16 + _t129*_t17);
+    const trailer2_real_t _t132 = _t126*_t73 + _t127*_t71 + _t130*_t69 + _t131*_t67;
+    const trailer2_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[11];
+    const trailer2_real_t _t133 = K_theta_tractor_x_tractor*_t81 + _t132;
+    const trailer2_real_t _t134 = _t133 + _t40*_t86 - _t74*_t87 + _t90*(_t76 + _t85);
+    const trailer2_real_t _t135 = _t101*_t77 + _t102*_t49 + _t103*_t48 + _t134 + _t51*_t93;
+    const trailer2_real_t _t136 = J_theta_cart2_left*_t112*_t131 + J_theta_cart2_right*_t111*_t130
+            + J_theta_cart_left*_t109*_t127 + J_theta_cart_right*_t108*_t126;
+    const trailer2_real_t _t137 = -K_theta_tractor_x_tractor*_t84 + _t136;
+    const trailer2_real_t _t138 = _t137 + _t42*(J_theta_cart*_t90 + _t86) - _t75*_t90
+            - TRAILER2_LIT(0.3)*_t85*_t87;
+    const trailer2_real_t _t139 = _t102*_t53 + _t103*_t52 + _t138
+            + _t55*(J_theta_cart2*_t101 + _t93);
+    const trailer2_real_t _t2 = prepared->forward_dynamics[13];
+    const trailer2_real_t _t3 = prepared->forward_dynamics[14];
+    const trailer2_real_t _t140 = -_t135 + _t2*tau_right + _t3*tau_left;
+    const trailer2_real_t _t26 = prepared->forward_dynamics[33];
+    const trailer2_real_t _t27 = prepared->forward_dynamics[34];
+    const trailer2_real_t _t141 = -_t139 + _t26*tau_right + _t27*tau_left;
+    const trailer2_real_t _t142 = TRAILER2_LIT(1.0)/_t121;
+    const trailer2_real_t _t143 = _t142*(-_t116*_t141 + _t120*_t140);
+    const trailer2_real_t _t144 = _t142*(_t106*_t141 - _t116*_t140);
+    const trailer2_real_t _t145 = _t143*_t40 + _t144*_t42 + _t90;
+    const trailer2_real_t _t146 = _t101 + _t143*_t51 + _t144*_t55;
+    const trailer2_real_t _t147 = _t143*_t2 + _t144*_t26;
+    const trailer2_real_t _t148 = _t143*_t3 + _t144*_t27;
+    const trailer2_real_t _t149 = _t108*_t144 + _t126 + _t143*_t72;
+    const trailer2_real_t _t150 = _t109*_t144 + _t127 + _t143*_t70;
+    const trailer2_real_t _t151 = _t111*_t144 + _t130 + _t143*_t68;
+    const trailer2_real_t _t152 = _t112*_t144 + _t131 + _t143*_t66;
+    const trailer2_real_t _t153 = -_t122*_t84 + _t123*_t143;
+    const trailer2_real_t _t154 = _t122*_t143 + _t123*_t84;
+    if (!(_t106 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t105 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t121 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t161;
-    const trailer2_real_t r_1 = _t162;
-    const trailer2_real_t r_2 = _t152;
-    const trailer2_real_t r_3 = _t153;
-    const trailer2_real_t r_4 = _t154;
-    const trailer2_real_t r_5 = _t155;
-    const trailer2_real_t r_6 = _t156;
-    const trailer2_real_t r_7 = _t157;
-    const trailer2_real_t r_8 = _t158;
-    const trailer2_real_t r_9 = _t159;
-    const trailer2_real_t r_10 = _t160;
+    const trailer2_real_t r_0 = _t153;
+    const trailer2_real_t r_1 = _t154;
+    const trailer2_real_t r_2 = _t144;
+    const trailer2_real_t r_3 = _t145;
+    const trailer2_real_t r_4 = _t146;
+    const trailer2_real_t r_5 = _t147;
+    const trailer2_real_t r_6 = _t148;
+    const trailer2_real_t r_7 = _t149;
+    const trailer2_real_t r_8 = _t150;
+    const trailer2_real_t r_9 = _t151;
+    const trailer2_real_t r_10 = _t152;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
             | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4) | trailer2_exp_carry(r_5)
             | trailer2_exp_carry(r_6) | trailer2_exp_carry(r_7) | trailer2_exp_carry(r_8)
@@ -762,7 +753,7 @@ void trailer2_kinematics(const trailer2_params_t *p, const trailer2_real_t *q,
 }
 
 /* trailer2_minimal_mass_matrix: documented in trailer2_model.h.
-   operations after CSE: 67 add, 146 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 66 add, 157 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *M)
 {
@@ -796,127 +787,119 @@ void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_rea
     const trailer2_real_t _t18 = -TRAILER2_LIT(0.6)*_t17;
     const trailer2_real_t _t19 = TRAILER2_LIT(1.0)/_t18;
     const trailer2_real_t _t20 = _t17*_t19;
-    const trailer2_real_t _t21 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t22 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t23 = -TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t _t24 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t25 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t26 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t27 = TRAILER2_LIT(0.2)*radius_cart_left;
-    const trailer2_real_t _t28 = -TRAILER2_LIT(0.6)*radius_cart_left;
-    const trailer2_real_t _t29 = -TRAILER2_LIT(0.2)*radius_cart_right;
-    const trailer2_real_t _t30 = -TRAILER2_LIT(0.6)*radius_cart_right;
-    const trailer2_real_t _t31 = _t11*_t2;
-    const trailer2_real_t _t32 = _t10*(_t2*_t27 + _t28*_t3);
-    const trailer2_real_t _t33 = _t10*(_t2*_t29 + _t3*_t30);
-    const trailer2_real_t _t34 = _t12*_t31 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t35 = -_t13*_t31;
-    const trailer2_real_t _t36 = _t15*_t34 - _t16*_t35;
-    const trailer2_real_t _t37 = _t15*_t35 + _t16*_t34;
-    const trailer2_real_t _t38 = TRAILER2_LIT(0.2)*radius_cart2_left;
-    const trailer2_real_t _t39 = -TRAILER2_LIT(0.6)*radius_cart2_left;
-    const trailer2_real_t _t40 = -TRAILER2_LIT(0.2)*radius_cart2_right;
-    const trailer2_real_t _t41 = -TRAILER2_LIT(0.6)*radius_cart2_right;
-    const trailer2_real_t _t42 = _t20*_t36;
-    const trailer2_real_t _t43 = _t19*(_t36*_t38 + _t37*_t39);
-    const trailer2_real_t _t44 = _t19*(_t36*_t40 + _t37*_t41);
-    const trailer2_real_t _t45 = TRAILER2_LIT(0.207)*_t6;
-    const trailer2_real_t _t46 = -TRAILER2_LIT(0.207)*_t7;
-    const trailer2_real_t _t47 = -_t11*_t23;
-    const trailer2_real_t _t48 = _t10*(-_t23*_t27 - _t24*_t28);
-    const trailer2_real_t _t49 = _t10*(-_t23*_t29 - _t24*_t30);
-    const trailer2_real_t _t50 = _t12*_t47;
-    const trailer2_real_t _t51 = -_t13*_t47 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t52 = _t15*_t50 - _t16*_t51;
-    const trailer2_real_t _t53 = _t15*_t51 + _t16*_t50;
-    const trailer2_real_t _t54 = _t20*_t52;
-    const trailer2_real_t _t55 = _t19*(_t38*_t52 + _t39*_t53);
-    const trailer2_real_t _t56 = _t19*(_t40*_t52 + _t41*_t53);
-    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t57 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t58 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t59 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const trailer2_real_t _t60 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t61 = _t42*_t59;
-    const trailer2_real_t _t62 = _t42*_t60;
-    const trailer2_real_t _t63 = _t31*_t57 + _t61;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t64 = J_theta_right*_t6;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t65 = J_theta_left*_t7;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t66 = J_theta_cart_right*_t32;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t67 = J_theta_cart_left*_t33;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t68 = J_theta_cart2_right*_t43;
+    const trailer2_real_t _t21 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t22 = _t11*_t2;
+    const trailer2_real_t _t23 = _t12*_t22 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t24 = _t21*_t23;
+    const trailer2_real_t _t25 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t26 = -_t13*_t22;
+    const trailer2_real_t _t27 = _t25*_t26;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t _t29 = -_t11*_t28;
+    const trailer2_real_t _t30 = _t12*_t29;
+    const trailer2_real_t _t31 = _t21*_t30;
+    const trailer2_real_t _t32 = -_t13*_t29 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t33 = _t25*_t32;
+    const trailer2_real_t _t34 = _t31 + _t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t36 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t37 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t38 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t40 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t41 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t42 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t44 = _t10*(_t2*_t40 + _t3*_t41);
+    const trailer2_real_t _t45 = _t10*(_t2*_t42 + _t3*_t43);
+    const trailer2_real_t _t46 = _t15*_t23 - _t16*_t26;
+    const trailer2_real_t _t47 = _t15*_t26 + _t16*_t23;
+    const trailer2_real_t _t48 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t49 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t51 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t52 = _t20*_t46;
+    const trailer2_real_t _t53 = _t19*(_t46*_t48 + _t47*_t49);
+    const trailer2_real_t _t54 = _t19*(_t46*_t50 + _t47*_t51);
+    const trailer2_real_t _t55 = TRAILER2_LIT(0.207)*_t6;
+    const trailer2_real_t _t56 = -TRAILER2_LIT(0.207)*_t7;
+    const trailer2_real_t _t57 = _t10*(-_t28*_t40 - _t37*_t41);
+    const trailer2_real_t _t58 = _t10*(-_t28*_t42 - _t37*_t43);
+    const trailer2_real_t _t59 = _t15*_t30 - _t16*_t32;
+    const trailer2_real_t _t60 = _t15*_t32 + _t16*_t30;
+    const trailer2_real_t _t61 = _t20*_t59;
+    const trailer2_real_t _t62 = _t19*(_t48*_t59 + _t49*_t60);
+    const trailer2_real_t _t63 = _t19*(_t50*_t59 + _t51*_t60);
+    const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t64 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t65 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t69 = J_theta_cart2_left*_t44;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
     const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t70 = J_x_tractor + _t63;
+    const trailer2_real_t _t66 = J_theta_cart2_left*_t54*_t54 + J_theta_cart2_right*_t53*_t53
+            + J_theta_cart_left*_t45*_t45 + J_theta_cart_right*_t44*_t44 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t71 = J_theta_cart*_t31 + _t12*_t61 - _t13*_t62 + _t57;
+    const trailer2_real_t _t67 = J_theta_cart*_t22*_t22 + TRAILER2_LIT(2.0)*_t22*_t64 + _t66;
     const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t72 = J_theta_cart2*_t42 + _t34*_t59 + _t35*_t60;
-    const trailer2_real_t _t73 = _t54*_t59;
-    const trailer2_real_t _t74 = _t54*_t60;
-    const trailer2_real_t _t75 = _t47*_t57 + _t73;
-    const trailer2_real_t _t76 = _t47*_t58 + _t74;
+    const trailer2_real_t _t68 = J_theta_cart2*_t52*_t52 + _t24*_t52 + _t27*_t52
+            + _t52*(_t24 + _t27) + _t67;
+    const trailer2_real_t _t69 = J_theta_cart2_left*_t54*_t63 + J_theta_cart2_right*_t53*_t62
+            + J_theta_cart_left*_t45*_t58 + J_theta_cart_right*_t44*_t57 + J_theta_left*_t56*_t7
+            + J_theta_right*_t55*_t6;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t77 = K_theta_tractor_x_tractor_2 + _t75;
-    const trailer2_real_t _t78 = J_theta_right*_t45;
-    const trailer2_real_t _t79 = J_theta_left*_t46;
-    const trailer2_real_t _t80 = J_theta_cart_right*_t48;
-    const trailer2_real_t _t81 = J_theta_cart_left*_t49;
-    const trailer2_real_t _t82 = J_theta_cart2_right*_t55;
-    const trailer2_real_t _t83 = J_theta_cart2_left*_t56;
+    const trailer2_real_t _t70 = K_theta_tractor_x_tractor_2 + _t69;
+    const trailer2_real_t _t71 = J_theta_cart*_t22*_t29 - TRAILER2_LIT(0.3)*_t22*_t65 + _t29*_t64
+            + _t70;
+    const trailer2_real_t _t72 = J_theta_cart2*_t52*_t61 + _t24*_t61 + _t27*_t61 + _t34*_t52 + _t71;
+    const trailer2_real_t _t73 = J_theta_cart2_left*_t63*_t63 + J_theta_cart2_right*_t62*_t62
+            + J_theta_cart_left*_t58*_t58 + J_theta_cart_right*_t57*_t57 + J_theta_left*_t56*_t56
+            + J_theta_right*_t55*_t55;
     const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t84 = J_theta_tractor - TRAILER2_LIT(0.3)*_t76;
-    const trailer2_real_t _t85 = J_theta_cart*_t47 + _t12*_t73 - _t13*_t74 - TRAILER2_LIT(0.3)*_t58;
-    const trailer2_real_t _t86 = J_theta_cart2*_t54 + _t50*_t59 + _t51*_t60;
-    const trailer2_real_t _t87 = _t31*_t71 + _t32*_t66 + _t33*_t67 + _t42*_t72 + _t43*_t68
-            + _t44*_t69 + _t6*_t64 + _t65*_t7 + _t70;
-    const trailer2_real_t _t88 = _t31*_t85 + _t32*_t80 + _t33*_t81 + _t42*_t86 + _t43*_t82
-            + _t44*_t83 + _t6*_t78 + _t7*_t79 + _t77;
-    const trailer2_real_t _t89 = _t45*_t78 + _t46*_t79 + _t47*_t85 + _t48*_t80 + _t49*_t81
-            + _t54*_t86 + _t55*_t82 + _t56*_t83 + _t84;
-    const trailer2_real_t _t90 = _t21*_t88 + _t25*_t87;
-    const trailer2_real_t _t91 = _t22*_t88 + _t26*_t87;
-    const trailer2_real_t _t92 = _t21*_t89 + _t25*_t88;
-    const trailer2_real_t _t93 = _t22*_t89 + _t26*_t88;
-    const trailer2_real_t _t94 = _t21*_t92 + _t25*_t90;
-    const trailer2_real_t _t95 = _t21*_t93 + _t25*_t91;
-    const trailer2_real_t _t96 = _t22*_t93 + _t26*_t91;
-    M[0] = _t94;
-    M[1] = _t95;
-    M[2] = _t95;
-    M[3] = _t96;
+    const trailer2_real_t _t74 = J_theta_tractor + _t73;
+    const trailer2_real_t _t75 = J_theta_cart*_t29*_t29 - TRAILER2_LIT(0.6)*_t29*_t65 + _t74;
+    const trailer2_real_t _t76 = J_theta_cart2*_t61*_t61 + _t31*_t61 + _t33*_t61 + _t34*_t61 + _t75;
+    const trailer2_real_t _t77 = _t35*_t72 + _t38*_t68;
+    const trailer2_real_t _t78 = _t36*_t72 + _t39*_t68;
+    const trailer2_real_t _t79 = _t35*_t76 + _t38*_t72;
+    const trailer2_real_t _t80 = _t36*_t76 + _t39*_t72;
+    const trailer2_real_t _t81 = _t35*_t79 + _t38*_t77;
+    const trailer2_real_t _t82 = _t35*_t80 + _t38*_t78;
+    const trailer2_real_t _t83 = _t36*_t80 + _t39*_t78;
+    M[0] = _t81;
+    M[1] = _t82;
+    M[2] = _t82;
+    M[3] = _t83;
 }
 
 /* trailer2_minimal_bias_forces: documented in trailer2_model.h.
-   operations after CSE: 78 add, 170 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 80 add, 177 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *H)
 {
-    trailer2_real_t _shared[97];
+    trailer2_real_t _shared[95];
     trailer2_staged_quantities(p, q, wheel_rates, _shared);
     const trailer2_real_t _ms18 = _shared[0];
     const trailer2_real_t _ms19 = _shared[1];
     const trailer2_real_t _ms60 = _shared[6];
     const trailer2_real_t _ms61 = _shared[7];
-    const trailer2_real_t _ms228 = _shared[95];
-    const trailer2_real_t _ms229 = _shared[96];
-    const trailer2_real_t _t0 = _ms18*_ms229 + _ms228*_ms60;
-    const trailer2_real_t _t1 = _ms19*_ms229 + _ms228*_ms61;
+    const trailer2_real_t _ms189 = _shared[90];
+    const trailer2_real_t _ms193 = _shared[94];
+    const trailer2_real_t _t0 = _ms18*_ms193 + _ms189*_ms60;
+    const trailer2_real_t _t1 = _ms189*_ms61 + _ms19*_ms193;
     H[0] = _t0;
     H[1] = _t1;
 }
 
 /* trailer2_minimal_forward_dynamics: documented in trailer2_model.h.
-   operations after CSE: 127 add, 247 mul, 4 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 126 add, 261 mul, 4 div, 4 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *wheel_accels)
@@ -980,7 +963,7 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     (void)theta_tractor;
     (void)thetadot_left;
     (void)thetadot_right;
-    trailer2_real_t _shared[97];
+    trailer2_real_t _shared[95];
     trailer2_staged_quantities(p, q, wheel_rates, _shared);
     const trailer2_real_t _ms87 = _shared[9];
     const trailer2_real_t _ms97 = _shared[17];
@@ -999,59 +982,51 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t _ms164 = _shared[76];
     const trailer2_real_t _ms165 = _shared[77];
     const trailer2_real_t _ms166 = _shared[78];
-    const trailer2_real_t _ms167 = _shared[79];
     const trailer2_real_t _ms168 = _shared[80];
-    const trailer2_real_t _ms228 = _shared[95];
-    const trailer2_real_t _ms229 = _shared[96];
+    const trailer2_real_t _ms170 = _shared[82];
+    const trailer2_real_t _ms171 = _shared[83];
+    const trailer2_real_t _ms172 = _shared[84];
+    const trailer2_real_t _ms189 = _shared[90];
+    const trailer2_real_t _ms193 = _shared[94];
     const trailer2_real_t _t0 = _ms87*radius_left;
     const trailer2_real_t _t1 = _ms87*radius_right;
-    const trailer2_real_t _t2 = J_theta_right*_t0;
-    const trailer2_real_t _t3 = J_theta_left*_t1;
-    const trailer2_real_t _t4 = J_theta_cart_right*_ms98;
-    const trailer2_real_t _t5 = J_theta_cart_left*_ms99;
-    const trailer2_real_t _t6 = J_theta_cart2_right*_ms112;
-    const trailer2_real_t _t7 = J_theta_cart2_left*_ms113;
-    const trailer2_real_t _t8 = _ms111*_ms165;
-    const trailer2_real_t _t9 = _ms163*_ms97 + _t8;
-    const trailer2_real_t _t10 = J_x_tractor + _t9;
-    const trailer2_real_t _t11 = _ms111*_ms166;
-    const trailer2_real_t _t12 = J_theta_cart*_ms97 + _ms163 + _ms167*_t8 + _ms168*_t11;
-    const trailer2_real_t _t13 = _ms167*_ms97 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t14 = _ms168*_ms97;
-    const trailer2_real_t _t15 = J_theta_cart2*_ms111 + _ms165*_t13 + _ms166*_t14;
-    const trailer2_real_t _t16 = _ms111*_t15 + _ms112*_t6 + _ms113*_t7 + _ms97*_t12 + _ms98*_t4
-            + _ms99*_t5 + _t0*_t2 + _t1*_t3 + _t10;
-    const trailer2_real_t _t17 = _ms123*_ms165;
-    const trailer2_real_t _t18 = _ms116*_ms163 + _t17;
-    const trailer2_real_t _t19 = K_theta_tractor_x_tractor_2 + _t18;
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.207)*_t0;
-    const trailer2_real_t _t21 = J_theta_right*_t20;
-    const trailer2_real_t _t22 = -TRAILER2_LIT(0.207)*_t1;
-    const trailer2_real_t _t23 = J_theta_left*_t22;
-    const trailer2_real_t _t24 = J_theta_cart_right*_ms117;
-    const trailer2_real_t _t25 = J_theta_cart_left*_ms118;
-    const trailer2_real_t _t26 = J_theta_cart2_right*_ms124;
-    const trailer2_real_t _t27 = J_theta_cart2_left*_ms125;
-    const trailer2_real_t _t28 = _ms123*_ms166;
-    const trailer2_real_t _t29 = J_theta_cart*_ms116 - TRAILER2_LIT(0.3)*_ms164 + _ms167*_t17
-            + _ms168*_t28;
-    const trailer2_real_t _t30 = _ms116*_ms167;
-    const trailer2_real_t _t31 = _ms116*_ms168 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t32 = J_theta_cart2*_ms123 + _ms165*_t30 + _ms166*_t31;
-    const trailer2_real_t _t33 = _ms111*_t32 + _ms112*_t26 + _ms113*_t27 + _ms97*_t29 + _ms98*_t24
-            + _ms99*_t25 + _t0*_t21 + _t1*_t23 + _t19;
-    const trailer2_real_t _t34 = _ms116*_ms164 + _t28;
-    const trailer2_real_t _t35 = J_theta_tractor - TRAILER2_LIT(0.3)*_t34;
-    const trailer2_real_t _t36 = _ms116*_t29 + _ms117*_t24 + _ms118*_t25 + _ms123*_t32 + _ms124*_t26
-            + _ms125*_t27 + _t20*_t21 + _t22*_t23 + _t35;
-    const trailer2_real_t _t37 = _t16*_t36 - _t33*_t33;
-    const trailer2_real_t _t38 = -_ms228 + _t0*tau_right + _t1*tau_left;
-    const trailer2_real_t _t39 = -_ms229 + _t20*tau_right + _t22*tau_left;
-    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/_t37;
-    const trailer2_real_t _t41 = _t40*(-_t33*_t39 + _t36*_t38);
-    const trailer2_real_t _t42 = _t40*(_t16*_t39 - _t33*_t38);
-    const trailer2_real_t _t43 = _t0*_t41 + _t20*_t42;
-    const trailer2_real_t _t44 = _t1*_t41 + _t22*_t42;
+    const trailer2_real_t _t2 = _ms165*_ms168;
+    const trailer2_real_t _t3 = _ms166*_ms170;
+    const trailer2_real_t _t4 = _ms165*_ms171;
+    const trailer2_real_t _t5 = _ms166*_ms172;
+    const trailer2_real_t _t6 = _t4 + _t5;
+    const trailer2_real_t _t7 = J_theta_cart2_left*_ms113*_ms113 + J_theta_cart2_right*_ms112*_ms112
+            + J_theta_cart_left*_ms99*_ms99 + J_theta_cart_right*_ms98*_ms98 + J_theta_left*_t1*_t1
+            + J_theta_right*_t0*_t0 + J_x_tractor;
+    const trailer2_real_t _t8 = J_theta_cart*_ms97*_ms97 + TRAILER2_LIT(2.0)*_ms163*_ms97 + _t7;
+    const trailer2_real_t _t9 = J_theta_cart2*_ms111*_ms111 + _ms111*_t2 + _ms111*_t3
+            + _ms111*(_t2 + _t3) + _t8;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.207)*_t0;
+    const trailer2_real_t _t11 = -TRAILER2_LIT(0.207)*_t1;
+    const trailer2_real_t _t12 = J_theta_cart2_left*_ms113*_ms125
+            + J_theta_cart2_right*_ms112*_ms124 + J_theta_cart_left*_ms118*_ms99
+            + J_theta_cart_right*_ms117*_ms98 + J_theta_left*_t1*_t11 + J_theta_right*_t0*_t10;
+    const trailer2_real_t _t13 = K_theta_tractor_x_tractor_2 + _t12;
+    const trailer2_real_t _t14 = J_theta_cart*_ms116*_ms97 + _ms116*_ms163
+            - TRAILER2_LIT(0.3)*_ms164*_ms97 + _t13;
+    const trailer2_real_t _t15 = J_theta_cart2*_ms111*_ms123 + _ms111*_t6 + _ms123*_t2 + _ms123*_t3
+            + _t14;
+    const trailer2_real_t _t16 = J_theta_cart2_left*_ms125*_ms125
+            + J_theta_cart2_right*_ms124*_ms124 + J_theta_cart_left*_ms118*_ms118
+            + J_theta_cart_right*_ms117*_ms117 + J_theta_left*_t11*_t11 + J_theta_right*_t10*_t10;
+    const trailer2_real_t _t17 = J_theta_tractor + _t16;
+    const trailer2_real_t _t18 = J_theta_cart*_ms116*_ms116 - TRAILER2_LIT(0.6)*_ms116*_ms164
+            + _t17;
+    const trailer2_real_t _t19 = J_theta_cart2*_ms123*_ms123 + _ms123*_t4 + _ms123*_t5 + _ms123*_t6
+            + _t18;
+    const trailer2_real_t _t20 = -_t15*_t15 + _t19*_t9;
+    const trailer2_real_t _t21 = -_ms189 + _t0*tau_right + _t1*tau_left;
+    const trailer2_real_t _t22 = -_ms193 + _t10*tau_right + _t11*tau_left;
+    const trailer2_real_t _t23 = TRAILER2_LIT(1.0)/_t20;
+    const trailer2_real_t _t24 = _t23*(-_t15*_t22 + _t19*_t21);
+    const trailer2_real_t _t25 = _t23*(-_t15*_t21 + _t22*_t9);
+    const trailer2_real_t _t26 = _t0*_t24 + _t10*_t25;
+    const trailer2_real_t _t27 = _t1*_t24 + _t11*_t25;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -1100,14 +1075,14 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t16 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t9 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t37 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t20 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t43;
-    const trailer2_real_t r_1 = _t44;
+    const trailer2_real_t r_0 = _t26;
+    const trailer2_real_t r_1 = _t27;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;
     }
@@ -1117,7 +1092,7 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
 }
 
 /* trailer2_linearization: documented in trailer2_model.h.
-   operations after CSE: 664 add, 1000 mul, 4 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 612 add, 964 mul, 4 div, 10 sin/cos, 0 sqrt */
 void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, trailer2_real_t *A,
     trailer2_real_t *B)
@@ -1134,7 +1109,7 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t theta_cart = q[3];
     const trailer2_real_t theta_cart2 = q[4];
-    trailer2_real_t _shared[97];
+    trailer2_real_t _shared[95];
     trailer2_staged_quantities(p, q, wheel_rates, _shared);
     const trailer2_real_t _ms18 = _shared[0];
     const trailer2_real_t _ms19 = _shared[1];
@@ -1190,562 +1165,513 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     const trailer2_real_t _ms144 = _shared[56];
     const trailer2_real_t _ms146 = _shared[58];
     const trailer2_real_t _ms151 = _shared[63];
+    const trailer2_real_t _ms152 = _shared[64];
+    const trailer2_real_t _ms153 = _shared[65];
     const trailer2_real_t _ms156 = _shared[68];
     const trailer2_real_t _ms157 = _shared[69];
     const trailer2_real_t _ms160 = _shared[72];
+    const trailer2_real_t _ms161 = _shared[73];
+    const trailer2_real_t _ms162 = _shared[74];
     const trailer2_real_t _ms163 = _shared[75];
     const trailer2_real_t _ms164 = _shared[76];
     const trailer2_real_t _ms165 = _shared[77];
     const trailer2_real_t _ms166 = _shared[78];
     const trailer2_real_t _ms167 = _shared[79];
     const trailer2_real_t _ms168 = _shared[80];
-    const trailer2_real_t _ms209 = _shared[81];
-    const trailer2_real_t _ms210 = _shared[82];
-    const trailer2_real_t _ms211 = _shared[83];
-    const trailer2_real_t _ms212 = _shared[84];
-    const trailer2_real_t _ms220 = _shared[88];
-    const trailer2_real_t _ms221 = _shared[89];
-    const trailer2_real_t _ms222 = _shared[90];
-    const trailer2_real_t _ms223 = _shared[91];
-    const trailer2_real_t _ms226 = _shared[93];
-    const trailer2_real_t _ms227 = _shared[94];
-    const trailer2_real_t _ms228 = _shared[95];
-    const trailer2_real_t _ms229 = _shared[96];
+    const trailer2_real_t _ms169 = _shared[81];
+    const trailer2_real_t _ms170 = _shared[82];
+    const trailer2_real_t _ms171 = _shared[83];
+    const trailer2_real_t _ms172 = _shared[84];
+    const trailer2_real_t _ms184 = _shared[85];
+    const trailer2_real_t _ms185 = _shared[86];
+    const trailer2_real_t _ms189 = _shared[90];
+    const trailer2_real_t _ms193 = _shared[94];
     const trailer2_real_t _t0 = _ms87*radius_left;
     const trailer2_real_t _t1 = _ms87*radius_right;
-    const trailer2_real_t _t2 = _ms167*_ms97;
-    const trailer2_real_t _t3 = _ms168*_ms97;
-    const trailer2_real_t _t4 = _ms111*_ms165;
-    const trailer2_real_t _t5 = _ms111*_ms166;
-    const trailer2_real_t _t6 = _ms116*_ms167;
-    const trailer2_real_t _t7 = _ms116*_ms168;
-    const trailer2_real_t _t8 = _ms123*_ms165;
-    const trailer2_real_t _t9 = _ms123*_ms166;
+    const trailer2_real_t _t2 = TRAILER2_LIT(2.0)*_ms163;
+    const trailer2_real_t _t3 = _ms165*_ms168;
+    const trailer2_real_t _t4 = _ms166*_ms170;
+    const trailer2_real_t _t5 = _t3 + _t4;
+    const trailer2_real_t _t6 = J_theta_cart2_left*_ms113;
+    const trailer2_real_t _t7 = J_theta_cart2_right*_ms112;
+    const trailer2_real_t _t8 = J_theta_cart_left*_ms118;
+    const trailer2_real_t _t9 = J_theta_cart_right*_ms117;
     const trailer2_real_t _t10 = _ms116*_ms163;
-    const trailer2_real_t _t11 = _ms116*_ms164;
-    const trailer2_real_t _t12 = TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t13 = TRAILER2_SIN(theta_tractor);
-    const trailer2_real_t _t14 = _ms90*_ms96;
-    const trailer2_real_t _t15 = -theta_tractor;
-    const trailer2_real_t _t16 = _t15 + theta_cart;
-    const trailer2_real_t _t17 = TRAILER2_SIN(_t16);
-    const trailer2_real_t _t18 = TRAILER2_LIT(0.85)*_t17;
-    const trailer2_real_t _t19 = TRAILER2_COS(_t16);
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.85)*_t19;
-    const trailer2_real_t _t21 = _t15 + theta_cart2;
-    const trailer2_real_t _t22 = TRAILER2_COS(_t21);
-    const trailer2_real_t _t23 = TRAILER2_SIN(_t21);
-    const trailer2_real_t _t24 = -_ms51*_t14;
-    const trailer2_real_t _t25 = -_ms97*_t18 - _t20*_t24;
-    const trailer2_real_t _t26 = _t22*_t25;
-    const trailer2_real_t _t27 = -_ms97*_t20 + _t18*_t24;
-    const trailer2_real_t _t28 = _t23*_t27;
-    const trailer2_real_t _t29 = _ms104*_ms110;
-    const trailer2_real_t _t30 = _ms57*_t14;
-    const trailer2_real_t _t31 = -_ms116*_t18 - _t20*_t30;
-    const trailer2_real_t _t32 = _t22*_t31;
-    const trailer2_real_t _t33 = -_ms116*_t20 + TRAILER2_LIT(0.85)*_t17*_t30;
-    const trailer2_real_t _t34 = _t23*_t33;
-    const trailer2_real_t _t35 = _ms92*_ms96;
-    const trailer2_real_t _t36 = _ms91*_ms96;
-    const trailer2_real_t _t37 = _ms94*_ms96;
-    const trailer2_real_t _t38 = _ms93*_ms96;
-    const trailer2_real_t _t39 = _t22*_t27 + _t23*_t25;
-    const trailer2_real_t _t40 = _ms105*_ms110;
-    const trailer2_real_t _t41 = _ms106*_ms110;
-    const trailer2_real_t _t42 = _t22*_t33 + _t23*_t31;
-    const trailer2_real_t _t43 = _ms107*_ms110;
-    const trailer2_real_t _t44 = _ms108*_ms110;
-    const trailer2_real_t _t45 = _ms163*_t30 + _t11;
-    const trailer2_real_t _t46 = J_theta_cart*_t30 + TRAILER2_LIT(0.3)*_ms163 - _ms167*_t9
-            + _ms168*_t8;
-    const trailer2_real_t _t47 = _ms166*_t6;
-    const trailer2_real_t _t48 = _t7 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t49 = _ms165*_t48;
-    const trailer2_real_t _t50 = _ms167*_t30 + _t7;
-    const trailer2_real_t _t51 = _ms168*_t30 - _t6;
-    const trailer2_real_t _t52 = _ms165*_t50 + _ms166*_t51;
-    const trailer2_real_t _t53 = J_theta_cart_right*_ms117;
-    const trailer2_real_t _t54 = -_ms50*_t35 - _ms51*_t36;
-    const trailer2_real_t _t55 = _t53*_t54;
-    const trailer2_real_t _t56 = J_theta_cart_left*_ms118;
-    const trailer2_real_t _t57 = -_ms50*_t37 - _ms51*_t38;
-    const trailer2_real_t _t58 = _t56*_t57;
-    const trailer2_real_t _t59 = J_theta_cart*_ms116 - TRAILER2_LIT(0.3)*_ms164 + _ms167*_t8
-            + _ms168*_t9;
-    const trailer2_real_t _t60 = _t24*_t59;
-    const trailer2_real_t _t61 = -_ms52*_t35 + _ms57*_ms91*_ms96;
-    const trailer2_real_t _t62 = J_theta_cart_right*_t61;
-    const trailer2_real_t _t63 = _ms98*_t62;
-    const trailer2_real_t _t64 = -_ms52*_t37 + _ms57*_ms93*_ms96;
-    const trailer2_real_t _t65 = J_theta_cart_left*_t64;
-    const trailer2_real_t _t66 = _ms99*_t65;
-    const trailer2_real_t _t67 = _ms164*_t30;
-    const trailer2_real_t _t68 = _ms117*_t62;
-    const trailer2_real_t _t69 = _ms118*_t65;
-    const trailer2_real_t _t70 = _t53*_t61;
-    const trailer2_real_t _t71 = _t56*_t64;
-    const trailer2_real_t _t72 = _t30*_t59;
-    const trailer2_real_t _t73 = TRAILER2_LIT(2.0)*_ms128;
-    const trailer2_real_t _t74 = _ms142*_t19;
-    const trailer2_real_t _t75 = _ms126*_t17;
-    const trailer2_real_t _t76 = _ms126*_t19;
-    const trailer2_real_t _t77 = _ms142*_t17;
-    const trailer2_real_t _t78 = -_t76 - _t77;
-    const trailer2_real_t _t79 = TRAILER2_LIT(2.0)*_ms129;
-    const trailer2_real_t _t80 = _ms143*_t22;
-    const trailer2_real_t _t81 = _ms144*_t23;
-    const trailer2_real_t _t82 = -_t80 - _t81;
-    const trailer2_real_t _t83 = _ms126*_t24 + _ms127*_t30;
-    const trailer2_real_t _t84 = -_ms128*_t20 + TRAILER2_LIT(0.85)*_t17*_t83;
-    const trailer2_real_t _t85 = _ms129*_t84;
-    const trailer2_real_t _t86 = -_ms128*_t18 - _t20*_t83;
-    const trailer2_real_t _t87 = _ms129*_t86;
-    const trailer2_real_t _t88 = _t22*_t85 + _t23*_t87;
-    const trailer2_real_t _t89 = _ms143*_t23;
-    const trailer2_real_t _t90 = _ms144*_t22;
-    const trailer2_real_t _t91 = _ms129*_t89 - _ms129*_t90;
-    const trailer2_real_t _t92 = _ms128*_t74 - _ms128*_t75 + _t78*_t83;
-    const trailer2_real_t _t93 = -_ms139*_t19 - _ms146*_t17 - _t92;
-    const trailer2_real_t _t94 = _t14*_t93;
-    const trailer2_real_t _t95 = _t73*_t83;
-    const trailer2_real_t _t96 = -_ms137*_t20 + TRAILER2_LIT(0.85)*_t17*_t95;
-    const trailer2_real_t _t97 = -_ms151*_t18 - _t20*_t94 + _t96;
-    const trailer2_real_t _t98 = _t22*_t97;
-    const trailer2_real_t _t99 = _ms137*_t18 + _t20*_t95;
-    const trailer2_real_t _t100 = -_ms151*_t20 + _t18*_t94 + _t99;
-    const trailer2_real_t _t101 = _t100*_t23;
-    const trailer2_real_t _t102 = _ms156*_t22 + _ms157*_t23;
-    const trailer2_real_t _t103 = _ms138*_ms165 + _ms160*_ms166;
-    const trailer2_real_t _t104 = _ms137*_ms163 + _ms151*_ms164 + _ms163*_t94 - _ms164*_t95;
-    const trailer2_real_t _t105 = -_t74 + _t75;
-    const trailer2_real_t _t106 = _t89 - _t90;
-    const trailer2_real_t _t107 = _t22*_t87 - _t23*_t85;
-    const trailer2_real_t _t108 = _ms129*_t80 + _ms129*_t81;
-    const trailer2_real_t _t109 = _t100*_t22 + _t23*_t97;
-    const trailer2_real_t _t110 = _ms156*_t23 - _ms157*_t22;
-    const trailer2_real_t _t111 = _ms138*_ms166;
-    const trailer2_real_t _t112 = _ms160*_ms165;
-    const trailer2_real_t _t113 = J_theta_cart*_t94;
-    const trailer2_real_t _t114 = _ms139*_ms164;
-    const trailer2_real_t _t115 = _ms168*_ms211;
-    const trailer2_real_t _t116 = _ms146*_ms163;
-    const trailer2_real_t _t117 = _ms167*_ms212;
-    const trailer2_real_t _t118 = _ms166*_ms209;
-    const trailer2_real_t _t119 = _ms165*_ms210;
-    const trailer2_real_t _t120 = _ms137*_ms167 + _ms151*_ms168 + _ms167*_t94 - _ms168*_t95;
-    const trailer2_real_t _t121 = _ms137*_ms168 - _ms151*_ms167 + _ms167*_t95 + _ms168*_t94;
-    const trailer2_real_t _t122 = _ms165*_t120 + _ms166*_t121;
-    const trailer2_real_t _t123 = _ms220*_t54;
-    const trailer2_real_t _t124 = _ms221*_t57;
-    const trailer2_real_t _t125 = _ms226*_t24;
-    const trailer2_real_t _t126 = -_ms128*_t76 - _ms128*_t77 + _t105*_t83;
-    const trailer2_real_t _t127 = _ms139*_t17 - _ms146*_t19 - _t126;
-    const trailer2_real_t _t128 = _t127*_t35 + _t36*_t93;
-    const trailer2_real_t _t129 = J_theta_cart_right*_t128;
-    const trailer2_real_t _t130 = _ms98*_t129;
-    const trailer2_real_t _t131 = _t127*_t37 + _t38*_t93;
-    const trailer2_real_t _t132 = J_theta_cart_left*_t131;
-    const trailer2_real_t _t133 = _ms99*_t132;
-    const trailer2_real_t _t134 = _ms137*_ms164 - _ms151*_ms163 + _ms163*_t95 + _ms164*_t94;
-    const trailer2_real_t _t135 = _ms117*_t129;
-    const trailer2_real_t _t136 = _ms118*_t132;
-    const trailer2_real_t _t137 = _ms220*_t61;
-    const trailer2_real_t _t138 = _ms221*_t64;
-    const trailer2_real_t _t139 = _ms226*_t30;
-    const trailer2_real_t _t140 = _ms163*_t24 + _ms164*_ms97;
-    const trailer2_real_t _t141 = J_theta_cart*_t24 + _ms164 - _ms167*_t5 + _ms168*_t4;
-    const trailer2_real_t _t142 = _t2 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t143 = _ms166*_t142;
-    const trailer2_real_t _t144 = _ms165*_t3;
-    const trailer2_real_t _t145 = _ms167*_t24 + _t3;
-    const trailer2_real_t _t146 = _ms168*_t24 - _t2;
-    const trailer2_real_t _t147 = _ms165*_t145 + _ms166*_t146;
-    const trailer2_real_t _t148 = J_theta_cart_right*_ms98;
-    const trailer2_real_t _t149 = _t148*_t54;
-    const trailer2_real_t _t150 = J_theta_cart_left*_ms99;
-    const trailer2_real_t _t151 = _t150*_t57;
-    const trailer2_real_t _t152 = J_theta_cart*_ms97 + _ms163 + _ms167*_t4 + _ms168*_t5;
-    const trailer2_real_t _t153 = _t152*_t24;
-    const trailer2_real_t _t154 = J_theta_cart_right*_t54;
-    const trailer2_real_t _t155 = _ms98*_t154;
-    const trailer2_real_t _t156 = J_theta_cart_left*_t57;
-    const trailer2_real_t _t157 = _ms99*_t156;
-    const trailer2_real_t _t158 = _t10 + _t8;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t159 = K_theta_tractor_x_tractor_2 + _t158;
-    const trailer2_real_t _t160 = TRAILER2_LIT(0.207)*_t0;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t161 = J_theta_right*_t160;
-    const trailer2_real_t _t162 = -TRAILER2_LIT(0.207)*_t1;
+    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_ms164;
+    const trailer2_real_t _t12 = J_theta_cart*_ms97;
+    const trailer2_real_t _t13 = J_theta_cart2*_ms123;
+    const trailer2_real_t _t14 = _ms165*_ms171;
+    const trailer2_real_t _t15 = _ms166*_ms172;
+    const trailer2_real_t _t16 = _t14 + _t15;
+    const trailer2_real_t _t17 = _ms116*_ms164;
+    const trailer2_real_t _t18 = TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t19 = TRAILER2_SIN(theta_tractor);
+    const trailer2_real_t _t20 = _ms90*_ms96;
+    const trailer2_real_t _t21 = -theta_tractor;
+    const trailer2_real_t _t22 = _t21 + theta_cart;
+    const trailer2_real_t _t23 = TRAILER2_SIN(_t22);
+    const trailer2_real_t _t24 = TRAILER2_LIT(0.85)*_t23;
+    const trailer2_real_t _t25 = TRAILER2_COS(_t22);
+    const trailer2_real_t _t26 = TRAILER2_LIT(0.85)*_t25;
+    const trailer2_real_t _t27 = _t21 + theta_cart2;
+    const trailer2_real_t _t28 = TRAILER2_COS(_t27);
+    const trailer2_real_t _t29 = TRAILER2_SIN(_t27);
+    const trailer2_real_t _t30 = -_ms51*_t20;
+    const trailer2_real_t _t31 = -_ms97*_t24 - _t26*_t30;
+    const trailer2_real_t _t32 = _t28*_t31;
+    const trailer2_real_t _t33 = -_ms97*_t26 + _t24*_t30;
+    const trailer2_real_t _t34 = _t29*_t33;
+    const trailer2_real_t _t35 = _ms104*_ms110;
+    const trailer2_real_t _t36 = _ms57*_t20;
+    const trailer2_real_t _t37 = -_ms116*_t24 - _t26*_t36;
+    const trailer2_real_t _t38 = _t28*_t37;
+    const trailer2_real_t _t39 = -_ms116*_t26 + TRAILER2_LIT(0.85)*_t23*_t36;
+    const trailer2_real_t _t40 = _t29*_t39;
+    const trailer2_real_t _t41 = _ms92*_ms96;
+    const trailer2_real_t _t42 = _ms91*_ms96;
+    const trailer2_real_t _t43 = _ms94*_ms96;
+    const trailer2_real_t _t44 = _ms93*_ms96;
+    const trailer2_real_t _t45 = _t28*_t33 + _t29*_t31;
+    const trailer2_real_t _t46 = _ms105*_ms110;
+    const trailer2_real_t _t47 = _ms106*_ms110;
+    const trailer2_real_t _t48 = _t28*_t39 + _t29*_t37;
+    const trailer2_real_t _t49 = _ms107*_ms110;
+    const trailer2_real_t _t50 = _ms108*_ms110;
+    const trailer2_real_t _t51 = -_ms100*_t28 - _ms101*_t29 - _t32 + _t34;
+    const trailer2_real_t _t52 = _ms100*_t29 - _ms101*_t28 + _t45;
+    const trailer2_real_t _t53 = _t49*_t51 + _t50*_t52;
+    const trailer2_real_t _t54 = J_theta_cart2_left*_t53;
+    const trailer2_real_t _t55 = _t46*_t51 + _t47*_t52;
+    const trailer2_real_t _t56 = J_theta_cart2_right*_t55;
+    const trailer2_real_t _t57 = -_ms50*_t43 - _ms51*_t44;
+    const trailer2_real_t _t58 = _t57*_t8;
+    const trailer2_real_t _t59 = J_theta_cart_left*_ms99;
+    const trailer2_real_t _t60 = -_ms52*_t43 + _ms57*_ms93*_ms96;
+    const trailer2_real_t _t61 = _t59*_t60;
+    const trailer2_real_t _t62 = -_ms50*_t41 - _ms51*_t42;
+    const trailer2_real_t _t63 = _t62*_t9;
+    const trailer2_real_t _t64 = J_theta_cart_right*_ms98;
+    const trailer2_real_t _t65 = -_ms52*_t41 + _ms57*_ms91*_ms96;
+    const trailer2_real_t _t66 = _t64*_t65;
+    const trailer2_real_t _t67 = _ms163 + _t12;
+    const trailer2_real_t _t68 = J_theta_cart*_ms116;
+    const trailer2_real_t _t69 = -_t11 + _t68;
+    const trailer2_real_t _t70 = TRAILER2_LIT(0.3)*_ms163;
+    const trailer2_real_t _t71 = _ms97*_t70 + _t17 + _t30*_t69 + _t36*_t67;
+    const trailer2_real_t _t72 = _ms166*(_ms111*_ms171 + _ms123*_ms168);
+    const trailer2_real_t _t73 = _t13 + _t16;
+    const trailer2_real_t _t74 = J_theta_cart2*_ms111;
+    const trailer2_real_t _t75 = _t5 + _t74;
+    const trailer2_real_t _t76 = _ms165*(_ms111*_ms172 + _ms123*_ms170);
+    const trailer2_real_t _t77 = _ms111*_ms165;
+    const trailer2_real_t _t78 = _ms111*_ms166;
+    const trailer2_real_t _t79 = _ms123*_ms165;
+    const trailer2_real_t _t80 = _ms123*_ms166;
+    const trailer2_real_t _t81 = _ms167*_t30 + _ms169*_ms97;
+    const trailer2_real_t _t82 = -_ms167*_ms97 + _ms169*_t30;
+    const trailer2_real_t _t83 = _ms116*_ms169 + _ms167*_t36;
+    const trailer2_real_t _t84 = -_ms116*_ms167 + _ms169*_t36;
+    const trailer2_real_t _t85 = _t77*_t83 + _t78*_t84 + _t79*_t81 + _t80*_t82;
+    const trailer2_real_t _t86 = J_theta_cart2_left*_ms125;
+    const trailer2_real_t _t87 = TRAILER2_LIT(2.0)*_t86;
+    const trailer2_real_t _t88 = J_theta_cart2_right*_ms124;
+    const trailer2_real_t _t89 = TRAILER2_LIT(2.0)*_t88;
+    const trailer2_real_t _t90 = TRAILER2_LIT(2.0)*_t60*_t8;
+    const trailer2_real_t _t91 = TRAILER2_LIT(2.0)*_t65*_t9;
+    const trailer2_real_t _t92 = TRAILER2_LIT(0.6)*_t10 + _t36*(-TRAILER2_LIT(0.6)*_ms164
+            + TRAILER2_LIT(2.0)*_t68);
+    const trailer2_real_t _t93 = TRAILER2_LIT(2.0)*_t13 + TRAILER2_LIT(2.0)*_t14
+            + TRAILER2_LIT(2.0)*_t15;
+    const trailer2_real_t _t94 = _ms165*_ms172;
+    const trailer2_real_t _t95 = TRAILER2_LIT(2.0)*_ms123;
+    const trailer2_real_t _t96 = _t94*_t95;
+    const trailer2_real_t _t97 = _ms166*_ms171;
+    const trailer2_real_t _t98 = _t95*_t97;
+    const trailer2_real_t _t99 = TRAILER2_LIT(2.0)*_t79*_t83 + TRAILER2_LIT(2.0)*_t80*_t84;
+    const trailer2_real_t _t100 = TRAILER2_LIT(2.0)*_ms129;
+    const trailer2_real_t _t101 = _ms143*_t28;
+    const trailer2_real_t _t102 = _ms144*_t29;
+    const trailer2_real_t _t103 = -_t101 - _t102;
+    const trailer2_real_t _t104 = _ms126*_t30 + _ms127*_t36;
+    const trailer2_real_t _t105 = -_ms128*_t26 + TRAILER2_LIT(0.85)*_t104*_t23;
+    const trailer2_real_t _t106 = _ms129*_t105;
+    const trailer2_real_t _t107 = -_ms128*_t24 - _t104*_t26;
+    const trailer2_real_t _t108 = _ms129*_t107;
+    const trailer2_real_t _t109 = _t106*_t28 + _t108*_t29;
+    const trailer2_real_t _t110 = _ms143*_t29;
+    const trailer2_real_t _t111 = _ms144*_t28;
+    const trailer2_real_t _t112 = _ms129*_t110 - _ms129*_t111;
+    const trailer2_real_t _t113 = TRAILER2_LIT(2.0)*_ms128;
+    const trailer2_real_t _t114 = _ms142*_t25;
+    const trailer2_real_t _t115 = _ms126*_t23;
+    const trailer2_real_t _t116 = _ms126*_t25;
+    const trailer2_real_t _t117 = _ms142*_t23;
+    const trailer2_real_t _t118 = -_t116 - _t117;
+    const trailer2_real_t _t119 = _ms128*_t114 - _ms128*_t115 + _t104*_t118;
+    const trailer2_real_t _t120 = -_ms139*_t25 - _ms146*_t23 - _t119;
+    const trailer2_real_t _t121 = _t120*_t20;
+    const trailer2_real_t _t122 = _t104*_t113;
+    const trailer2_real_t _t123 = -_ms137*_t26 + TRAILER2_LIT(0.85)*_t122*_t23;
+    const trailer2_real_t _t124 = -_ms151*_t24 - _t121*_t26 + _t123;
+    const trailer2_real_t _t125 = _t124*_t28;
+    const trailer2_real_t _t126 = _ms137*_t24 + _t122*_t26;
+    const trailer2_real_t _t127 = -_ms151*_t26 + _t121*_t24 + _t126;
+    const trailer2_real_t _t128 = _t127*_t29;
+    const trailer2_real_t _t129 = _ms156*_t28 + _ms157*_t29;
+    const trailer2_real_t _t130 = -_t114 + _t115;
+    const trailer2_real_t _t131 = _t110 - _t111;
+    const trailer2_real_t _t132 = -_t106*_t29 + _t108*_t28;
+    const trailer2_real_t _t133 = _ms129*_t101 + _ms129*_t102;
+    const trailer2_real_t _t134 = _t124*_t29 + _t127*_t28;
+    const trailer2_real_t _t135 = _ms156*_t29 - _ms157*_t28;
+    const trailer2_real_t _t136 = J_theta_cart_left*_ms153;
+    const trailer2_real_t _t137 = _t136*_t57;
+    const trailer2_real_t _t138 = -_ms128*_t116 - _ms128*_t117 + _t104*_t130;
+    const trailer2_real_t _t139 = _ms139*_t23 - _ms146*_t25 - _t138;
+    const trailer2_real_t _t140 = _t120*_t44 + _t139*_t43;
+    const trailer2_real_t _t141 = _t140*_t59;
+    const trailer2_real_t _t142 = J_theta_cart_right*_ms152;
+    const trailer2_real_t _t143 = _t142*_t62;
+    const trailer2_real_t _t144 = _t120*_t42 + _t139*_t41;
+    const trailer2_real_t _t145 = _t144*_t64;
+    const trailer2_real_t _t146 = _ms164*_t122;
+    const trailer2_real_t _t147 = _ms164*(_ms139*_ms97 + _ms151);
+    const trailer2_real_t _t148 = _t121*_t67;
+    const trailer2_real_t _t149 = _ms163*(-_ms137 + _ms146*_ms97);
+    const trailer2_real_t _t150 = J_theta_cart*_ms151 + _ms139*_ms163 + _ms146*_ms164;
+    const trailer2_real_t _t151 = _t150*_t30;
+    const trailer2_real_t _t152 = _ms166*(_ms111*_ms184 + _ms138*_ms170 + _ms160*_ms168);
+    const trailer2_real_t _t153 = J_theta_cart2*_ms160 + _ms165*_ms184 + _ms166*_ms185;
+    const trailer2_real_t _t154 = _ms165*_ms170;
+    const trailer2_real_t _t155 = _ms166*_ms168;
+    const trailer2_real_t _t156 = _t154 - _t155;
+    const trailer2_real_t _t157 = _ms165*(_ms111*_ms185 - _ms138*_ms168 + _ms160*_ms170);
+    const trailer2_real_t _t158 = -_ms138*_ms166 + _ms160*_ms165;
+    const trailer2_real_t _t159 = _ms138*_ms165 + _ms160*_ms166;
+    const trailer2_real_t _t160 = _ms137*_ms167 + _ms151*_ms169 + _ms167*_t121 - _ms169*_t122;
+    const trailer2_real_t _t161 = _ms137*_ms169 - _ms151*_ms167 + _ms167*_t122 + _ms169*_t121;
+    const trailer2_real_t _t162 = _t158*_t81 + _t159*_t82 + _t160*_t77 + _t161*_t78;
+    const trailer2_real_t _t163 = J_theta_cart2_left*_ms162;
+    const trailer2_real_t _t164 = J_theta_cart2_right*_ms161;
+    const trailer2_real_t _t165 = _t140*_t8;
+    const trailer2_real_t _t166 = _t136*_t60;
+    const trailer2_real_t _t167 = _t144*_t9;
+    const trailer2_real_t _t168 = _t142*_t65;
+    const trailer2_real_t _t169 = _t122*_t70;
+    const trailer2_real_t _t170 = _ms164*(_ms116*_ms139 - TRAILER2_LIT(0.3)*_ms137);
+    const trailer2_real_t _t171 = _t121*_t69;
+    const trailer2_real_t _t172 = _ms163*(_ms116*_ms146 - TRAILER2_LIT(0.3)*_ms151);
+    const trailer2_real_t _t173 = _t150*_t36;
+    const trailer2_real_t _t174 = _ms166*(_ms123*_ms184 + _ms138*_ms172 + _ms160*_ms171);
+    const trailer2_real_t _t175 = _t94 - _t97;
+    const trailer2_real_t _t176 = _ms165*(_ms123*_ms185 - _ms138*_ms171 + _ms160*_ms172);
+    const trailer2_real_t _t177 = _t158*_t83 + _t159*_t84 + _t160*_t79 + _t161*_t80;
+    const trailer2_real_t _t178 = TRAILER2_LIT(2.0)*_t6;
+    const trailer2_real_t _t179 = TRAILER2_LIT(2.0)*_t7;
+    const trailer2_real_t _t180 = TRAILER2_LIT(2.0)*_t57*_t59;
+    const trailer2_real_t _t181 = TRAILER2_LIT(2.0)*_t62*_t64;
+    const trailer2_real_t _t182 = _ms164*_ms97;
+    const trailer2_real_t _t183 = TRAILER2_LIT(2.0)*_t182 + _t30*(TRAILER2_LIT(2.0)*_t12 + _t2);
+    const trailer2_real_t _t184 = TRAILER2_LIT(2.0)*_t3 + TRAILER2_LIT(2.0)*_t4
+            + TRAILER2_LIT(2.0)*_t74;
+    const trailer2_real_t _t185 = TRAILER2_LIT(2.0)*_ms111;
+    const trailer2_real_t _t186 = _t154*_t185;
+    const trailer2_real_t _t187 = _t155*_t185;
+    const trailer2_real_t _t188 = TRAILER2_LIT(2.0)*_t77*_t81 + TRAILER2_LIT(2.0)*_t78*_t82;
+    const trailer2_real_t _t189 = TRAILER2_LIT(0.207)*_t0;
+    const trailer2_real_t _t190 = -TRAILER2_LIT(0.207)*_t1;
     const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t163 = J_theta_left*_t162;
-    const trailer2_real_t _t164 = J_theta_cart2_right*_ms124;
-    const trailer2_real_t _t165 = J_theta_cart2_left*_ms125;
-    const trailer2_real_t _t166 = J_theta_cart2*_ms123 + _ms165*_t6 + _ms166*_t48;
-    const trailer2_real_t _t167 = _ms111*_t166 + _ms112*_t164 + _ms113*_t165 + _ms97*_t59
-            + _ms98*_t53 + _ms99*_t56 + _t0*_t161 + _t1*_t163 + _t159;
-    const trailer2_real_t _t168 = TRAILER2_LIT(2.0)*_t167;
-    const trailer2_real_t _t169 = J_theta_right*_t0;
-    const trailer2_real_t _t170 = J_theta_left*_t1;
-    const trailer2_real_t _t171 = J_theta_cart2_right*_ms112;
-    const trailer2_real_t _t172 = J_theta_cart2_left*_ms113;
-    const trailer2_real_t _t173 = _ms163*_ms97 + _t4;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t _t191 = J_theta_left*_t1*_t190 + J_theta_right*_t0*_t189 + _ms124*_t7
+            + _ms125*_t6 + _ms98*_t9 + _ms99*_t8;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t192 = K_theta_tractor_x_tractor_2 + _t191;
+    const trailer2_real_t _t193 = _ms116*_t12 - _ms97*_t11 + _t10 + _t192;
+    const trailer2_real_t _t194 = _ms111*_t13 + _ms111*_t16 + _ms123*_t3 + _ms123*_t4 + _t193;
+    const trailer2_real_t _t195 = TRAILER2_LIT(2.0)*_t194;
     const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t174 = J_x_tractor + _t173;
-    const trailer2_real_t _t175 = J_theta_cart2*_ms111 + _ms165*_t142 + _ms166*_t3;
-    const trailer2_real_t _t176 = _ms111*_t175 + _ms112*_t171 + _ms113*_t172 + _ms97*_t152
-            + _ms98*_t148 + _ms99*_t150 + _t0*_t169 + _t1*_t170 + _t174;
-    const trailer2_real_t _t177 = _t11 + _t9;
+    const trailer2_real_t _t196 = J_theta_cart2_left*_ms113*_ms113
+            + J_theta_cart2_right*_ms112*_ms112 + J_theta_cart_left*_ms99*_ms99
+            + J_theta_cart_right*_ms98*_ms98 + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0
+            + J_x_tractor;
+    const trailer2_real_t _t197 = J_theta_cart*_ms97*_ms97 + _ms97*_t2 + _t196;
+    const trailer2_real_t _t198 = J_theta_cart2*_ms111*_ms111 + _ms111*_t3 + _ms111*_t4 + _ms111*_t5
+            + _t197;
+    const trailer2_real_t _t199 = J_theta_cart2_left*_ms125*_ms125
+            + J_theta_cart2_right*_ms124*_ms124 + J_theta_cart_left*_ms118*_ms118
+            + J_theta_cart_right*_ms117*_ms117 + J_theta_left*_t190*_t190
+            + J_theta_right*_t189*_t189;
     const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t178 = J_theta_tractor - TRAILER2_LIT(0.3)*_t177;
-    const trailer2_real_t _t179 = _ms116*_t59 + _ms117*_t53 + _ms118*_t56 + _ms123*_t166
-            + _ms124*_t164 + _ms125*_t165 + _t160*_t161 + _t162*_t163 + _t178;
-    const trailer2_real_t _t180 = -_t167*_t167 + _t176*_t179;
-    const trailer2_real_t _t181 = TRAILER2_LIT(1.0)/_t180;
-    const trailer2_real_t _t182 = _t181*_t181;
-    const trailer2_real_t _t183 = _t181;
-    const trailer2_real_t _t184 = _t167*_t183;
+    const trailer2_real_t _t200 = J_theta_tractor + _t199;
+    const trailer2_real_t _t201 = J_theta_cart*_ms116*_ms116 - TRAILER2_LIT(0.6)*_t17 + _t200;
+    const trailer2_real_t _t202 = J_theta_cart2*_ms123*_ms123 + _ms123*_t14 + _ms123*_t15
+            + _ms123*_t16 + _t201;
+    const trailer2_real_t _t203 = -_t194*_t194 + _t198*_t202;
+    const trailer2_real_t _t204 = TRAILER2_LIT(1.0)/_t203;
+    const trailer2_real_t _t205 = _t204*_t204;
+    const trailer2_real_t _t206 = _t204;
+    const trailer2_real_t _t207 = _t194*_t206;
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    const trailer2_real_t _t185 = -_ms228 + _t0*tau_right + _t1*tau_left;
-    const trailer2_real_t _t186 = _t183*_t185;
-    const trailer2_real_t _t187 = _t179*_t183;
-    const trailer2_real_t _t188 = -_ms229 + _t160*tau_right + _t162*tau_left;
-    const trailer2_real_t _t189 = _t183*_t188;
-    const trailer2_real_t _t190 = -_t167*_t188 + _t179*_t185;
-    const trailer2_real_t _t191 = _t176*_t183;
-    const trailer2_real_t _t192 = -_t167*_t185 + _t176*_t188;
-    const trailer2_real_t _t193 = TRAILER2_LIT(2.0)*_ms127;
-    const trailer2_real_t _t194 = _ms86*_ms87;
-    const trailer2_real_t _t195 = _ms128*_t17;
-    const trailer2_real_t _t196 = _ms128*_t19;
-    const trailer2_real_t _t197 = _ms116*_ms18 + _ms60*_ms97;
-    const trailer2_real_t _t198 = _ms60 + _t18*_t197;
-    const trailer2_real_t _t199 = _ms129*_t198;
-    const trailer2_real_t _t200 = -TRAILER2_LIT(0.3)*_ms18;
-    const trailer2_real_t _t201 = -_t197*_t20 + _t200;
-    const trailer2_real_t _t202 = _ms129*_t201;
-    const trailer2_real_t _t203 = _ms116*_ms19 + _ms61*_ms97;
-    const trailer2_real_t _t204 = _ms61 + _t18*_t203;
-    const trailer2_real_t _t205 = _ms129*_t204;
-    const trailer2_real_t _t206 = -TRAILER2_LIT(0.3)*_ms19;
-    const trailer2_real_t _t207 = -_t20*_t203 + _t206;
-    const trailer2_real_t _t208 = _ms129*_t207;
-    const trailer2_real_t _t209 = _ms18*_t160 + _ms60*_t0;
-    const trailer2_real_t _t210 = _ms18*_t162 + _ms60*_t1;
-    const trailer2_real_t _t211 = _ms19*_t160 + _ms61*_t0;
-    const trailer2_real_t _t212 = _ms19*_t162 + _ms61*_t1;
-    const trailer2_real_t _t213 = _ms126*_t12;
-    const trailer2_real_t _t214 = _ms126*_t13;
-    const trailer2_real_t _t215 = _ms60*_t12;
-    const trailer2_real_t _t216 = _ms61*_t12;
-    const trailer2_real_t _t217 = _ms60*_t13;
-    const trailer2_real_t _t218 = _ms61*_t13;
-    const trailer2_real_t _t219 = -_ms100*_t22 - _ms101*_t23 - _t26 + _t28;
-    const trailer2_real_t _t220 = _t219*_t29;
-    const trailer2_real_t _t221 = -_ms119*_t22 - _ms120*_t23 - _t32 + _t34;
-    const trailer2_real_t _t222 = _t221*_t29;
-    const trailer2_real_t _t223 = _ms126*_t220 + _ms127*_t222;
-    const trailer2_real_t _t224 = _t26 - _t28;
-    const trailer2_real_t _t225 = _t224*_t29;
-    const trailer2_real_t _t226 = _t32 - _t34;
-    const trailer2_real_t _t227 = _t226*_t29;
-    const trailer2_real_t _t228 = _ms126*_t225 + _ms127*_t227;
-    const trailer2_real_t _t229 = _ms103*_t29;
-    const trailer2_real_t _t230 = _ms122*_t29;
-    const trailer2_real_t _t231 = _ms126*_t229 + _ms127*_t230;
-    const trailer2_real_t _t232 = _ms111*_ms60 + _ms123*_ms18;
-    const trailer2_real_t _t233 = _ms111*_ms61 + _ms123*_ms19;
-    const trailer2_real_t _t234 = _ms126*_t54 + _ms127*_t61;
-    const trailer2_real_t _t235 = _ms117*_ms18 + _ms60*_ms98;
-    const trailer2_real_t _t236 = _ms117*_ms19 + _ms61*_ms98;
-    const trailer2_real_t _t237 = _ms126*_t57 + _ms127*_t64;
-    const trailer2_real_t _t238 = _ms118*_ms18 + _ms60*_ms99;
-    const trailer2_real_t _t239 = _ms118*_ms19 + _ms61*_ms99;
-    const trailer2_real_t _t240 = _ms100*_t23 - _ms101*_t22 + _t39;
-    const trailer2_real_t _t241 = _t219*_t40 + _t240*_t41;
-    const trailer2_real_t _t242 = _ms119*_t23 - _ms120*_t22 + _t42;
-    const trailer2_real_t _t243 = _t221*_t40 + _t242*_t41;
-    const trailer2_real_t _t244 = _ms126*_t241 + _ms127*_t243;
-    const trailer2_real_t _t245 = _t224*_t40 - _t39*_t41;
-    const trailer2_real_t _t246 = _t226*_t40 - _t41*_t42;
-    const trailer2_real_t _t247 = _ms126*_t245 + _ms127*_t246;
-    const trailer2_real_t _t248 = -_ms102*_t41 + _ms103*_ms105*_ms110;
-    const trailer2_real_t _t249 = -_ms121*_t41 + _ms122*_t40;
-    const trailer2_real_t _t250 = _ms126*_t248 + _ms127*_t249;
-    const trailer2_real_t _t251 = _ms112*_ms60 + _ms124*_ms18;
-    const trailer2_real_t _t252 = _ms112*_ms61 + _ms124*_ms19;
-    const trailer2_real_t _t253 = _t219*_t43 + _t240*_t44;
-    const trailer2_real_t _t254 = _t221*_t43 + _t242*_t44;
-    const trailer2_real_t _t255 = _ms126*_t253 + _ms127*_t254;
-    const trailer2_real_t _t256 = _t224*_t43 - _t39*_t44;
-    const trailer2_real_t _t257 = _t226*_t43 - _t42*_t44;
-    const trailer2_real_t _t258 = _ms126*_t256 + _ms127*_t257;
-    const trailer2_real_t _t259 = -_ms102*_t44 + _ms103*_ms107*_ms110;
-    const trailer2_real_t _t260 = -_ms121*_t44 + _ms122*_t43;
-    const trailer2_real_t _t261 = _ms126*_t259 + _ms127*_t260;
-    const trailer2_real_t _t262 = _ms113*_ms60 + _ms125*_ms18;
-    const trailer2_real_t _t263 = _ms113*_ms61 + _ms125*_ms19;
-    const trailer2_real_t _t264 = _ms165*_t222 + _t9;
-    const trailer2_real_t _t265 = _t264 + _t45;
-    const trailer2_real_t _t266 = J_theta_cart2_right*_t243;
-    const trailer2_real_t _t267 = J_theta_cart2_left*_t254;
-    const trailer2_real_t _t268 = _ms166*_t222 - _t8;
-    const trailer2_real_t _t269 = _ms167*_t264 + _ms168*_t268 + _t46;
-    const trailer2_real_t _t270 = J_theta_cart2*_t222 + _t47 - _t49 + _t52;
-    const trailer2_real_t _t271 = _ms111*_t270 + _ms112*_t266 + _ms113*_t267 + _ms97*_t269
-            + _t164*_t241 + _t165*_t253 + _t166*_t220 + _t265 + _t55 + _t58 + _t60 + _t63 + _t66;
-    const trailer2_real_t _t272 = -_t10 + _t268 + _t67;
-    const trailer2_real_t _t273 = -TRAILER2_LIT(0.3)*_t272;
-    const trailer2_real_t _t274 = _ms116*_t269 + _ms123*_t270 + _ms124*_t266 + _ms125*_t267
-            + _t164*_t243 + _t165*_t254 + _t166*_t222 + _t273 + _t68 + _t69 + _t70 + _t71 + _t72;
-    const trailer2_real_t _t275 = _t223*_t79;
-    const trailer2_real_t _t276 = _t223*_t82 - _t88 - _t91;
-    const trailer2_real_t _t277 = _t101 - _t102 - _t276 - _t98;
-    const trailer2_real_t _t278 = _t277*_t29;
-    const trailer2_real_t _t279 = _ms165*_t278 - _ms166*_t275 + _t103;
-    const trailer2_real_t _t280 = _t104 + _t279;
-    const trailer2_real_t _t281 = _t106*_t223 - _t107 - _t108;
-    const trailer2_real_t _t282 = _t109 + _t110 - _t281;
-    const trailer2_real_t _t283 = _t277*_t40 + _t282*_t41;
-    const trailer2_real_t _t284 = J_theta_cart2_right*_t283;
-    const trailer2_real_t _t285 = _t277*_t43 + _t282*_t44;
-    const trailer2_real_t _t286 = J_theta_cart2_left*_t285;
-    const trailer2_real_t _t287 = _ms165*_t275 + _ms166*_t278 + _t111 - _t112;
-    const trailer2_real_t _t288 = _ms167*_t279 + _ms168*_t287 + _t113 + _t114 + _t115 - _t116
-            - _t117;
-    const trailer2_real_t _t289 = J_theta_cart2*_t278 + _t118 - _t119 + _t122;
-    const trailer2_real_t _t290 = _ms111*_t289 + _ms112*_t284 + _ms113*_t286 + _ms222*_t241
-            + _ms223*_t253 + _ms227*_t220 + _ms97*_t288 + _t123 + _t124 + _t125 + _t130 + _t133
-            + _t280;
-    const trailer2_real_t _t291 = _t134 + _t287;
-    const trailer2_real_t _t292 = -TRAILER2_LIT(0.3)*_t291;
-    const trailer2_real_t _t293 = _ms116*_t288 + _ms123*_t289 + _ms124*_t284 + _ms125*_t286
-            + _ms222*_t243 + _ms223*_t254 + _ms227*_t222 + _t135 + _t136 + _t137 + _t138 + _t139
-            + _t292;
-    const trailer2_real_t _t294 = J_theta_cart2_right*_t241;
-    const trailer2_real_t _t295 = J_theta_cart2_left*_t253;
-    const trailer2_real_t _t296 = _ms165*_t220 + _t5;
-    const trailer2_real_t _t297 = _t140 + _t296;
-    const trailer2_real_t _t298 = _ms166*_t220 - _t4;
-    const trailer2_real_t _t299 = _ms167*_t296 + _ms168*_t298 + _t141;
-    const trailer2_real_t _t300 = J_theta_cart2*_t220 + _t143 - _t144 + _t147;
-    const trailer2_real_t _t301 = _ms111*_t300 + _ms112*_t294 + _ms113*_t295 + _ms97*_t299 + _t149
-            + _t151 + _t153 + _t155 + _t157 + _t171*_t241 + _t172*_t253 + _t175*_t220 + _t297;
-    const trailer2_real_t _t302 = -_t168*_t271 + _t176*_t274 + _t179*_t301;
-    const trailer2_real_t _t303 = -_t182*_t302;
-    const trailer2_real_t _t304 = _t184*_t293 + _t186*_t274 - _t187*_t290 - _t189*_t271
-            + _t190*_t303;
-    const trailer2_real_t _t305 = _t184*_t290 - _t186*_t271 + _t189*_t301 - _t191*_t293
-            + _t192*_t303;
-    const trailer2_real_t _t306 = _t0*_t304 + _t160*_t305;
-    const trailer2_real_t _t307 = _ms165*_t227;
-    const trailer2_real_t _t308 = _t307 - _t45;
-    const trailer2_real_t _t309 = J_theta_cart2_right*_t246;
-    const trailer2_real_t _t310 = J_theta_cart2_left*_t257;
-    const trailer2_real_t _t311 = _ms166*_t227;
-    const trailer2_real_t _t312 = _ms167*_t307 + _ms168*_t311 - _t46;
-    const trailer2_real_t _t313 = J_theta_cart2*_t227 - _t52;
-    const trailer2_real_t _t314 = _ms111*_t313 + _ms112*_t309 + _ms113*_t310 + _ms97*_t312
-            + _t164*_t245 + _t165*_t256 + _t166*_t225 + _t308 - _t55 - _t58 - _t60 - _t63 - _t66;
-    const trailer2_real_t _t315 = _t10 + _t311 - _t67;
-    const trailer2_real_t _t316 = -TRAILER2_LIT(0.3)*_t315;
-    const trailer2_real_t _t317 = _ms116*_t312 + _ms123*_t313 + _ms124*_t309 + _ms125*_t310
-            + _t164*_t246 + _t165*_t257 + _t166*_t227 + _t316 - _t68 - _t69 - _t70 - _t71 - _t72;
-    const trailer2_real_t _t318 = _t228*_t79;
-    const trailer2_real_t _t319 = _t228*_t82 + _t88;
-    const trailer2_real_t _t320 = -_t101 - _t319 + _t98;
-    const trailer2_real_t _t321 = _t29*_t320;
-    const trailer2_real_t _t322 = _ms165*_t321 - _ms166*_t318;
-    const trailer2_real_t _t323 = -_t104 + _t322;
-    const trailer2_real_t _t324 = _t106*_t228 + _t107;
-    const trailer2_real_t _t325 = -_t109 - _t324;
-    const trailer2_real_t _t326 = _t320*_t40 + _t325*_t41;
-    const trailer2_real_t _t327 = J_theta_cart2_right*_t326;
-    const trailer2_real_t _t328 = _t320*_t43 + _t325*_t44;
-    const trailer2_real_t _t329 = J_theta_cart2_left*_t328;
-    const trailer2_real_t _t330 = _ms165*_t318 + _ms166*_t321;
-    const trailer2_real_t _t331 = _ms167*_t322 + _ms168*_t330 - _t113 - _t114 - _t115 + _t116
-            + _t117;
-    const trailer2_real_t _t332 = J_theta_cart2*_t321 - _t122;
-    const trailer2_real_t _t333 = _ms111*_t332 + _ms112*_t327 + _ms113*_t329 + _ms222*_t245
-            + _ms223*_t256 + _ms227*_t225 + _ms97*_t331 - _t123 - _t124 - _t125 - _t130 - _t133
-            + _t323;
-    const trailer2_real_t _t334 = -_t134 + _t330;
-    const trailer2_real_t _t335 = -TRAILER2_LIT(0.3)*_t334;
-    const trailer2_real_t _t336 = _ms116*_t331 + _ms123*_t332 + _ms124*_t327 + _ms125*_t329
-            + _ms222*_t246 + _ms223*_t257 + _ms227*_t227 - _t135 - _t136 - _t137 - _t138 - _t139
-            + _t335;
-    const trailer2_real_t _t337 = J_theta_cart2_right*_t245;
-    const trailer2_real_t _t338 = J_theta_cart2_left*_t256;
-    const trailer2_real_t _t339 = _ms165*_t225;
-    const trailer2_real_t _t340 = -_t140 + _t339;
-    const trailer2_real_t _t341 = _ms166*_t225;
-    const trailer2_real_t _t342 = _ms167*_t339 + _ms168*_t341 - _t141;
-    const trailer2_real_t _t343 = J_theta_cart2*_t225 - _t147;
-    const trailer2_real_t _t344 = _ms111*_t343 + _ms112*_t337 + _ms113*_t338 + _ms97*_t342 - _t149
-            - _t151 - _t153 - _t155 - _t157 + _t171*_t245 + _t172*_t256 + _t175*_t225 + _t340;
-    const trailer2_real_t _t345 = -_t168*_t314 + _t176*_t317 + _t179*_t344;
-    const trailer2_real_t _t346 = -_t182*_t345;
-    const trailer2_real_t _t347 = _t184*_t336 + _t186*_t317 - _t187*_t333 - _t189*_t314
-            + _t190*_t346;
-    const trailer2_real_t _t348 = _t184*_t333 - _t186*_t314 + _t189*_t344 - _t191*_t336
-            + _t192*_t346;
-    const trailer2_real_t _t349 = _t0*_t347 + _t160*_t348;
-    const trailer2_real_t _t350 = _ms165*_t230 - _t9;
-    const trailer2_real_t _t351 = J_theta_cart2_right*_t249;
-    const trailer2_real_t _t352 = J_theta_cart2_left*_t260;
-    const trailer2_real_t _t353 = _ms166*_t230 + _t8;
-    const trailer2_real_t _t354 = _ms167*_t350 + _ms168*_t353;
-    const trailer2_real_t _t355 = J_theta_cart2*_t230 - _t47 + _t49;
-    const trailer2_real_t _t356 = _ms111*_t355 + _ms112*_t351 + _ms113*_t352 + _ms97*_t354
-            + _t164*_t248 + _t165*_t259 + _t166*_t229 + _t350;
-    const trailer2_real_t _t357 = -TRAILER2_LIT(0.3)*_t353;
-    const trailer2_real_t _t358 = _ms116*_t354 + _ms123*_t355 + _ms124*_t351 + _ms125*_t352
-            + _t164*_t249 + _t165*_t260 + _t166*_t230 + _t357;
-    const trailer2_real_t _t359 = _t231*_t79;
-    const trailer2_real_t _t360 = _t231*_t82 + _t91;
-    const trailer2_real_t _t361 = _t102 - _t360;
-    const trailer2_real_t _t362 = _t29*_t361;
-    const trailer2_real_t _t363 = _ms165*_t362 - _ms166*_t359 - _t103;
-    const trailer2_real_t _t364 = _t106*_t231 + _t108;
-    const trailer2_real_t _t365 = -_t110 - _t364;
-    const trailer2_real_t _t366 = _t361*_t40 + _t365*_t41;
-    const trailer2_real_t _t367 = J_theta_cart2_right*_t366;
-    const trailer2_real_t _t368 = _t361*_t43 + _t365*_t44;
-    const trailer2_real_t _t369 = J_theta_cart2_left*_t368;
-    const trailer2_real_t _t370 = _ms165*_t359 + _ms166*_t362 - _t111 + _t112;
-    const trailer2_real_t _t371 = _ms167*_t363 + _ms168*_t370;
-    const trailer2_real_t _t372 = J_theta_cart2*_t362 - _t118 + _t119;
-    const trailer2_real_t _t373 = _ms111*_t372 + _ms112*_t367 + _ms113*_t369 + _ms222*_t248
-            + _ms223*_t259 + _ms227*_t229 + _ms97*_t371 + _t363;
-    const trailer2_real_t _t374 = -TRAILER2_LIT(0.3)*_t370;
-    const trailer2_real_t _t375 = _ms116*_t371 + _ms123*_t372 + _ms124*_t367 + _ms125*_t369
-            + _ms222*_t249 + _ms223*_t260 + _ms227*_t230 + _t374;
-    const trailer2_real_t _t376 = J_theta_cart2_right*_t248;
-    const trailer2_real_t _t377 = J_theta_cart2_left*_t259;
-    const trailer2_real_t _t378 = _ms165*_t229 - _t5;
-    const trailer2_real_t _t379 = _ms166*_t229 + _t4;
-    const trailer2_real_t _t380 = _ms167*_t378 + _ms168*_t379;
-    const trailer2_real_t _t381 = J_theta_cart2*_t229 - _t143 + _t144;
-    const trailer2_real_t _t382 = _ms111*_t381 + _ms112*_t376 + _ms113*_t377 + _ms97*_t380
-            + _t171*_t248 + _t172*_t259 + _t175*_t229 + _t378;
-    const trailer2_real_t _t383 = -_t168*_t356 + _t176*_t358 + _t179*_t382;
-    const trailer2_real_t _t384 = -_t182*_t383;
-    const trailer2_real_t _t385 = _t184*_t375 + _t186*_t358 - _t187*_t373 - _t189*_t356
-            + _t190*_t384;
-    const trailer2_real_t _t386 = _t184*_t373 - _t186*_t356 + _t189*_t382 - _t191*_t375
-            + _t192*_t384;
-    const trailer2_real_t _t387 = _t0*_t385 + _t160*_t386;
-    const trailer2_real_t _t388 = _ms18*_t193;
-    const trailer2_real_t _t389 = _t197*_t73;
-    const trailer2_real_t _t390 = TRAILER2_LIT(0.3)*_t388;
-    const trailer2_real_t _t391 = -_ms126*_ms18 - _ms127*_ms60;
-    const trailer2_real_t _t392 = -_t194*_t391;
-    const trailer2_real_t _t393 = -_ms60*_t196 - _t195*_t200 + _t197*_t78;
-    const trailer2_real_t _t394 = _t17*_t390 - _t19*_t392 - _t393;
-    const trailer2_real_t _t395 = _t14*_t394;
-    const trailer2_real_t _t396 = _t232*_t79;
-    const trailer2_real_t _t397 = -_t199*_t22 - _t202*_t23 + _t232*_t82;
-    const trailer2_real_t _t398 = _t20*_t389;
-    const trailer2_real_t _t399 = _t18*_t395 + _t390 + _t398;
-    const trailer2_real_t _t400 = _t18*_t389;
-    const trailer2_real_t _t401 = -_t20*_t395 + _t392 + _t400;
-    const trailer2_real_t _t402 = -_t22*_t401 + _t23*_t399 - _t397;
-    const trailer2_real_t _t403 = _t29*_t402;
-    const trailer2_real_t _t404 = _ms165*_t403 - _ms166*_t396;
-    const trailer2_real_t _t405 = _ms163*_t395 - _ms164*_t389 + _t404;
-    const trailer2_real_t _t406 = K_theta_tractor_x_tractor*_t388 + _t405;
-    const trailer2_real_t _t407 = _ms60*_t195 + _t105*_t197 - _t196*_t200;
-    const trailer2_real_t _t408 = _t17*_t392 + _t19*_t390 - _t407;
-    const trailer2_real_t _t409 = _t35*_t408 + _t36*_t394;
-    const trailer2_real_t _t410 = J_theta_cart_right*_t409;
-    const trailer2_real_t _t411 = _t37*_t408 + _t38*_t394;
-    const trailer2_real_t _t412 = J_theta_cart_left*_t411;
-    const trailer2_real_t _t413 = _t106*_t232 + _t199*_t23 - _t202*_t22;
-    const trailer2_real_t _t414 = _t22*_t399 + _t23*_t401 - _t413;
-    const trailer2_real_t _t415 = _t40*_t402 + _t41*_t414;
-    const trailer2_real_t _t416 = J_theta_cart2_right*_t415;
-    const trailer2_real_t _t417 = _t402*_t43 + _t414*_t44;
-    const trailer2_real_t _t418 = J_theta_cart2_left*_t417;
-    const trailer2_real_t _t419 = _ms165*_t396 + _ms166*_t403;
-    const trailer2_real_t _t420 = J_theta_cart*_t395 + _ms163*_t390 + _ms164*_t392 + _ms167*_t404
-            + _ms168*_t419;
-    const trailer2_real_t _t421 = _ms167*_t395 - _ms168*_t389 + _t390;
-    const trailer2_real_t _t422 = _ms167*_t389 + _ms168*_t395 + _t392;
-    const trailer2_real_t _t423 = J_theta_cart2*_t403 + _ms165*_t421 + _ms166*_t422;
-    const trailer2_real_t _t424 = _ms111*_t423 + _ms112*_t416 + _ms113*_t418 + _ms97*_t420
-            + _ms98*_t410 + _ms99*_t412 + _t406;
-    const trailer2_real_t _t425 = _ms163*_t389 + _ms164*_t395 + _t419;
-    const trailer2_real_t _t426 = -K_theta_tractor_x_tractor*_t392 - TRAILER2_LIT(0.3)*_t425;
-    const trailer2_real_t _t427 = _ms116*_t420 + _ms117*_t410 + _ms118*_t412 + _ms123*_t423
-            + _ms124*_t416 + _ms125*_t418 + _t426;
-    const trailer2_real_t _t428 = _t184*_t427 - _t187*_t424;
-    const trailer2_real_t _t429 = _t167*_t183*_t424 - _t191*_t427;
-    const trailer2_real_t _t430 = _t0*_t428 + _t160*_t429;
-    const trailer2_real_t _t431 = _ms19*_t193;
-    const trailer2_real_t _t432 = _t203*_t73;
-    const trailer2_real_t _t433 = TRAILER2_LIT(0.3)*_t431;
-    const trailer2_real_t _t434 = -_ms126*_ms19 - _ms127*_ms61;
-    const trailer2_real_t _t435 = -_t194*_t434;
-    const trailer2_real_t _t436 = -_ms61*_t196 - _t195*_t206 + _t203*_t78;
-    const trailer2_real_t _t437 = _t17*_t433 - _t19*_t435 - _t436;
-    const trailer2_real_t _t438 = _t14*_t437;
-    const trailer2_real_t _t439 = _t233*_t79;
-    const trailer2_real_t _t440 = -_t205*_t22 - _t208*_t23 + _t233*_t82;
-    const trailer2_real_t _t441 = _t20*_t432;
-    const trailer2_real_t _t442 = _t18*_t438 + _t433 + _t441;
-    const trailer2_real_t _t443 = _t18*_t432;
-    const trailer2_real_t _t444 = -_t20*_t438 + _t435 + _t443;
-    const trailer2_real_t _t445 = -_t22*_t444 + _t23*_t442 - _t440;
-    const trailer2_real_t _t446 = _t29*_t445;
-    const trailer2_real_t _t447 = _ms165*_t446 - _ms166*_t439;
-    const trailer2_real_t _t448 = _ms163*_t438 - _ms164*_t432 + _t447;
-    const trailer2_real_t _t449 = K_theta_tractor_x_tractor*_t431 + _t448;
-    const trailer2_real_t _t450 = _ms61*_t195 + _t105*_t203 - _t196*_t206;
-    const trailer2_real_t _t451 = _t17*_t435 + _t19*_t433 - _t450;
-    const trailer2_real_t _t452 = _t35*_t451 + _t36*_t437;
-    const trailer2_real_t _t453 = J_theta_cart_right*_t452;
-    const trailer2_real_t _t454 = _t37*_t451 + _t38*_t437;
-    const trailer2_real_t _t455 = J_theta_cart_left*_t454;
-    const trailer2_real_t _t456 = _t106*_t233 + _t205*_t23 - _t208*_t22;
-    const trailer2_real_t _t457 = _t22*_t442 + _t23*_t444 - _t456;
-    const trailer2_real_t _t458 = _t40*_t445 + _t41*_t457;
-    const trailer2_real_t _t459 = J_theta_cart2_right*_t458;
-    const trailer2_real_t _t460 = _t43*_t445 + _t44*_t457;
-    const trailer2_real_t _t461 = J_theta_cart2_left*_t460;
-    const trailer2_real_t _t462 = _ms165*_t439 + _ms166*_t446;
-    const trailer2_real_t _t463 = J_theta_cart*_t438 + _ms163*_t433 + _ms164*_t435 + _ms167*_t447
-            + _ms168*_t462;
-    const trailer2_real_t _t464 = _ms167*_t438 - _ms168*_t432 + _t433;
-    const trailer2_real_t _t465 = _ms167*_t432 + _ms168*_t438 + _t435;
-    const trailer2_real_t _t466 = J_theta_cart2*_t446 + _ms165*_t464 + _ms166*_t465;
-    const trailer2_real_t _t467 = _ms111*_t466 + _ms112*_t459 + _ms113*_t461 + _ms97*_t463
-            + _ms98*_t453 + _ms99*_t455 + _t449;
-    const trailer2_real_t _t468 = _ms163*_t432 + _ms164*_t438 + _t462;
-    const trailer2_real_t _t469 = -K_theta_tractor_x_tractor*_t435 - TRAILER2_LIT(0.3)*_t468;
-    const trailer2_real_t _t470 = _ms116*_t463 + _ms117*_t453 + _ms118*_t455 + _ms123*_t466
-            + _ms124*_t459 + _ms125*_t461 + _t469;
-    const trailer2_real_t _t471 = _t184*_t470 - _t187*_t467;
-    const trailer2_real_t _t472 = _t167*_t183*_t467 - _t191*_t470;
-    const trailer2_real_t _t473 = _t0*_t471 + _t160*_t472;
-    const trailer2_real_t _t474 = _t1*_t304 + _t162*_t305;
-    const trailer2_real_t _t475 = _t1*_t347 + _t162*_t348;
-    const trailer2_real_t _t476 = _t1*_t385 + _t162*_t386;
-    const trailer2_real_t _t477 = _t1*_t428 + _t162*_t429;
-    const trailer2_real_t _t478 = _t1*_t471 + _t162*_t472;
-    const trailer2_real_t _t479 = _t0*_t179*_t183 - _t160*_t184;
-    const trailer2_real_t _t480 = -_t0*_t184 + _t160*_t191;
-    const trailer2_real_t _t481 = _t0*_t479 + _t160*_t480;
-    const trailer2_real_t _t482 = _t1*_t179*_t183 - _t162*_t184;
-    const trailer2_real_t _t483 = -_t1*_t184 + _t162*_t191;
-    const trailer2_real_t _t484 = _t0*_t482 + _t160*_t483;
-    const trailer2_real_t _t485 = _t1*_t479 + _t162*_t480;
-    const trailer2_real_t _t486 = _t1*_t482 + _t162*_t483;
+    const trailer2_real_t _t208 = -_ms189 + _t0*tau_right + _t1*tau_left;
+    const trailer2_real_t _t209 = _t206*_t208;
+    const trailer2_real_t _t210 = _t202*_t206;
+    const trailer2_real_t _t211 = -_ms193 + _t189*tau_right + _t190*tau_left;
+    const trailer2_real_t _t212 = _t206*_t211;
+    const trailer2_real_t _t213 = -_t194*_t211 + _t202*_t208;
+    const trailer2_real_t _t214 = _t198*_t206;
+    const trailer2_real_t _t215 = -_t194*_t208 + _t198*_t211;
+    const trailer2_real_t _t216 = _ms116*_ms18 + _ms60*_ms97;
+    const trailer2_real_t _t217 = _ms60 + _t216*_t24;
+    const trailer2_real_t _t218 = _ms129*_t217;
+    const trailer2_real_t _t219 = -TRAILER2_LIT(0.3)*_ms18;
+    const trailer2_real_t _t220 = -_t216*_t26 + _t219;
+    const trailer2_real_t _t221 = _ms129*_t220;
+    const trailer2_real_t _t222 = TRAILER2_LIT(2.0)*_ms127;
+    const trailer2_real_t _t223 = _ms86*_ms87;
+    const trailer2_real_t _t224 = _ms128*_t23;
+    const trailer2_real_t _t225 = _ms128*_t25;
+    const trailer2_real_t _t226 = _ms163*_ms97;
+    const trailer2_real_t _t227 = _ms116*_ms19 + _ms61*_ms97;
+    const trailer2_real_t _t228 = _ms61 + _t227*_t24;
+    const trailer2_real_t _t229 = _ms129*_t228;
+    const trailer2_real_t _t230 = -TRAILER2_LIT(0.3)*_ms19;
+    const trailer2_real_t _t231 = -_t227*_t26 + _t230;
+    const trailer2_real_t _t232 = _ms129*_t231;
+    const trailer2_real_t _t233 = _ms18*_t189 + _ms60*_t0;
+    const trailer2_real_t _t234 = _ms18*_t190 + _ms60*_t1;
+    const trailer2_real_t _t235 = _ms19*_t189 + _ms61*_t0;
+    const trailer2_real_t _t236 = _ms19*_t190 + _ms61*_t1;
+    const trailer2_real_t _t237 = _ms126*_t18;
+    const trailer2_real_t _t238 = _ms126*_t19;
+    const trailer2_real_t _t239 = _ms60*_t18;
+    const trailer2_real_t _t240 = _ms61*_t18;
+    const trailer2_real_t _t241 = _ms60*_t19;
+    const trailer2_real_t _t242 = _ms61*_t19;
+    const trailer2_real_t _t243 = _t35*_t51;
+    const trailer2_real_t _t244 = -_ms119*_t28 - _ms120*_t29 - _t38 + _t40;
+    const trailer2_real_t _t245 = _t244*_t35;
+    const trailer2_real_t _t246 = _ms126*_t243 + _ms127*_t245;
+    const trailer2_real_t _t247 = _t32 - _t34;
+    const trailer2_real_t _t248 = _t247*_t35;
+    const trailer2_real_t _t249 = _t38 - _t40;
+    const trailer2_real_t _t250 = _t249*_t35;
+    const trailer2_real_t _t251 = _ms126*_t248 + _ms127*_t250;
+    const trailer2_real_t _t252 = _ms103*_t35;
+    const trailer2_real_t _t253 = _ms122*_t35;
+    const trailer2_real_t _t254 = _ms126*_t252 + _ms127*_t253;
+    const trailer2_real_t _t255 = _ms111*_ms60 + _ms123*_ms18;
+    const trailer2_real_t _t256 = _ms111*_ms61 + _ms123*_ms19;
+    const trailer2_real_t _t257 = _ms126*_t62 + _ms127*_t65;
+    const trailer2_real_t _t258 = _ms117*_ms18 + _ms60*_ms98;
+    const trailer2_real_t _t259 = _ms117*_ms19 + _ms61*_ms98;
+    const trailer2_real_t _t260 = _ms126*_t57 + _ms127*_t60;
+    const trailer2_real_t _t261 = _ms118*_ms18 + _ms60*_ms99;
+    const trailer2_real_t _t262 = _ms118*_ms19 + _ms61*_ms99;
+    const trailer2_real_t _t263 = _ms119*_t29 - _ms120*_t28 + _t48;
+    const trailer2_real_t _t264 = _t244*_t46 + _t263*_t47;
+    const trailer2_real_t _t265 = _ms126*_t55 + _ms127*_t264;
+    const trailer2_real_t _t266 = _t247*_t46 - _t45*_t47;
+    const trailer2_real_t _t267 = _t249*_t46 - _t47*_t48;
+    const trailer2_real_t _t268 = _ms126*_t266 + _ms127*_t267;
+    const trailer2_real_t _t269 = -_ms102*_t47 + _ms103*_ms105*_ms110;
+    const trailer2_real_t _t270 = -_ms121*_t47 + _ms122*_t46;
+    const trailer2_real_t _t271 = _ms126*_t269 + _ms127*_t270;
+    const trailer2_real_t _t272 = _ms112*_ms60 + _ms124*_ms18;
+    const trailer2_real_t _t273 = _ms112*_ms61 + _ms124*_ms19;
+    const trailer2_real_t _t274 = _t244*_t49 + _t263*_t50;
+    const trailer2_real_t _t275 = _ms126*_t53 + _ms127*_t274;
+    const trailer2_real_t _t276 = _t247*_t49 - _t45*_t50;
+    const trailer2_real_t _t277 = _t249*_t49 - _t48*_t50;
+    const trailer2_real_t _t278 = _ms126*_t276 + _ms127*_t277;
+    const trailer2_real_t _t279 = -_ms102*_t50 + _ms103*_ms107*_ms110;
+    const trailer2_real_t _t280 = -_ms121*_t50 + _ms122*_t49;
+    const trailer2_real_t _t281 = _ms126*_t279 + _ms127*_t280;
+    const trailer2_real_t _t282 = _ms113*_ms60 + _ms125*_ms18;
+    const trailer2_real_t _t283 = _ms113*_ms61 + _ms125*_ms19;
+    const trailer2_real_t _t284 = _ms124*_t56 + _ms125*_t54 + _t264*_t7 + _t274*_t6 + _t58 + _t61
+            + _t63 + _t66;
+    const trailer2_real_t _t285 = _t284 + _t71;
+    const trailer2_real_t _t286 = _t243*_t73 + _t245*_t75 + _t285 + _t72 - _t76 + _t85;
+    const trailer2_real_t _t287 = _t264*_t89 + _t274*_t87 + _t90 + _t91;
+    const trailer2_real_t _t288 = _t287 + _t92;
+    const trailer2_real_t _t289 = _t245*_t93 + _t288 - _t96 + _t98 + _t99;
+    const trailer2_real_t _t290 = _t100*_t246;
+    const trailer2_real_t _t291 = _t103*_t246 - _t109 - _t112;
+    const trailer2_real_t _t292 = -_t125 + _t128 - _t129 - _t291;
+    const trailer2_real_t _t293 = _t292*_t35;
+    const trailer2_real_t _t294 = _t131*_t246 - _t132 - _t133;
+    const trailer2_real_t _t295 = _t134 + _t135 - _t294;
+    const trailer2_real_t _t296 = _t292*_t46 + _t295*_t47;
+    const trailer2_real_t _t297 = _t292*_t49 + _t295*_t50;
+    const trailer2_real_t _t298 = _ms161*_t56 + _ms162*_t54 + _t137 + _t141 + _t143 + _t145
+            + _t296*_t7 + _t297*_t6;
+    const trailer2_real_t _t299 = -_t146 + _t147 + _t148 - _t149 + _t151 + _t298;
+    const trailer2_real_t _t300 = _t152 + _t153*_t243 + _t156*_t290 - _t157 + _t162 + _t293*_t75
+            + _t299;
+    const trailer2_real_t _t301 = _t163*_t274 + _t164*_t264 + _t165 + _t166 + _t167 + _t168
+            + _t296*_t88 + _t297*_t86;
+    const trailer2_real_t _t302 = -_t169 + _t170 + _t171 - _t172 + _t173 + _t301;
+    const trailer2_real_t _t303 = _t153*_t245 + _t174 + _t175*_t290 - _t176 + _t177 + _t293*_t73
+            + _t302;
+    const trailer2_real_t _t304 = _t178*_t53 + _t179*_t55 + _t180 + _t181;
+    const trailer2_real_t _t305 = _t183 + _t304;
+    const trailer2_real_t _t306 = _t184*_t243 - _t186 + _t187 + _t188 + _t305;
+    const trailer2_real_t _t307 = -_t195*_t286 + _t198*_t289 + _t202*_t306;
+    const trailer2_real_t _t308 = -_t205*_t307;
+    const trailer2_real_t _t309 = _t207*_t303 + _t209*_t289 - _t210*_t300 - _t212*_t286
+            + _t213*_t308;
+    const trailer2_real_t _t310 = _t207*_t300 - _t209*_t286 + _t212*_t306 - _t214*_t303
+            + _t215*_t308;
+    const trailer2_real_t _t311 = _t0*_t309 + _t189*_t310;
+    const trailer2_real_t _t312 = _t266*_t88 + _t267*_t7 + _t276*_t86 + _t277*_t6 - _t58 - _t61
+            - _t63 - _t66;
+    const trailer2_real_t _t313 = _t312 - _t71;
+    const trailer2_real_t _t314 = _t248*_t73 + _t250*_t75 + _t313 - _t85;
+    const trailer2_real_t _t315 = _t267*_t89 + _t277*_t87 - _t90 - _t91;
+    const trailer2_real_t _t316 = _t315 - _t92;
+    const trailer2_real_t _t317 = _t250*_t93 + _t316 - _t99;
+    const trailer2_real_t _t318 = _t100*_t251;
+    const trailer2_real_t _t319 = _t103*_t251 + _t109;
+    const trailer2_real_t _t320 = _t125 - _t128 - _t319;
+    const trailer2_real_t _t321 = _t320*_t35;
+    const trailer2_real_t _t322 = _t131*_t251 + _t132;
+    const trailer2_real_t _t323 = -_t134 - _t322;
+    const trailer2_real_t _t324 = _t320*_t46 + _t323*_t47;
+    const trailer2_real_t _t325 = _t320*_t49 + _t323*_t50;
+    const trailer2_real_t _t326 = -_t137 - _t141 - _t143 - _t145 + _t163*_t276 + _t164*_t266
+            + _t324*_t7 + _t325*_t6;
+    const trailer2_real_t _t327 = _t146 - _t147 - _t148 + _t149 - _t151 + _t326;
+    const trailer2_real_t _t328 = _t153*_t248 + _t156*_t318 - _t162 + _t321*_t75 + _t327;
+    const trailer2_real_t _t329 = _t163*_t277 + _t164*_t267 - _t165 - _t166 - _t167 - _t168
+            + _t324*_t88 + _t325*_t86;
+    const trailer2_real_t _t330 = _t169 - _t170 - _t171 + _t172 - _t173 + _t329;
+    const trailer2_real_t _t331 = _t153*_t250 + _t175*_t318 - _t177 + _t321*_t73 + _t330;
+    const trailer2_real_t _t332 = _t178*_t276 + _t179*_t266 - _t180 - _t181;
+    const trailer2_real_t _t333 = -_t183 + _t332;
+    const trailer2_real_t _t334 = _t184*_t248 - _t188 + _t333;
+    const trailer2_real_t _t335 = -_t195*_t314 + _t198*_t317 + _t202*_t334;
+    const trailer2_real_t _t336 = -_t205*_t335;
+    const trailer2_real_t _t337 = _t207*_t331 + _t209*_t317 - _t210*_t328 - _t212*_t314
+            + _t213*_t336;
+    const trailer2_real_t _t338 = _t207*_t328 - _t209*_t314 + _t212*_t334 - _t214*_t331
+            + _t215*_t336;
+    const trailer2_real_t _t339 = _t0*_t337 + _t189*_t338;
+    const trailer2_real_t _t340 = _t269*_t88 + _t270*_t7 + _t279*_t86 + _t280*_t6;
+    const trailer2_real_t _t341 = _t252*_t73 + _t253*_t75 + _t340 - _t72 + _t76;
+    const trailer2_real_t _t342 = _t270*_t89 + _t280*_t87;
+    const trailer2_real_t _t343 = _t253*_t93 + _t342 + _t96 - _t98;
+    const trailer2_real_t _t344 = _t100*_t254;
+    const trailer2_real_t _t345 = _t103*_t254 + _t112;
+    const trailer2_real_t _t346 = _t129 - _t345;
+    const trailer2_real_t _t347 = _t346*_t35;
+    const trailer2_real_t _t348 = _t131*_t254 + _t133;
+    const trailer2_real_t _t349 = -_t135 - _t348;
+    const trailer2_real_t _t350 = _t346*_t46 + _t349*_t47;
+    const trailer2_real_t _t351 = _t346*_t49 + _t349*_t50;
+    const trailer2_real_t _t352 = _t163*_t279 + _t164*_t269 + _t350*_t7 + _t351*_t6;
+    const trailer2_real_t _t353 = -_t152 + _t153*_t252 + _t156*_t344 + _t157 + _t347*_t75 + _t352;
+    const trailer2_real_t _t354 = _t163*_t280 + _t164*_t270 + _t350*_t88 + _t351*_t86;
+    const trailer2_real_t _t355 = _t153*_t253 - _t174 + _t175*_t344 + _t176 + _t347*_t73 + _t354;
+    const trailer2_real_t _t356 = _t178*_t279 + _t179*_t269;
+    const trailer2_real_t _t357 = _t184*_t252 + _t186 - _t187 + _t356;
+    const trailer2_real_t _t358 = -_t195*_t341 + _t198*_t343 + _t202*_t357;
+    const trailer2_real_t _t359 = -_t205*_t358;
+    const trailer2_real_t _t360 = _t207*_t355 + _t209*_t343 - _t210*_t353 - _t212*_t341
+            + _t213*_t359;
+    const trailer2_real_t _t361 = _t207*_t353 - _t209*_t341 + _t212*_t357 - _t214*_t355
+            + _t215*_t359;
+    const trailer2_real_t _t362 = _t0*_t360 + _t189*_t361;
+    const trailer2_real_t _t363 = _t100*_t255;
+    const trailer2_real_t _t364 = _t103*_t255 - _t218*_t28 - _t221*_t29;
+    const trailer2_real_t _t365 = _ms18*_t222;
+    const trailer2_real_t _t366 = TRAILER2_LIT(0.3)*_t365;
+    const trailer2_real_t _t367 = _t113*_t216;
+    const trailer2_real_t _t368 = _t26*_t367;
+    const trailer2_real_t _t369 = -_ms126*_ms18 - _ms127*_ms60;
+    const trailer2_real_t _t370 = -_t223*_t369;
+    const trailer2_real_t _t371 = -_ms60*_t225 + _t118*_t216 - _t219*_t224;
+    const trailer2_real_t _t372 = _t23*_t366 - _t25*_t370 - _t371;
+    const trailer2_real_t _t373 = _t20*_t372;
+    const trailer2_real_t _t374 = _t24*_t373 + _t366 + _t368;
+    const trailer2_real_t _t375 = _t24*_t367;
+    const trailer2_real_t _t376 = -_t26*_t373 + _t370 + _t375;
+    const trailer2_real_t _t377 = -_t28*_t376 + _t29*_t374 - _t364;
+    const trailer2_real_t _t378 = _t35*_t377;
+    const trailer2_real_t _t379 = _ms167*_t373 - _ms169*_t367 + _t366;
+    const trailer2_real_t _t380 = _ms167*_t367 + _ms169*_t373 + _t370;
+    const trailer2_real_t _t381 = _ms60*_t224 + _t130*_t216 - _t219*_t225;
+    const trailer2_real_t _t382 = _t23*_t370 + _t25*_t366 - _t381;
+    const trailer2_real_t _t383 = _t372*_t42 + _t382*_t41;
+    const trailer2_real_t _t384 = _t372*_t44 + _t382*_t43;
+    const trailer2_real_t _t385 = _t131*_t255 + _t218*_t29 - _t221*_t28;
+    const trailer2_real_t _t386 = _t28*_t374 + _t29*_t376 - _t385;
+    const trailer2_real_t _t387 = _t377*_t46 + _t386*_t47;
+    const trailer2_real_t _t388 = _t377*_t49 + _t386*_t50;
+    const trailer2_real_t _t389 = _t383*_t64 + _t384*_t59 + _t387*_t7 + _t388*_t6;
+    const trailer2_real_t _t390 = K_theta_tractor_x_tractor*_t365 + _t389;
+    const trailer2_real_t _t391 = -_ms164*_t367 + _t182*_t370 + _t226*_t366 + _t373*_t67 + _t390;
+    const trailer2_real_t _t392 = _t156*_t363 + _t378*_t75 + _t379*_t77 + _t380*_t78 + _t391;
+    const trailer2_real_t _t393 = _t383*_t9 + _t384*_t8 + _t387*_t88 + _t388*_t86;
+    const trailer2_real_t _t394 = -K_theta_tractor_x_tractor*_t370 + _t393;
+    const trailer2_real_t _t395 = _t10*_t366 + _t17*_t370 - _t367*_t70 + _t373*_t69 + _t394;
+    const trailer2_real_t _t396 = _t175*_t363 + _t378*_t73 + _t379*_t79 + _t380*_t80 + _t395;
+    const trailer2_real_t _t397 = _t207*_t396 - _t210*_t392;
+    const trailer2_real_t _t398 = _t194*_t206*_t392 - _t214*_t396;
+    const trailer2_real_t _t399 = _t0*_t397 + _t189*_t398;
+    const trailer2_real_t _t400 = _t100*_t256;
+    const trailer2_real_t _t401 = _t103*_t256 - _t229*_t28 - _t232*_t29;
+    const trailer2_real_t _t402 = _ms19*_t222;
+    const trailer2_real_t _t403 = TRAILER2_LIT(0.3)*_t402;
+    const trailer2_real_t _t404 = _t113*_t227;
+    const trailer2_real_t _t405 = _t26*_t404;
+    const trailer2_real_t _t406 = -_ms126*_ms19 - _ms127*_ms61;
+    const trailer2_real_t _t407 = -_t223*_t406;
+    const trailer2_real_t _t408 = -_ms61*_t225 + _t118*_t227 - _t224*_t230;
+    const trailer2_real_t _t409 = _t23*_t403 - _t25*_t407 - _t408;
+    const trailer2_real_t _t410 = _t20*_t409;
+    const trailer2_real_t _t411 = _t24*_t410 + _t403 + _t405;
+    const trailer2_real_t _t412 = _t24*_t404;
+    const trailer2_real_t _t413 = -_t26*_t410 + _t407 + _t412;
+    const trailer2_real_t _t414 = -_t28*_t413 + _t29*_t411 - _t401;
+    const trailer2_real_t _t415 = _t35*_t414;
+    const trailer2_real_t _t416 = _ms167*_t410 - _ms169*_t404 + _t403;
+    const trailer2_real_t _t417 = _ms167*_t404 + _ms169*_t410 + _t407;
+    const trailer2_real_t _t418 = _ms61*_t224 + _t130*_t227 - _t225*_t230;
+    const trailer2_real_t _t419 = _t23*_t407 + _t25*_t403 - _t418;
+    const trailer2_real_t _t420 = _t409*_t42 + _t41*_t419;
+    const trailer2_real_t _t421 = _t409*_t44 + _t419*_t43;
+    const trailer2_real_t _t422 = _t131*_t256 + _t229*_t29 - _t232*_t28;
+    const trailer2_real_t _t423 = _t28*_t411 + _t29*_t413 - _t422;
+    const trailer2_real_t _t424 = _t414*_t46 + _t423*_t47;
+    const trailer2_real_t _t425 = _t414*_t49 + _t423*_t50;
+    const trailer2_real_t _t426 = _t420*_t64 + _t421*_t59 + _t424*_t7 + _t425*_t6;
+    const trailer2_real_t _t427 = K_theta_tractor_x_tractor*_t402 + _t426;
+    const trailer2_real_t _t428 = -_ms164*_t404 + _t182*_t407 + _t226*_t403 + _t410*_t67 + _t427;
+    const trailer2_real_t _t429 = _t156*_t400 + _t415*_t75 + _t416*_t77 + _t417*_t78 + _t428;
+    const trailer2_real_t _t430 = _t420*_t9 + _t421*_t8 + _t424*_t88 + _t425*_t86;
+    const trailer2_real_t _t431 = -K_theta_tractor_x_tractor*_t407 + _t430;
+    const trailer2_real_t _t432 = _t10*_t403 + _t17*_t407 - _t404*_t70 + _t410*_t69 + _t431;
+    const trailer2_real_t _t433 = _t175*_t400 + _t415*_t73 + _t416*_t79 + _t417*_t80 + _t432;
+    const trailer2_real_t _t434 = _t207*_t433 - _t210*_t429;
+    const trailer2_real_t _t435 = _t194*_t206*_t429 - _t214*_t433;
+    const trailer2_real_t _t436 = _t0*_t434 + _t189*_t435;
+    const trailer2_real_t _t437 = _t1*_t309 + _t190*_t310;
+    const trailer2_real_t _t438 = _t1*_t337 + _t190*_t338;
+    const trailer2_real_t _t439 = _t1*_t360 + _t190*_t361;
+    const trailer2_real_t _t440 = _t1*_t397 + _t190*_t398;
+    const trailer2_real_t _t441 = _t1*_t434 + _t190*_t435;
+    const trailer2_real_t _t442 = _t0*_t202*_t206 - _t189*_t207;
+    const trailer2_real_t _t443 = -_t0*_t207 + _t189*_t214;
+    const trailer2_real_t _t444 = _t0*_t442 + _t189*_t443;
+    const trailer2_real_t _t445 = _t1*_t202*_t206 - _t190*_t207;
+    const trailer2_real_t _t446 = -_t1*_t207 + _t190*_t214;
+    const trailer2_real_t _t447 = _t0*_t445 + _t189*_t446;
+    const trailer2_real_t _t448 = _t1*_t442 + _t190*_t443;
+    const trailer2_real_t _t449 = _t1*_t445 + _t190*_t446;
     A[0] = TRAILER2_LIT(0.0);
     A[1] = TRAILER2_LIT(0.0);
-    A[2] = -_t214;
+    A[2] = -_t238;
     A[3] = TRAILER2_LIT(0.0);
     A[4] = TRAILER2_LIT(0.0);
     A[5] = TRAILER2_LIT(0.0);
@@ -1754,11 +1680,11 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[8] = TRAILER2_LIT(0.0);
     A[9] = TRAILER2_LIT(0.0);
     A[10] = TRAILER2_LIT(0.0);
-    A[11] = _t215;
-    A[12] = _t216;
+    A[11] = _t239;
+    A[12] = _t240;
     A[13] = TRAILER2_LIT(0.0);
     A[14] = TRAILER2_LIT(0.0);
-    A[15] = _t213;
+    A[15] = _t237;
     A[16] = TRAILER2_LIT(0.0);
     A[17] = TRAILER2_LIT(0.0);
     A[18] = TRAILER2_LIT(0.0);
@@ -1767,8 +1693,8 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[21] = TRAILER2_LIT(0.0);
     A[22] = TRAILER2_LIT(0.0);
     A[23] = TRAILER2_LIT(0.0);
-    A[24] = _t217;
-    A[25] = _t218;
+    A[24] = _t241;
+    A[25] = _t242;
     A[26] = TRAILER2_LIT(0.0);
     A[27] = TRAILER2_LIT(0.0);
     A[28] = TRAILER2_LIT(0.0);
@@ -1784,8 +1710,8 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[38] = _ms19;
     A[39] = TRAILER2_LIT(0.0);
     A[40] = TRAILER2_LIT(0.0);
-    A[41] = _t83;
-    A[42] = -_t83;
+    A[41] = _t104;
+    A[42] = -_t104;
     A[43] = TRAILER2_LIT(0.0);
     A[44] = TRAILER2_LIT(0.0);
     A[45] = TRAILER2_LIT(0.0);
@@ -1793,21 +1719,21 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[47] = TRAILER2_LIT(0.0);
     A[48] = TRAILER2_LIT(0.0);
     A[49] = TRAILER2_LIT(0.0);
-    A[50] = _t197;
-    A[51] = _t203;
+    A[50] = _t216;
+    A[51] = _t227;
     A[52] = TRAILER2_LIT(0.0);
     A[53] = TRAILER2_LIT(0.0);
-    A[54] = _t223;
-    A[55] = _t228;
-    A[56] = _t231;
+    A[54] = _t246;
+    A[55] = _t251;
+    A[56] = _t254;
     A[57] = TRAILER2_LIT(0.0);
     A[58] = TRAILER2_LIT(0.0);
     A[59] = TRAILER2_LIT(0.0);
     A[60] = TRAILER2_LIT(0.0);
     A[61] = TRAILER2_LIT(0.0);
     A[62] = TRAILER2_LIT(0.0);
-    A[63] = _t232;
-    A[64] = _t233;
+    A[63] = _t255;
+    A[64] = _t256;
     A[65] = TRAILER2_LIT(0.0);
     A[66] = TRAILER2_LIT(0.0);
     A[67] = TRAILER2_LIT(0.0);
@@ -1819,8 +1745,8 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[73] = TRAILER2_LIT(0.0);
     A[74] = TRAILER2_LIT(0.0);
     A[75] = TRAILER2_LIT(0.0);
-    A[76] = _t209;
-    A[77] = _t211;
+    A[76] = _t233;
+    A[77] = _t235;
     A[78] = TRAILER2_LIT(0.0);
     A[79] = TRAILER2_LIT(0.0);
     A[80] = TRAILER2_LIT(0.0);
@@ -1832,12 +1758,12 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[86] = TRAILER2_LIT(0.0);
     A[87] = TRAILER2_LIT(0.0);
     A[88] = TRAILER2_LIT(0.0);
-    A[89] = _t210;
-    A[90] = _t212;
+    A[89] = _t234;
+    A[90] = _t236;
     A[91] = TRAILER2_LIT(0.0);
     A[92] = TRAILER2_LIT(0.0);
-    A[93] = _t234;
-    A[94] = -_t234;
+    A[93] = _t257;
+    A[94] = -_t257;
     A[95] = TRAILER2_LIT(0.0);
     A[96] = TRAILER2_LIT(0.0);
     A[97] = TRAILER2_LIT(0.0);
@@ -1845,12 +1771,12 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[99] = TRAILER2_LIT(0.0);
     A[100] = TRAILER2_LIT(0.0);
     A[101] = TRAILER2_LIT(0.0);
-    A[102] = _t235;
-    A[103] = _t236;
+    A[102] = _t258;
+    A[103] = _t259;
     A[104] = TRAILER2_LIT(0.0);
     A[105] = TRAILER2_LIT(0.0);
-    A[106] = _t237;
-    A[107] = -_t237;
+    A[106] = _t260;
+    A[107] = -_t260;
     A[108] = TRAILER2_LIT(0.0);
     A[109] = TRAILER2_LIT(0.0);
     A[110] = TRAILER2_LIT(0.0);
@@ -1858,60 +1784,60 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     A[112] = TRAILER2_LIT(0.0);
     A[113] = TRAILER2_LIT(0.0);
     A[114] = TRAILER2_LIT(0.0);
-    A[115] = _t238;
-    A[116] = _t239;
+    A[115] = _t261;
+    A[116] = _t262;
     A[117] = TRAILER2_LIT(0.0);
     A[118] = TRAILER2_LIT(0.0);
-    A[119] = _t244;
-    A[120] = _t247;
-    A[121] = _t250;
+    A[119] = _t265;
+    A[120] = _t268;
+    A[121] = _t271;
     A[122] = TRAILER2_LIT(0.0);
     A[123] = TRAILER2_LIT(0.0);
     A[124] = TRAILER2_LIT(0.0);
     A[125] = TRAILER2_LIT(0.0);
     A[126] = TRAILER2_LIT(0.0);
     A[127] = TRAILER2_LIT(0.0);
-    A[128] = _t251;
-    A[129] = _t252;
+    A[128] = _t272;
+    A[129] = _t273;
     A[130] = TRAILER2_LIT(0.0);
     A[131] = TRAILER2_LIT(0.0);
-    A[132] = _t255;
-    A[133] = _t258;
-    A[134] = _t261;
+    A[132] = _t275;
+    A[133] = _t278;
+    A[134] = _t281;
     A[135] = TRAILER2_LIT(0.0);
     A[136] = TRAILER2_LIT(0.0);
     A[137] = TRAILER2_LIT(0.0);
     A[138] = TRAILER2_LIT(0.0);
     A[139] = TRAILER2_LIT(0.0);
     A[140] = TRAILER2_LIT(0.0);
-    A[141] = _t262;
-    A[142] = _t263;
+    A[141] = _t282;
+    A[142] = _t283;
     A[143] = TRAILER2_LIT(0.0);
     A[144] = TRAILER2_LIT(0.0);
-    A[145] = _t306;
-    A[146] = _t349;
-    A[147] = _t387;
+    A[145] = _t311;
+    A[146] = _t339;
+    A[147] = _t362;
     A[148] = TRAILER2_LIT(0.0);
     A[149] = TRAILER2_LIT(0.0);
     A[150] = TRAILER2_LIT(0.0);
     A[151] = TRAILER2_LIT(0.0);
     A[152] = TRAILER2_LIT(0.0);
     A[153] = TRAILER2_LIT(0.0);
-    A[154] = _t430;
-    A[155] = _t473;
+    A[154] = _t399;
+    A[155] = _t436;
     A[156] = TRAILER2_LIT(0.0);
     A[157] = TRAILER2_LIT(0.0);
-    A[158] = _t474;
-    A[159] = _t475;
-    A[160] = _t476;
+    A[158] = _t437;
+    A[159] = _t438;
+    A[160] = _t439;
     A[161] = TRAILER2_LIT(0.0);
     A[162] = TRAILER2_LIT(0.0);
     A[163] = TRAILER2_LIT(0.0);
     A[164] = TRAILER2_LIT(0.0);
     A[165] = TRAILER2_LIT(0.0);
     A[166] = TRAILER2_LIT(0.0);
-    A[167] = _t477;
-    A[168] = _t478;
+    A[167] = _t440;
+    A[168] = _t441;
     B[0] = TRAILER2_LIT(0.0);
     B[1] = TRAILER2_LIT(0.0);
     B[2] = TRAILER2_LIT(0.0);
@@ -1934,14 +1860,14 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
     B[19] = TRAILER2_LIT(0.0);
     B[20] = TRAILER2_LIT(0.0);
     B[21] = TRAILER2_LIT(0.0);
-    B[22] = _t481;
-    B[23] = _t484;
-    B[24] = _t485;
-    B[25] = _t486;
+    B[22] = _t444;
+    B[23] = _t447;
+    B[24] = _t448;
+    B[25] = _t449;
 }
 
 /* trailer2_wheel_contact_forces: documented in trailer2_model.h.
-   operations after CSE: 195 add, 333 mul, 8 div, 8 sin/cos, 0 sqrt */
+   operations after CSE: 194 add, 347 mul, 8 div, 8 sin/cos, 0 sqrt */
 trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
     trailer2_real_t *longitudinal, trailer2_real_t *lateral)
@@ -2001,7 +1927,7 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     (void)K_theta_cart_x_tractor_2;
     (void)thetadot_left;
     (void)thetadot_right;
-    trailer2_real_t _shared[97];
+    trailer2_real_t _shared[95];
     trailer2_staged_quantities(p, q, wheel_rates, _shared);
     const trailer2_real_t _ms87 = _shared[9];
     const trailer2_real_t _ms97 = _shared[17];
@@ -2032,120 +1958,114 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t _ms166 = _shared[78];
     const trailer2_real_t _ms167 = _shared[79];
     const trailer2_real_t _ms168 = _shared[80];
-    const trailer2_real_t _ms228 = _shared[95];
-    const trailer2_real_t _ms229 = _shared[96];
+    const trailer2_real_t _ms169 = _shared[81];
+    const trailer2_real_t _ms170 = _shared[82];
+    const trailer2_real_t _ms171 = _shared[83];
+    const trailer2_real_t _ms172 = _shared[84];
+    const trailer2_real_t _ms189 = _shared[90];
+    const trailer2_real_t _ms193 = _shared[94];
     const trailer2_real_t _t0 = _ms87*radius_left;
     const trailer2_real_t _t1 = _ms87*radius_right;
-    const trailer2_real_t _t2 = J_theta_right*_t0;
-    const trailer2_real_t _t3 = J_theta_left*_t1;
-    const trailer2_real_t _t4 = J_theta_cart_right*_ms98;
-    const trailer2_real_t _t5 = J_theta_cart_left*_ms99;
-    const trailer2_real_t _t6 = J_theta_cart2_right*_ms112;
-    const trailer2_real_t _t7 = J_theta_cart2_left*_ms113;
-    const trailer2_real_t _t8 = _ms111*_ms165;
-    const trailer2_real_t _t9 = _ms163*_ms97 + _t8;
-    const trailer2_real_t _t10 = J_x_tractor + _t9;
-    const trailer2_real_t _t11 = _ms111*_ms166;
-    const trailer2_real_t _t12 = J_theta_cart*_ms97 + _ms163 + _ms167*_t8 + _ms168*_t11;
-    const trailer2_real_t _t13 = _ms167*_ms97 + TRAILER2_LIT(1.0);
-    const trailer2_real_t _t14 = _ms168*_ms97;
-    const trailer2_real_t _t15 = J_theta_cart2*_ms111 + _ms165*_t13 + _ms166*_t14;
-    const trailer2_real_t _t16 = _ms111*_t15 + _ms112*_t6 + _ms113*_t7 + _ms97*_t12 + _ms98*_t4
-            + _ms99*_t5 + _t0*_t2 + _t1*_t3 + _t10;
-    const trailer2_real_t _t17 = _ms123*_ms165;
-    const trailer2_real_t _t18 = _ms116*_ms163 + _t17;
-    const trailer2_real_t _t19 = K_theta_tractor_x_tractor_2 + _t18;
-    const trailer2_real_t _t20 = TRAILER2_LIT(0.207)*_t0;
-    const trailer2_real_t _t21 = J_theta_right*_t20;
-    const trailer2_real_t _t22 = -TRAILER2_LIT(0.207)*_t1;
-    const trailer2_real_t _t23 = J_theta_left*_t22;
-    const trailer2_real_t _t24 = J_theta_cart_right*_ms117;
-    const trailer2_real_t _t25 = J_theta_cart_left*_ms118;
-    const trailer2_real_t _t26 = J_theta_cart2_right*_ms124;
-    const trailer2_real_t _t27 = J_theta_cart2_left*_ms125;
-    const trailer2_real_t _t28 = _ms123*_ms166;
-    const trailer2_real_t _t29 = J_theta_cart*_ms116 - TRAILER2_LIT(0.3)*_ms164 + _ms167*_t17
-            + _ms168*_t28;
-    const trailer2_real_t _t30 = _ms116*_ms167;
-    const trailer2_real_t _t31 = _ms116*_ms168 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
-    const trailer2_real_t _t32 = J_theta_cart2*_ms123 + _ms165*_t30 + _ms166*_t31;
-    const trailer2_real_t _t33 = _ms111*_t32 + _ms112*_t26 + _ms113*_t27 + _ms97*_t29 + _ms98*_t24
-            + _ms99*_t25 + _t0*_t21 + _t1*_t23 + _t19;
-    const trailer2_real_t _t34 = _ms116*_ms164 + _t28;
-    const trailer2_real_t _t35 = J_theta_tractor - TRAILER2_LIT(0.3)*_t34;
-    const trailer2_real_t _t36 = _ms116*_t29 + _ms117*_t24 + _ms118*_t25 + _ms123*_t32 + _ms124*_t26
-            + _ms125*_t27 + _t20*_t21 + _t22*_t23 + _t35;
-    const trailer2_real_t _t37 = _t16*_t36 - _t33*_t33;
-    const trailer2_real_t _t38 = -theta_tractor;
-    const trailer2_real_t _t39 = _t38 + theta_cart;
-    const trailer2_real_t _t40 = TRAILER2_SIN(_t39);
-    const trailer2_real_t _t41 = _t38 + theta_cart2;
-    const trailer2_real_t _t42 = TRAILER2_COS(_t41);
-    const trailer2_real_t _t43 = TRAILER2_LIT(0.85)*_t42;
-    const trailer2_real_t _t44 = TRAILER2_SIN(_t41);
-    const trailer2_real_t _t45 = TRAILER2_COS(_t39);
-    const trailer2_real_t _t46 = -_t40*_t43 + TRAILER2_LIT(0.85)*_t44*_t45;
-    const trailer2_real_t _t47 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t48 = -_ms228 + _t0*tau_right + _t1*tau_left;
-    const trailer2_real_t _t49 = -_ms229 + _t20*tau_right + _t22*tau_left;
-    const trailer2_real_t _t50 = TRAILER2_LIT(1.0)/_t37;
-    const trailer2_real_t _t51 = _t50*(-_t33*_t49 + _t36*_t48);
-    const trailer2_real_t _t52 = _t50*(_t16*_t49 - _t33*_t48);
-    const trailer2_real_t _t53 = _ms112*_t51 + _ms124*_t52 + _ms161;
-    const trailer2_real_t _t54 = J_theta_cart2_right*_t53;
-    const trailer2_real_t _t55 = -_t47*_t54;
-    const trailer2_real_t _t56 = _t44*_t55;
-    const trailer2_real_t _t57 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t58 = _ms113*_t51 + _ms125*_t52 + _ms162;
-    const trailer2_real_t _t59 = J_theta_cart2_left*_t58;
-    const trailer2_real_t _t60 = -_t57*_t59;
-    const trailer2_real_t _t61 = _t44*_t60;
-    const trailer2_real_t _t62 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t63 = _ms117*_t52 + _ms152 + _ms98*_t51;
-    const trailer2_real_t _t64 = J_theta_cart_right*_t63;
-    const trailer2_real_t _t65 = -_t62*_t64;
-    const trailer2_real_t _t66 = _t40*_t65;
-    const trailer2_real_t _t67 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t68 = _ms118*_t52 + _ms153 + _ms99*_t51;
-    const trailer2_real_t _t69 = J_theta_cart_left*_t68;
-    const trailer2_real_t _t70 = -_t67*_t69;
-    const trailer2_real_t _t71 = _t40*_t70;
-    const trailer2_real_t _t72 = _ms116*_t52 + _ms151 + _ms97*_t51;
-    const trailer2_real_t _t73 = _ms111*_t51 + _ms123*_t52 + _ms160;
-    const trailer2_real_t _t74 = -_ms138*_ms166 + _ms165*_t73;
-    const trailer2_real_t _t75 = -_ms137*_ms164 + _ms163*_t72 + _t74;
-    const trailer2_real_t _t76 = K_theta_tractor_x_tractor*_ms136 + K_theta_tractor_x_tractor_2*_t52
-            + _t75;
-    const trailer2_real_t _t77 = J_x_tractor*_t51 + _t76;
-    const trailer2_real_t _t78 = TRAILER2_LIT(0.3)*_ms136 + _t51;
-    const trailer2_real_t _t79 = -_ms137*_ms168 + _ms167*_t72 + _t78;
-    const trailer2_real_t _t80 = _ms146 - TRAILER2_LIT(0.3)*_t52;
-    const trailer2_real_t _t81 = _ms137*_ms167 + _ms168*_t72 + _t80;
-    const trailer2_real_t _t82 = J_theta_cart2*_t73 + _ms165*_t79 + _ms166*_t81;
-    const trailer2_real_t _t83 = TRAILER2_LIT(0.2)*_t55 - TRAILER2_LIT(0.2)*_t60 - _t82;
-    const trailer2_real_t _t84 = -TRAILER2_LIT(1.6666666666666667)*_t83;
-    const trailer2_real_t _t85 = _ms138*_ms165 + _ms166*_t73;
-    const trailer2_real_t _t86 = J_theta_cart*_t72 + _ms163*_t78 + _ms164*_t80 + _ms167*_t74
-            + _ms168*_t85;
-    const trailer2_real_t _t87 = -_t46*_t55 - _t46*_t60 + TRAILER2_LIT(0.2)*_t65
-            - TRAILER2_LIT(0.2)*_t70 - _t84*(-TRAILER2_LIT(0.85)*_t40*_t44 - _t43*_t45) - _t86;
-    const trailer2_real_t _t88 = -TRAILER2_LIT(1.6666666666666667)*_t87;
-    const trailer2_real_t _t89 = _t40*_t88 + _t42*_t55 + _t42*_t60 + _t44*_t84 + _t45*_t65
-            + _t45*_t70 - _t77;
-    const trailer2_real_t _t90 = TRAILER2_LIT(0.5)*_t89;
-    const trailer2_real_t _t91 = _ms137*_ms163 + _ms164*_t72 + _t85;
-    const trailer2_real_t _t92 = J_theta_tractor*_t52 - K_theta_tractor_x_tractor*_ms146
-            + K_theta_tractor_x_tractor_2*_t51 - TRAILER2_LIT(0.3)*_t91;
-    const trailer2_real_t _t93 = TRAILER2_LIT(0.3)*_t42*_t84 + TRAILER2_LIT(0.3)*_t45*_t88
-            - TRAILER2_LIT(0.3)*_t56 - TRAILER2_LIT(0.3)*_t61 - TRAILER2_LIT(0.3)*_t66
-            - TRAILER2_LIT(0.3)*_t71 - _t92;
-    const trailer2_real_t _t94 = TRAILER2_LIT(2.4154589371980677)*_t93;
-    const trailer2_real_t _t95 = -K_theta_tractor_x_tractor*_t52
-            + K_theta_tractor_x_tractor_2*_ms136 + _t91;
-    const trailer2_real_t _t96 = J_x_tractor*_ms146 + _t95;
-    const trailer2_real_t _t97 = -_t90 + _t94;
-    const trailer2_real_t _t98 = -_t90 - _t94;
-    const trailer2_real_t _t99 = -_t42*_t84 - _t45*_t88 + _t56 + _t61 + _t66 + _t71 - _t96;
+    const trailer2_real_t _t2 = _ms165*_ms168;
+    const trailer2_real_t _t3 = _ms166*_ms170;
+    const trailer2_real_t _t4 = _ms165*_ms171;
+    const trailer2_real_t _t5 = _ms166*_ms172;
+    const trailer2_real_t _t6 = _t4 + _t5;
+    const trailer2_real_t _t7 = J_theta_cart2_left*_ms113*_ms113 + J_theta_cart2_right*_ms112*_ms112
+            + J_theta_cart_left*_ms99*_ms99 + J_theta_cart_right*_ms98*_ms98 + J_theta_left*_t1*_t1
+            + J_theta_right*_t0*_t0 + J_x_tractor;
+    const trailer2_real_t _t8 = J_theta_cart*_ms97*_ms97 + TRAILER2_LIT(2.0)*_ms163*_ms97 + _t7;
+    const trailer2_real_t _t9 = J_theta_cart2*_ms111*_ms111 + _ms111*_t2 + _ms111*_t3
+            + _ms111*(_t2 + _t3) + _t8;
+    const trailer2_real_t _t10 = TRAILER2_LIT(0.207)*_t0;
+    const trailer2_real_t _t11 = -TRAILER2_LIT(0.207)*_t1;
+    const trailer2_real_t _t12 = J_theta_cart2_left*_ms113*_ms125
+            + J_theta_cart2_right*_ms112*_ms124 + J_theta_cart_left*_ms118*_ms99
+            + J_theta_cart_right*_ms117*_ms98 + J_theta_left*_t1*_t11 + J_theta_right*_t0*_t10;
+    const trailer2_real_t _t13 = K_theta_tractor_x_tractor_2 + _t12;
+    const trailer2_real_t _t14 = J_theta_cart*_ms116*_ms97 + _ms116*_ms163
+            - TRAILER2_LIT(0.3)*_ms164*_ms97 + _t13;
+    const trailer2_real_t _t15 = J_theta_cart2*_ms111*_ms123 + _ms111*_t6 + _ms123*_t2 + _ms123*_t3
+            + _t14;
+    const trailer2_real_t _t16 = J_theta_cart2_left*_ms125*_ms125
+            + J_theta_cart2_right*_ms124*_ms124 + J_theta_cart_left*_ms118*_ms118
+            + J_theta_cart_right*_ms117*_ms117 + J_theta_left*_t11*_t11 + J_theta_right*_t10*_t10;
+    const trailer2_real_t _t17 = J_theta_tractor + _t16;
+    const trailer2_real_t _t18 = J_theta_cart*_ms116*_ms116 - TRAILER2_LIT(0.6)*_ms116*_ms164
+            + _t17;
+    const trailer2_real_t _t19 = J_theta_cart2*_ms123*_ms123 + _ms123*_t4 + _ms123*_t5 + _ms123*_t6
+            + _t18;
+    const trailer2_real_t _t20 = -_t15*_t15 + _t19*_t9;
+    const trailer2_real_t _t21 = -theta_tractor;
+    const trailer2_real_t _t22 = _t21 + theta_cart;
+    const trailer2_real_t _t23 = TRAILER2_SIN(_t22);
+    const trailer2_real_t _t24 = _t21 + theta_cart2;
+    const trailer2_real_t _t25 = TRAILER2_COS(_t24);
+    const trailer2_real_t _t26 = TRAILER2_LIT(0.85)*_t25;
+    const trailer2_real_t _t27 = TRAILER2_SIN(_t24);
+    const trailer2_real_t _t28 = TRAILER2_COS(_t22);
+    const trailer2_real_t _t29 = -_t23*_t26 + TRAILER2_LIT(0.85)*_t27*_t28;
+    const trailer2_real_t _t30 = TRAILER2_LIT(1.0)/radius_cart2_right;
+    const trailer2_real_t _t31 = -_ms189 + _t0*tau_right + _t1*tau_left;
+    const trailer2_real_t _t32 = -_ms193 + _t10*tau_right + _t11*tau_left;
+    const trailer2_real_t _t33 = TRAILER2_LIT(1.0)/_t20;
+    const trailer2_real_t _t34 = _t33*(-_t15*_t32 + _t19*_t31);
+    const trailer2_real_t _t35 = _t33*(-_t15*_t31 + _t32*_t9);
+    const trailer2_real_t _t36 = _ms112*_t34 + _ms124*_t35 + _ms161;
+    const trailer2_real_t _t37 = J_theta_cart2_right*_t36;
+    const trailer2_real_t _t38 = -_t30*_t37;
+    const trailer2_real_t _t39 = _t27*_t38;
+    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/radius_cart2_left;
+    const trailer2_real_t _t41 = _ms113*_t34 + _ms125*_t35 + _ms162;
+    const trailer2_real_t _t42 = J_theta_cart2_left*_t41;
+    const trailer2_real_t _t43 = -_t40*_t42;
+    const trailer2_real_t _t44 = _t27*_t43;
+    const trailer2_real_t _t45 = TRAILER2_LIT(1.0)/radius_cart_right;
+    const trailer2_real_t _t46 = _ms117*_t35 + _ms152 + _ms98*_t34;
+    const trailer2_real_t _t47 = J_theta_cart_right*_t46;
+    const trailer2_real_t _t48 = -_t45*_t47;
+    const trailer2_real_t _t49 = _t23*_t48;
+    const trailer2_real_t _t50 = TRAILER2_LIT(1.0)/radius_cart_left;
+    const trailer2_real_t _t51 = _ms118*_t35 + _ms153 + _ms99*_t34;
+    const trailer2_real_t _t52 = J_theta_cart_left*_t51;
+    const trailer2_real_t _t53 = -_t50*_t52;
+    const trailer2_real_t _t54 = _t23*_t53;
+    const trailer2_real_t _t55 = _ms116*_t35 + _ms151 + _ms97*_t34;
+    const trailer2_real_t _t56 = _ms111*_t34 + _ms123*_t35 + _ms160;
+    const trailer2_real_t _t57 = -_ms138*_ms166 + _ms165*_t56;
+    const trailer2_real_t _t58 = -_ms137*_ms164 + _ms163*_t55 + _t57;
+    const trailer2_real_t _t59 = K_theta_tractor_x_tractor*_ms136 + K_theta_tractor_x_tractor_2*_t35
+            + _t58;
+    const trailer2_real_t _t60 = J_x_tractor*_t34 + _t59;
+    const trailer2_real_t _t61 = TRAILER2_LIT(0.3)*_ms136 + _t34;
+    const trailer2_real_t _t62 = -_ms137*_ms169 + _ms167*_t55 + _t61;
+    const trailer2_real_t _t63 = _ms146 - TRAILER2_LIT(0.3)*_t35;
+    const trailer2_real_t _t64 = _ms137*_ms167 + _ms169*_t55 + _t63;
+    const trailer2_real_t _t65 = J_theta_cart2*_t56 + _ms165*_t62 + _ms166*_t64;
+    const trailer2_real_t _t66 = TRAILER2_LIT(0.2)*_t38 - TRAILER2_LIT(0.2)*_t43 - _t65;
+    const trailer2_real_t _t67 = -TRAILER2_LIT(1.6666666666666667)*_t66;
+    const trailer2_real_t _t68 = _ms138*_ms165 + _ms166*_t56;
+    const trailer2_real_t _t69 = J_theta_cart*_t55 + _ms163*_t61 + _ms164*_t63 + _ms167*_t57
+            + _ms169*_t68;
+    const trailer2_real_t _t70 = -_t29*_t38 - _t29*_t43 + TRAILER2_LIT(0.2)*_t48
+            - TRAILER2_LIT(0.2)*_t53 - _t67*(-TRAILER2_LIT(0.85)*_t23*_t27 - _t26*_t28) - _t69;
+    const trailer2_real_t _t71 = -TRAILER2_LIT(1.6666666666666667)*_t70;
+    const trailer2_real_t _t72 = _t23*_t71 + _t25*_t38 + _t25*_t43 + _t27*_t67 + _t28*_t48
+            + _t28*_t53 - _t60;
+    const trailer2_real_t _t73 = TRAILER2_LIT(0.5)*_t72;
+    const trailer2_real_t _t74 = _ms137*_ms163 + _ms164*_t55 + _t68;
+    const trailer2_real_t _t75 = J_theta_tractor*_t35 - K_theta_tractor_x_tractor*_ms146
+            + K_theta_tractor_x_tractor_2*_t34 - TRAILER2_LIT(0.3)*_t74;
+    const trailer2_real_t _t76 = TRAILER2_LIT(0.3)*_t25*_t67 + TRAILER2_LIT(0.3)*_t28*_t71
+            - TRAILER2_LIT(0.3)*_t39 - TRAILER2_LIT(0.3)*_t44 - TRAILER2_LIT(0.3)*_t49
+            - TRAILER2_LIT(0.3)*_t54 - _t75;
+    const trailer2_real_t _t77 = TRAILER2_LIT(2.4154589371980677)*_t76;
+    const trailer2_real_t _t78 = -K_theta_tractor_x_tractor*_t35
+            + K_theta_tractor_x_tractor_2*_ms136 + _t74;
+    const trailer2_real_t _t79 = J_x_tractor*_ms146 + _t78;
+    const trailer2_real_t _t80 = -_t73 + _t77;
+    const trailer2_real_t _t81 = -_t73 - _t77;
+    const trailer2_real_t _t82 = -_t25*_t67 - _t28*_t71 + _t39 + _t44 + _t49 + _t54 - _t79;
     if (!(radius_cart2_left > TRAILER2_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
@@ -2194,17 +2114,17 @@ trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     if (!(J_x_tractor > TRAILER2_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t16 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t9 > TRAILER2_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    if (!(_t37 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t20 > TRAILER2_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER2_ERR_BAD_PARAMS;
     }
-    const trailer2_real_t r_0 = _t98;
-    const trailer2_real_t r_1 = _t97;
-    const trailer2_real_t r_2 = -_t99;
-    const trailer2_real_t r_3 = -_t88;
-    const trailer2_real_t r_4 = -_t84;
+    const trailer2_real_t r_0 = _t81;
+    const trailer2_real_t r_1 = _t80;
+    const trailer2_real_t r_2 = -_t82;
+    const trailer2_real_t r_3 = -_t71;
+    const trailer2_real_t r_4 = -_t67;
     if (((trailer2_exp_carry(r_0) | trailer2_exp_carry(r_1) | trailer2_exp_carry(r_2)
             | trailer2_exp_carry(r_3) | trailer2_exp_carry(r_4)) & TRAILER2_EXP_CARRY_TOP) != 0u) {
         return TRAILER2_ERR_NONFINITE_OUTPUT;

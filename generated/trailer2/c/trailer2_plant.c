@@ -7,7 +7,7 @@
 #include "trailer2_plant.h"
 
 /* trailer2_plant_state_derivative: documented in trailer2_plant.h.
-   operations after CSE: 131 add, 257 mul, 4 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 132 add, 274 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer2_plant_state_derivative(const trailer2_plant_params_t *pp, const trailer2_real_t *x,
     const trailer2_real_t *tau, trailer2_real_t *xdot)
 {
@@ -69,154 +69,149 @@ void trailer2_plant_state_derivative(const trailer2_plant_params_t *pp, const tr
     const trailer2_real_t _t44 = _t42*_t43;
     const trailer2_real_t _t45 = -_t13*_t30 + _t32;
     const trailer2_real_t _t46 = _t42*_t45;
-    const trailer2_real_t _t47 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t48 = TRAILER2_LIT(0.2)*radius_cart_left;
-    const trailer2_real_t _t49 = -TRAILER2_LIT(0.6)*radius_cart_left;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(0.2)*radius_cart_right;
-    const trailer2_real_t _t51 = -TRAILER2_LIT(0.6)*radius_cart_right;
-    const trailer2_real_t _t52 = _t10*(_t2*_t48 + _t3*_t49);
-    const trailer2_real_t _t53 = _t10*(_t2*_t50 + _t3*_t51);
-    const trailer2_real_t _t54 = _t15*_t35 + _t16*_t34;
-    const trailer2_real_t _t55 = TRAILER2_LIT(0.2)*radius_cart2_left;
-    const trailer2_real_t _t56 = -TRAILER2_LIT(0.6)*radius_cart2_left;
-    const trailer2_real_t _t57 = -TRAILER2_LIT(0.2)*radius_cart2_right;
-    const trailer2_real_t _t58 = -TRAILER2_LIT(0.6)*radius_cart2_right;
-    const trailer2_real_t _t59 = _t19*(_t36*_t55 + _t54*_t56);
-    const trailer2_real_t _t60 = _t19*(_t36*_t57 + _t54*_t58);
-    const trailer2_real_t _t61 = TRAILER2_LIT(0.207)*_t6;
-    const trailer2_real_t _t62 = -TRAILER2_LIT(0.207)*_t7;
-    const trailer2_real_t _t63 = _t10*(-_t25*_t48 - _t47*_t49);
-    const trailer2_real_t _t64 = _t10*(-_t25*_t50 - _t47*_t51);
-    const trailer2_real_t _t65 = _t15*_t39 + _t16*_t38;
-    const trailer2_real_t _t66 = _t19*(_t40*_t55 + _t56*_t65);
-    const trailer2_real_t _t67 = _t19*(_t40*_t57 + _t58*_t65);
-    const trailer2_real_t _t68 = _t23*_t6 + _t29*_t61;
-    const trailer2_real_t _t69 = _t23*_t7 + _t29*_t62;
-    const trailer2_real_t _t70 = _t23*_t52 + _t29*_t63;
-    const trailer2_real_t _t71 = _t23*_t53 + _t29*_t64;
-    const trailer2_real_t _t72 = _t23*_t59 + _t29*_t66;
-    const trailer2_real_t _t73 = _t23*_t60 + _t29*_t67;
-    const trailer2_real_t _t74 = _t29*_t29;
-    const trailer2_real_t _t75 = _t30*_t30;
-    const trailer2_real_t _t76 = _t42*_t42;
-    const trailer2_real_t _t77 = TRAILER2_LIT(0.3)*_t74;
-    const trailer2_real_t _t78 = _t13*_t75;
-    const trailer2_real_t _t79 = _t12*_t75;
-    const trailer2_real_t _t80 = -_t23*_t29;
-    const trailer2_real_t _t81 = -_t4*_t5*_t80;
-    const trailer2_real_t _t82 = -_t2*_t33 - _t3*_t31;
-    const trailer2_real_t _t83 = _t2*_t31 - _t3*_t33;
-    const trailer2_real_t _t84 = _t2*_t77 - _t3*_t81 - _t82;
-    const trailer2_real_t _t85 = _t2*_t81 + _t3*_t77 - _t83;
-    const trailer2_real_t _t86 = _t11*_t84;
-    const trailer2_real_t _t87 = _t10*(_t48*_t84 + _t49*_t85);
-    const trailer2_real_t _t88 = _t10*(_t50*_t84 + _t51*_t85);
-    const trailer2_real_t _t89 = -_t15*_t46 - _t16*_t44;
-    const trailer2_real_t _t90 = _t15*_t44 - _t16*_t46;
-    const trailer2_real_t _t91 = _t12*_t86 + _t77 + _t78;
-    const trailer2_real_t _t92 = -_t13*_t86 + _t79 + _t81;
-    const trailer2_real_t _t93 = _t15*_t91 - _t16*_t92 - _t89;
-    const trailer2_real_t _t94 = _t15*_t92 + _t16*_t91 - _t90;
-    const trailer2_real_t _t95 = _t20*_t93;
-    const trailer2_real_t _t96 = _t19*(_t55*_t93 + _t56*_t94);
-    const trailer2_real_t _t97 = _t19*(_t57*_t93 + _t58*_t94);
-    const trailer2_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
-    const trailer2_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t98 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t99 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer2_real_t K_theta_cart2_x_tractor = pp->K_theta_cart2_x_tractor;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = pp->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t100 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const trailer2_real_t _t101 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const trailer2_real_t _t102 = _t100*_t37;
-    const trailer2_real_t _t103 = _t101*_t37;
-    const trailer2_real_t _t104 = _t102 + _t24*_t98;
-    const trailer2_real_t J_theta_right = pp->J_theta_right;
-    const trailer2_real_t _t105 = J_theta_right*_t6;
-    const trailer2_real_t J_theta_left = pp->J_theta_left;
-    const trailer2_real_t _t106 = J_theta_left*_t7;
-    const trailer2_real_t J_theta_cart_right = pp->J_theta_cart_right;
-    const trailer2_real_t _t107 = J_theta_cart_right*_t52;
-    const trailer2_real_t J_theta_cart_left = pp->J_theta_cart_left;
-    const trailer2_real_t _t108 = J_theta_cart_left*_t53;
-    const trailer2_real_t J_theta_cart2_right = pp->J_theta_cart2_right;
-    const trailer2_real_t _t109 = J_theta_cart2_right*_t59;
+    const trailer2_real_t _t47 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t48 = _t34*_t47;
+    const trailer2_real_t _t49 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t50 = _t35*_t49;
+    const trailer2_real_t _t51 = _t15*_t35 + _t16*_t34;
+    const trailer2_real_t _t52 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t53 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t54 = _t19*(_t36*_t52 + _t51*_t53);
     const trailer2_real_t J_theta_cart2_left = pp->J_theta_cart2_left;
-    const trailer2_real_t _t110 = J_theta_cart2_left*_t60;
-    const trailer2_real_t J_x_tractor = pp->J_x_tractor;
-    const trailer2_real_t _t111 = J_x_tractor + _t104;
+    const trailer2_real_t _t55 = J_theta_cart2_left*_t54;
+    const trailer2_real_t _t56 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t57 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t58 = _t19*(_t36*_t56 + _t51*_t57);
+    const trailer2_real_t J_theta_cart2_right = pp->J_theta_cart2_right;
+    const trailer2_real_t _t59 = J_theta_cart2_right*_t58;
+    const trailer2_real_t _t60 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t61 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t62 = _t10*(_t2*_t60 + _t3*_t61);
+    const trailer2_real_t J_theta_cart_left = pp->J_theta_cart_left;
+    const trailer2_real_t _t63 = J_theta_cart_left*_t62;
+    const trailer2_real_t _t64 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t65 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t66 = _t10*(_t2*_t64 + _t3*_t65);
+    const trailer2_real_t J_theta_cart_right = pp->J_theta_cart_right;
+    const trailer2_real_t _t67 = J_theta_cart_right*_t66;
+    const trailer2_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
+    const trailer2_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
+    const trailer2_real_t _t68 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t _t69 = TRAILER2_LIT(0.3)*_t68;
     const trailer2_real_t J_theta_cart = pp->J_theta_cart;
-    const trailer2_real_t _t112 = J_theta_cart*_t24 + _t102*_t12 - _t103*_t13 + _t98;
+    const trailer2_real_t _t70 = J_theta_cart*_t24;
     const trailer2_real_t J_theta_cart2 = pp->J_theta_cart2;
-    const trailer2_real_t _t113 = J_theta_cart2*_t37 + _t100*_t34 + _t101*_t35;
-    const trailer2_real_t _t114 = _t100*_t41;
-    const trailer2_real_t _t115 = _t101*_t41;
-    const trailer2_real_t _t116 = _t114 + _t26*_t98;
-    const trailer2_real_t _t117 = _t115 + _t26*_t99;
+    const trailer2_real_t _t71 = J_theta_cart2*_t37;
+    const trailer2_real_t _t72 = _t38*_t47;
+    const trailer2_real_t _t73 = _t39*_t49;
+    const trailer2_real_t _t74 = _t72 + _t73;
+    const trailer2_real_t _t75 = _t29*_t29;
+    const trailer2_real_t _t76 = TRAILER2_LIT(0.3)*_t75;
+    const trailer2_real_t _t77 = -_t23*_t29;
+    const trailer2_real_t _t78 = -_t4*_t5*_t77;
+    const trailer2_real_t _t79 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t80 = _t68*_t78 + _t76*_t79;
+    const trailer2_real_t _t81 = _t30*_t30;
+    const trailer2_real_t _t82 = -_t2*_t33 - _t3*_t31;
+    const trailer2_real_t _t83 = _t2*_t76 - _t3*_t78 - _t82;
+    const trailer2_real_t _t84 = _t11*_t83;
+    const trailer2_real_t _t85 = _t12*_t84 + _t13*_t81 + _t76;
+    const trailer2_real_t _t86 = _t12*_t81 - _t13*_t84 + _t78;
+    const trailer2_real_t _t87 = _t47*_t85 + _t49*_t86;
+    const trailer2_real_t _t88 = _t42*_t42;
+    const trailer2_real_t _t89 = -_t15*_t46 - _t16*_t44;
+    const trailer2_real_t _t90 = _t13*_t81;
+    const trailer2_real_t _t91 = _t12*_t84 + _t76 + _t90;
+    const trailer2_real_t _t92 = _t12*_t81;
+    const trailer2_real_t _t93 = -_t13*_t84 + _t78 + _t92;
+    const trailer2_real_t _t94 = _t15*_t91 - _t16*_t93 - _t89;
+    const trailer2_real_t _t95 = _t20*_t94;
+    const trailer2_real_t _t96 = _t47*_t88 + _t49*_t95;
+    const trailer2_real_t _t97 = _t47*_t95 - _t49*_t88;
+    const trailer2_real_t _t98 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t99 = TRAILER2_LIT(0.207)*_t6;
+    const trailer2_real_t _t100 = -TRAILER2_LIT(0.207)*_t7;
+    const trailer2_real_t _t101 = _t10*(-_t25*_t64 - _t65*_t98);
+    const trailer2_real_t _t102 = _t10*(-_t25*_t60 - _t61*_t98);
+    const trailer2_real_t _t103 = _t15*_t39 + _t16*_t38;
+    const trailer2_real_t _t104 = _t19*(_t103*_t57 + _t40*_t56);
+    const trailer2_real_t _t105 = _t19*(_t103*_t53 + _t40*_t52);
+    const trailer2_real_t _t106 = _t23*_t6 + _t29*_t99;
+    const trailer2_real_t _t107 = _t100*_t29 + _t23*_t7;
+    const trailer2_real_t _t108 = _t101*_t29 + _t23*_t66;
+    const trailer2_real_t _t109 = _t102*_t29 + _t23*_t62;
+    const trailer2_real_t _t110 = _t104*_t29 + _t23*_t58;
+    const trailer2_real_t _t111 = _t105*_t29 + _t23*_t54;
+    const trailer2_real_t _t112 = _t2*_t31 - _t3*_t33;
+    const trailer2_real_t _t113 = -_t112 + _t2*_t78 + _t3*_t76;
+    const trailer2_real_t _t114 = _t10*(_t113*_t65 + _t64*_t83);
+    const trailer2_real_t _t115 = _t10*(_t113*_t61 + _t60*_t83);
+    const trailer2_real_t _t116 = _t15*_t44 - _t16*_t46;
+    const trailer2_real_t _t117 = -_t116 + _t15*_t93 + _t16*_t91;
+    const trailer2_real_t _t118 = _t19*(_t117*_t57 + _t56*_t94);
+    const trailer2_real_t _t119 = _t19*(_t117*_t53 + _t52*_t94);
+    const trailer2_real_t J_theta_left = pp->J_theta_left;
+    const trailer2_real_t J_theta_right = pp->J_theta_right;
+    const trailer2_real_t J_x_tractor = pp->J_x_tractor;
+    const trailer2_real_t _t120 = J_theta_cart2_left*_t54*_t54 + J_theta_cart2_right*_t58*_t58
+            + J_theta_cart_left*_t62*_t62 + J_theta_cart_right*_t66*_t66 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const trailer2_real_t _t121 = J_theta_cart*_t24*_t24 + _t120 + TRAILER2_LIT(2.0)*_t24*_t79;
+    const trailer2_real_t _t122 = J_theta_cart2*_t37*_t37 + _t121 + _t37*_t48 + _t37*_t50
+            + _t37*(_t48 + _t50);
+    const trailer2_real_t _t123 = J_theta_left*_t100*_t7 + J_theta_right*_t6*_t99 + _t101*_t67
+            + _t102*_t63 + _t104*_t59 + _t105*_t55;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = pp->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t118 = K_theta_tractor_x_tractor_2 + _t116;
-    const trailer2_real_t _t119 = J_theta_right*_t61;
-    const trailer2_real_t _t120 = J_theta_left*_t62;
-    const trailer2_real_t _t121 = J_theta_cart_right*_t63;
-    const trailer2_real_t _t122 = J_theta_cart_left*_t64;
-    const trailer2_real_t _t123 = J_theta_cart2_right*_t66;
-    const trailer2_real_t _t124 = J_theta_cart2_left*_t67;
+    const trailer2_real_t _t124 = K_theta_tractor_x_tractor_2 + _t123;
+    const trailer2_real_t _t125 = _t124 - _t24*_t69 + _t26*_t70 + _t26*_t79;
+    const trailer2_real_t _t126 = _t125 + _t37*_t74 + _t41*_t48 + _t41*_t50 + _t41*_t71;
+    const trailer2_real_t _t127 = J_theta_cart2_left*_t105*_t105 + J_theta_cart2_right*_t104*_t104
+            + J_theta_cart_left*_t102*_t102 + J_theta_cart_right*_t101*_t101
+            + J_theta_left*_t100*_t100 + J_theta_right*_t99*_t99;
     const trailer2_real_t J_theta_tractor = pp->J_theta_tractor;
-    const trailer2_real_t _t125 = J_theta_tractor - TRAILER2_LIT(0.3)*_t117;
-    const trailer2_real_t _t126 = J_theta_cart*_t26 + _t114*_t12 - _t115*_t13
-            - TRAILER2_LIT(0.3)*_t99;
-    const trailer2_real_t _t127 = J_theta_cart2*_t41 + _t100*_t38 + _t101*_t39;
-    const trailer2_real_t _t128 = _t105*_t6 + _t106*_t7 + _t107*_t52 + _t108*_t53 + _t109*_t59
-            + _t110*_t60 + _t111 + _t112*_t24 + _t113*_t37;
-    const trailer2_real_t _t129 = _t118 + _t119*_t6 + _t120*_t7 + _t121*_t52 + _t122*_t53
-            + _t123*_t59 + _t124*_t60 + _t126*_t24 + _t127*_t37;
-    const trailer2_real_t _t130 = _t119*_t61 + _t120*_t62 + _t121*_t63 + _t122*_t64 + _t123*_t66
-            + _t124*_t67 + _t125 + _t126*_t26 + _t127*_t41;
-    const trailer2_real_t _t131 = _t12*_t86 + _t13*_t75 + _t77;
-    const trailer2_real_t _t132 = _t12*_t75 - _t13*_t86 + _t81;
-    const trailer2_real_t _t133 = _t100*_t95 - _t101*_t76;
-    const trailer2_real_t _t134 = _t100*_t76 + _t101*_t95;
-    const trailer2_real_t _t135 = _t133 - _t75*_t99 + _t86*_t98;
-    const trailer2_real_t _t136 = _t134 + _t75*_t98 + _t86*_t99;
+    const trailer2_real_t _t128 = J_theta_tractor + _t127;
+    const trailer2_real_t _t129 = J_theta_cart*_t26*_t26 + _t128 - TRAILER2_LIT(0.6)*_t26*_t68;
+    const trailer2_real_t _t130 = J_theta_cart2*_t41*_t41 + _t129 + _t41*_t72 + _t41*_t73
+            + _t41*_t74;
+    const trailer2_real_t _t131 = _t114*_t67 + _t115*_t63 + _t118*_t59 + _t119*_t55;
     const trailer2_real_t K_theta_tractor_x_tractor = pp->K_theta_tractor_x_tractor;
-    const trailer2_real_t _t137 = K_theta_tractor_x_tractor*_t74 + _t135;
-    const trailer2_real_t _t138 = J_theta_cart_right*_t87;
-    const trailer2_real_t _t139 = J_theta_cart_left*_t88;
-    const trailer2_real_t _t140 = J_theta_cart2_right*_t96;
-    const trailer2_real_t _t141 = J_theta_cart2_left*_t97;
-    const trailer2_real_t _t142 = -K_theta_tractor_x_tractor*_t81 - TRAILER2_LIT(0.3)*_t136;
-    const trailer2_real_t _t143 = J_theta_cart*_t86 + _t12*_t133 - _t13*_t134 + _t77*_t98
-            + _t81*_t99;
-    const trailer2_real_t _t144 = J_theta_cart2*_t95 + _t100*_t131 + _t101*_t132;
-    const trailer2_real_t _t145 = _t137 + _t138*_t52 + _t139*_t53 + _t140*_t59 + _t141*_t60
-            + _t143*_t24 + _t144*_t37;
-    const trailer2_real_t _t146 = _t138*_t63 + _t139*_t64 + _t140*_t66 + _t141*_t67 + _t142
-            + _t143*_t26 + _t144*_t41;
+    const trailer2_real_t _t132 = K_theta_tractor_x_tractor*_t75 + _t131;
+    const trailer2_real_t _t133 = _t132 + _t24*_t80 - _t68*_t81 + _t70*_t84 + _t79*_t84;
+    const trailer2_real_t _t134 = _t133 + _t34*_t97 + _t35*_t96 + _t37*_t87 + _t71*_t95;
+    const trailer2_real_t _t135 = J_theta_cart2_left*_t105*_t119 + J_theta_cart2_right*_t104*_t118
+            + J_theta_cart_left*_t102*_t115 + J_theta_cart_right*_t101*_t114;
+    const trailer2_real_t _t136 = -K_theta_tractor_x_tractor*_t78 + _t135;
+    const trailer2_real_t _t137 = J_theta_cart*_t26*_t84 + _t136 + _t26*_t80 - _t69*_t84
+            - TRAILER2_LIT(0.3)*_t79*_t81;
+    const trailer2_real_t _t138 = J_theta_cart2*_t41*_t95 + _t137 + _t38*_t97 + _t39*_t96
+            + _t41*_t87;
     const trailer2_real_t tau_right = tau[0];
     const trailer2_real_t tau_left = tau[1];
-    const trailer2_real_t _t147 = -_t145 + _t6*tau_right + _t7*tau_left;
-    const trailer2_real_t _t148 = -_t146 + _t61*tau_right + _t62*tau_left;
-    const trailer2_real_t _t149 = _t128*_t130 - _t129*_t129;
-    const trailer2_real_t _t150 = TRAILER2_LIT(1.0)/_t149;
-    const trailer2_real_t _t151 = _t150*(-_t129*_t148 + _t130*_t147);
-    const trailer2_real_t _t152 = _t150*(_t128*_t148 - _t129*_t147);
-    const trailer2_real_t _t153 = _t151*_t6 + _t152*_t61;
-    const trailer2_real_t _t154 = _t151*_t7 + _t152*_t62;
-    const trailer2_real_t _t155 = _t23*TRAILER2_COS(theta_tractor);
-    const trailer2_real_t _t156 = _t23*TRAILER2_SIN(theta_tractor);
-    xdot[0] = _t155;
-    xdot[1] = _t156;
+    const trailer2_real_t _t139 = -_t134 + _t6*tau_right + _t7*tau_left;
+    const trailer2_real_t _t140 = _t100*tau_left - _t138 + _t99*tau_right;
+    const trailer2_real_t _t141 = _t122*_t130 - _t126*_t126;
+    const trailer2_real_t _t142 = TRAILER2_LIT(1.0)/_t141;
+    const trailer2_real_t _t143 = _t142*(-_t126*_t140 + _t130*_t139);
+    const trailer2_real_t _t144 = _t142*(_t122*_t140 - _t126*_t139);
+    const trailer2_real_t _t145 = _t143*_t6 + _t144*_t99;
+    const trailer2_real_t _t146 = _t100*_t144 + _t143*_t7;
+    const trailer2_real_t _t147 = _t23*TRAILER2_COS(theta_tractor);
+    const trailer2_real_t _t148 = _t23*TRAILER2_SIN(theta_tractor);
+    xdot[0] = _t147;
+    xdot[1] = _t148;
     xdot[2] = _t29;
     xdot[3] = _t30;
     xdot[4] = _t42;
-    xdot[5] = _t68;
-    xdot[6] = _t69;
-    xdot[7] = _t70;
-    xdot[8] = _t71;
-    xdot[9] = _t72;
-    xdot[10] = _t73;
-    xdot[11] = _t153;
-    xdot[12] = _t154;
+    xdot[5] = _t106;
+    xdot[6] = _t107;
+    xdot[7] = _t108;
+    xdot[8] = _t109;
+    xdot[9] = _t110;
+    xdot[10] = _t111;
+    xdot[11] = _t145;
+    xdot[12] = _t146;
 }
 
 /* trailer2_plant_params_with_payload: documented in trailer2_plant.h.

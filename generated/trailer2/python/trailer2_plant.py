@@ -61,7 +61,7 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     Returns:
         xdot: array of 13 (shape 13x1, row-major)
 
-    operations after CSE: 131 add, 257 mul, 4 div, 6 sin/cos, 0 sqrt
+    operations after CSE: 132 add, 274 mul, 4 div, 6 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, theta_cart2, _, _, _, _, _, _, thetadot_right, thetadot_left = _flat(x, 13, "x")
     tau_right, tau_left = _flat(tau, 2, "tau")
@@ -134,130 +134,122 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     _t44 = _t42*_t43
     _t45 = -_t13*_t30 + _t32
     _t46 = _t42*_t45
-    _t47 = 0.3*_t2
-    _t48 = 0.2*radius_cart_left
-    _t49 = -0.6*radius_cart_left
-    _t50 = -0.2*radius_cart_right
-    _t51 = -0.6*radius_cart_right
-    _t52 = _t10*(_t2*_t48 + _t3*_t49)
-    _t53 = _t10*(_t2*_t50 + _t3*_t51)
-    _t54 = _t15*_t35 + _t16*_t34
-    _t55 = 0.2*radius_cart2_left
-    _t56 = -0.6*radius_cart2_left
-    _t57 = -0.2*radius_cart2_right
-    _t58 = -0.6*radius_cart2_right
-    _t59 = _t19*(_t36*_t55 + _t54*_t56)
-    _t60 = _t19*(_t36*_t57 + _t54*_t58)
-    _t61 = 0.207*_t6
-    _t62 = -0.207*_t7
-    _t63 = _t10*(-_t25*_t48 - _t47*_t49)
-    _t64 = _t10*(-_t25*_t50 - _t47*_t51)
-    _t65 = _t15*_t39 + _t16*_t38
-    _t66 = _t19*(_t40*_t55 + _t56*_t65)
-    _t67 = _t19*(_t40*_t57 + _t58*_t65)
-    _t68 = _t23*_t6 + _t29*_t61
-    _t69 = _t23*_t7 + _t29*_t62
-    _t70 = _t23*_t52 + _t29*_t63
-    _t71 = _t23*_t53 + _t29*_t64
-    _t72 = _t23*_t59 + _t29*_t66
-    _t73 = _t23*_t60 + _t29*_t67
-    _t74 = _t29*_t29
-    _t75 = _t30*_t30
-    _t76 = _t42*_t42
-    _t77 = 0.3*_t74
-    _t78 = _t13*_t75
-    _t79 = _t12*_t75
-    _t80 = -_t23*_t29
-    _t81 = -_t4*_t5*_t80
+    _t47 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16
+    _t48 = _t34*_t47
+    _t49 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15
+    _t50 = _t35*_t49
+    _t51 = _t15*_t35 + _t16*_t34
+    _t52 = -0.2*radius_cart2_right
+    _t53 = -0.6*radius_cart2_right
+    _t54 = _t19*(_t36*_t52 + _t51*_t53)
+    _t55 = J_theta_cart2_left*_t54
+    _t56 = 0.2*radius_cart2_left
+    _t57 = -0.6*radius_cart2_left
+    _t58 = _t19*(_t36*_t56 + _t51*_t57)
+    _t59 = J_theta_cart2_right*_t58
+    _t60 = -0.2*radius_cart_right
+    _t61 = -0.6*radius_cart_right
+    _t62 = _t10*(_t2*_t60 + _t3*_t61)
+    _t63 = J_theta_cart_left*_t62
+    _t64 = 0.2*radius_cart_left
+    _t65 = -0.6*radius_cart_left
+    _t66 = _t10*(_t2*_t64 + _t3*_t65)
+    _t67 = J_theta_cart_right*_t66
+    _t68 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2
+    _t69 = 0.3*_t68
+    _t70 = J_theta_cart*_t24
+    _t71 = J_theta_cart2*_t37
+    _t72 = _t38*_t47
+    _t73 = _t39*_t49
+    _t74 = _t72 + _t73
+    _t75 = _t29*_t29
+    _t76 = 0.3*_t75
+    _t77 = -_t23*_t29
+    _t78 = -_t4*_t5*_t77
+    _t79 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
+    _t80 = _t68*_t78 + _t76*_t79
+    _t81 = _t30*_t30
     _t82 = -_t2*_t33 - _t3*_t31
-    _t83 = _t2*_t31 - _t3*_t33
-    _t84 = _t2*_t77 - _t3*_t81 - _t82
-    _t85 = _t2*_t81 + _t3*_t77 - _t83
-    _t86 = _t11*_t84
-    _t87 = _t10*(_t48*_t84 + _t49*_t85)
-    _t88 = _t10*(_t50*_t84 + _t51*_t85)
+    _t83 = _t2*_t76 - _t3*_t78 - _t82
+    _t84 = _t11*_t83
+    _t85 = _t12*_t84 + _t13*_t81 + _t76
+    _t86 = _t12*_t81 - _t13*_t84 + _t78
+    _t87 = _t47*_t85 + _t49*_t86
+    _t88 = _t42*_t42
     _t89 = -_t15*_t46 - _t16*_t44
-    _t90 = _t15*_t44 - _t16*_t46
-    _t91 = _t12*_t86 + _t77 + _t78
-    _t92 = -_t13*_t86 + _t79 + _t81
-    _t93 = _t15*_t91 - _t16*_t92 - _t89
-    _t94 = _t15*_t92 + _t16*_t91 - _t90
-    _t95 = _t20*_t93
-    _t96 = _t19*(_t55*_t93 + _t56*_t94)
-    _t97 = _t19*(_t57*_t93 + _t58*_t94)
-    _t98 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
-    _t99 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2
-    _t100 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16
-    _t101 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15
-    _t102 = _t100*_t37
-    _t103 = _t101*_t37
-    _t104 = _t102 + _t24*_t98
-    _t105 = J_theta_right*_t6
-    _t106 = J_theta_left*_t7
-    _t107 = J_theta_cart_right*_t52
-    _t108 = J_theta_cart_left*_t53
-    _t109 = J_theta_cart2_right*_t59
-    _t110 = J_theta_cart2_left*_t60
-    _t111 = J_x_tractor + _t104
-    _t112 = J_theta_cart*_t24 + _t102*_t12 - _t103*_t13 + _t98
-    _t113 = J_theta_cart2*_t37 + _t100*_t34 + _t101*_t35
-    _t114 = _t100*_t41
-    _t115 = _t101*_t41
-    _t116 = _t114 + _t26*_t98
-    _t117 = _t115 + _t26*_t99
-    _t118 = K_theta_tractor_x_tractor_2 + _t116
-    _t119 = J_theta_right*_t61
-    _t120 = J_theta_left*_t62
-    _t121 = J_theta_cart_right*_t63
-    _t122 = J_theta_cart_left*_t64
-    _t123 = J_theta_cart2_right*_t66
-    _t124 = J_theta_cart2_left*_t67
-    _t125 = J_theta_tractor - 0.3*_t117
-    _t126 = J_theta_cart*_t26 + _t114*_t12 - _t115*_t13 - 0.3*_t99
-    _t127 = J_theta_cart2*_t41 + _t100*_t38 + _t101*_t39
-    _t128 = _t105*_t6 + _t106*_t7 + _t107*_t52 + _t108*_t53 + _t109*_t59 + _t110*_t60 + _t111 + _t112*_t24 + _t113*_t37
-    _t129 = _t118 + _t119*_t6 + _t120*_t7 + _t121*_t52 + _t122*_t53 + _t123*_t59 + _t124*_t60 + _t126*_t24 + _t127*_t37
-    _t130 = _t119*_t61 + _t120*_t62 + _t121*_t63 + _t122*_t64 + _t123*_t66 + _t124*_t67 + _t125 + _t126*_t26 + _t127*_t41
-    _t131 = _t12*_t86 + _t13*_t75 + _t77
-    _t132 = _t12*_t75 - _t13*_t86 + _t81
-    _t133 = _t100*_t95 - _t101*_t76
-    _t134 = _t100*_t76 + _t101*_t95
-    _t135 = _t133 - _t75*_t99 + _t86*_t98
-    _t136 = _t134 + _t75*_t98 + _t86*_t99
-    _t137 = K_theta_tractor_x_tractor*_t74 + _t135
-    _t138 = J_theta_cart_right*_t87
-    _t139 = J_theta_cart_left*_t88
-    _t140 = J_theta_cart2_right*_t96
-    _t141 = J_theta_cart2_left*_t97
-    _t142 = -K_theta_tractor_x_tractor*_t81 - 0.3*_t136
-    _t143 = J_theta_cart*_t86 + _t12*_t133 - _t13*_t134 + _t77*_t98 + _t81*_t99
-    _t144 = J_theta_cart2*_t95 + _t100*_t131 + _t101*_t132
-    _t145 = _t137 + _t138*_t52 + _t139*_t53 + _t140*_t59 + _t141*_t60 + _t143*_t24 + _t144*_t37
-    _t146 = _t138*_t63 + _t139*_t64 + _t140*_t66 + _t141*_t67 + _t142 + _t143*_t26 + _t144*_t41
-    _t147 = -_t145 + _t6*tau_right + _t7*tau_left
-    _t148 = -_t146 + _t61*tau_right + _t62*tau_left
-    _t149 = _t128*_t130 - _t129*_t129
-    _t150 = 1.0/_t149
-    _t151 = _t150*(-_t129*_t148 + _t130*_t147)
-    _t152 = _t150*(_t128*_t148 - _t129*_t147)
-    _t153 = _t151*_t6 + _t152*_t61
-    _t154 = _t151*_t7 + _t152*_t62
-    _t155 = _t23*math.cos(theta_tractor)
-    _t156 = _t23*math.sin(theta_tractor)
+    _t90 = _t13*_t81
+    _t91 = _t12*_t84 + _t76 + _t90
+    _t92 = _t12*_t81
+    _t93 = -_t13*_t84 + _t78 + _t92
+    _t94 = _t15*_t91 - _t16*_t93 - _t89
+    _t95 = _t20*_t94
+    _t96 = _t47*_t88 + _t49*_t95
+    _t97 = _t47*_t95 - _t49*_t88
+    _t98 = 0.3*_t2
+    _t99 = 0.207*_t6
+    _t100 = -0.207*_t7
+    _t101 = _t10*(-_t25*_t64 - _t65*_t98)
+    _t102 = _t10*(-_t25*_t60 - _t61*_t98)
+    _t103 = _t15*_t39 + _t16*_t38
+    _t104 = _t19*(_t103*_t57 + _t40*_t56)
+    _t105 = _t19*(_t103*_t53 + _t40*_t52)
+    _t106 = _t23*_t6 + _t29*_t99
+    _t107 = _t100*_t29 + _t23*_t7
+    _t108 = _t101*_t29 + _t23*_t66
+    _t109 = _t102*_t29 + _t23*_t62
+    _t110 = _t104*_t29 + _t23*_t58
+    _t111 = _t105*_t29 + _t23*_t54
+    _t112 = _t2*_t31 - _t3*_t33
+    _t113 = -_t112 + _t2*_t78 + _t3*_t76
+    _t114 = _t10*(_t113*_t65 + _t64*_t83)
+    _t115 = _t10*(_t113*_t61 + _t60*_t83)
+    _t116 = _t15*_t44 - _t16*_t46
+    _t117 = -_t116 + _t15*_t93 + _t16*_t91
+    _t118 = _t19*(_t117*_t57 + _t56*_t94)
+    _t119 = _t19*(_t117*_t53 + _t52*_t94)
+    _t120 = J_theta_cart2_left*_t54*_t54 + J_theta_cart2_right*_t58*_t58 + J_theta_cart_left*_t62*_t62 + J_theta_cart_right*_t66*_t66 + J_theta_left*_t7*_t7 + J_theta_right*_t6*_t6 + J_x_tractor
+    _t121 = J_theta_cart*_t24*_t24 + _t120 + 2.0*_t24*_t79
+    _t122 = J_theta_cart2*_t37*_t37 + _t121 + _t37*_t48 + _t37*_t50 + _t37*(_t48 + _t50)
+    _t123 = J_theta_left*_t100*_t7 + J_theta_right*_t6*_t99 + _t101*_t67 + _t102*_t63 + _t104*_t59 + _t105*_t55
+    _t124 = K_theta_tractor_x_tractor_2 + _t123
+    _t125 = _t124 - _t24*_t69 + _t26*_t70 + _t26*_t79
+    _t126 = _t125 + _t37*_t74 + _t41*_t48 + _t41*_t50 + _t41*_t71
+    _t127 = J_theta_cart2_left*_t105*_t105 + J_theta_cart2_right*_t104*_t104 + J_theta_cart_left*_t102*_t102 + J_theta_cart_right*_t101*_t101 + J_theta_left*_t100*_t100 + J_theta_right*_t99*_t99
+    _t128 = J_theta_tractor + _t127
+    _t129 = J_theta_cart*_t26*_t26 + _t128 - 0.6*_t26*_t68
+    _t130 = J_theta_cart2*_t41*_t41 + _t129 + _t41*_t72 + _t41*_t73 + _t41*_t74
+    _t131 = _t114*_t67 + _t115*_t63 + _t118*_t59 + _t119*_t55
+    _t132 = K_theta_tractor_x_tractor*_t75 + _t131
+    _t133 = _t132 + _t24*_t80 - _t68*_t81 + _t70*_t84 + _t79*_t84
+    _t134 = _t133 + _t34*_t97 + _t35*_t96 + _t37*_t87 + _t71*_t95
+    _t135 = J_theta_cart2_left*_t105*_t119 + J_theta_cart2_right*_t104*_t118 + J_theta_cart_left*_t102*_t115 + J_theta_cart_right*_t101*_t114
+    _t136 = -K_theta_tractor_x_tractor*_t78 + _t135
+    _t137 = J_theta_cart*_t26*_t84 + _t136 + _t26*_t80 - _t69*_t84 - 0.3*_t79*_t81
+    _t138 = J_theta_cart2*_t41*_t95 + _t137 + _t38*_t97 + _t39*_t96 + _t41*_t87
+    _t139 = -_t134 + _t6*tau_right + _t7*tau_left
+    _t140 = _t100*tau_left - _t138 + _t99*tau_right
+    _t141 = _t122*_t130 - _t126*_t126
+    _t142 = 1.0/_t141
+    _t143 = _t142*(-_t126*_t140 + _t130*_t139)
+    _t144 = _t142*(_t122*_t140 - _t126*_t139)
+    _t145 = _t143*_t6 + _t144*_t99
+    _t146 = _t100*_t144 + _t143*_t7
+    _t147 = _t23*math.cos(theta_tractor)
+    _t148 = _t23*math.sin(theta_tractor)
     xdot = np.array([
-        _t155,
-        _t156,
+        _t147,
+        _t148,
         _t29,
         _t30,
         _t42,
-        _t68,
-        _t69,
-        _t70,
-        _t71,
-        _t72,
-        _t73,
-        _t153,
-        _t154,
+        _t106,
+        _t107,
+        _t108,
+        _t109,
+        _t110,
+        _t111,
+        _t145,
+        _t146,
     ])
     return xdot
 

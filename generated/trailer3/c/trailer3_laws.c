@@ -31,7 +31,7 @@ void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const traile
 }
 
 /* trailer3_minimal_tde: documented in trailer3_laws.h.
-   operations after CSE: 109 add, 218 mul, 5 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 107 add, 233 mul, 5 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_prev,
     const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, const trailer3_real_t *span, trailer3_real_t *H1hat)
@@ -77,150 +77,145 @@ void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_p
     const trailer3_real_t _t26 = -TRAILER3_LIT(0.6)*_t6;
     const trailer3_real_t _t27 = TRAILER3_LIT(1.0)/_t26;
     const trailer3_real_t _t28 = _t27*_t6;
-    const trailer3_real_t span_1 = span[0];
-    const trailer3_real_t _t29 = TRAILER3_LIT(1.0)/span_1;
-    const trailer3_real_t qd_now0 = qdot_now[0];
-    const trailer3_real_t qd_then0 = qdot_then[0];
-    const trailer3_real_t _t30 = _t29*(qd_now0 - qd_then0);
-    const trailer3_real_t qd_now1 = qdot_now[1];
-    const trailer3_real_t qd_then1 = qdot_then[1];
-    const trailer3_real_t _t31 = _t29*(qd_now1 - qd_then1);
-    const trailer3_real_t _t32 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t33 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t34 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.2)*radius_cart_left;
-    const trailer3_real_t _t37 = -TRAILER3_LIT(0.6)*radius_cart_left;
-    const trailer3_real_t _t38 = -TRAILER3_LIT(0.2)*radius_cart_right;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(0.6)*radius_cart_right;
-    const trailer3_real_t _t40 = TRAILER3_LIT(0.2)*radius_cart2_left;
-    const trailer3_real_t _t41 = -TRAILER3_LIT(0.6)*radius_cart2_left;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(0.2)*radius_cart2_right;
-    const trailer3_real_t _t43 = -TRAILER3_LIT(0.6)*radius_cart2_right;
-    const trailer3_real_t _t44 = TRAILER3_LIT(0.2)*radius_cart3_left;
-    const trailer3_real_t _t45 = -TRAILER3_LIT(0.6)*radius_cart3_left;
-    const trailer3_real_t _t46 = -TRAILER3_LIT(0.2)*radius_cart3_right;
-    const trailer3_real_t _t47 = -TRAILER3_LIT(0.6)*radius_cart3_right;
-    const trailer3_real_t _t48 = TRAILER3_LIT(0.207)*_t2;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(0.207)*_t3;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t50 = J_theta_right*_t2;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t51 = J_theta_left*_t3;
-    const trailer3_real_t _t52 = J_theta_right*_t48;
-    const trailer3_real_t _t53 = J_theta_left*_t49;
-    const trailer3_real_t _t54 = -TRAILER3_LIT(0.3)*_t9;
-    const trailer3_real_t _t55 = -TRAILER3_LIT(0.3)*_t8;
-    const trailer3_real_t _t56 = -_t12*_t8;
-    const trailer3_real_t _t57 = _t11*(-_t36*_t8 + _t37*_t9);
-    const trailer3_real_t _t58 = _t11*(-_t38*_t8 + _t39*_t9);
-    const trailer3_real_t _t59 = -_t13*_t56 + TRAILER3_LIT(1.0);
-    const trailer3_real_t _t60 = -_t14*_t56;
-    const trailer3_real_t _t61 = -_t16*_t59 - _t17*_t60;
-    const trailer3_real_t _t62 = -_t16*_t60 + _t17*_t59;
-    const trailer3_real_t _t63 = _t20*_t61;
-    const trailer3_real_t _t64 = _t19*(_t40*_t61 + _t41*_t62);
-    const trailer3_real_t _t65 = _t19*(_t42*_t61 + _t43*_t62);
-    const trailer3_real_t _t66 = -_t21*_t63 + _t59;
-    const trailer3_real_t _t67 = -_t22*_t63 + _t60;
-    const trailer3_real_t _t68 = -_t24*_t66 - _t25*_t67;
-    const trailer3_real_t _t69 = -_t24*_t67 + _t25*_t66;
-    const trailer3_real_t _t70 = _t28*_t68;
-    const trailer3_real_t _t71 = _t27*(_t44*_t68 + _t45*_t69);
-    const trailer3_real_t _t72 = _t27*(_t46*_t68 + _t47*_t69);
-    const trailer3_real_t _t73 = -_t12*_t54;
-    const trailer3_real_t _t74 = _t11*(-_t36*_t54 - _t37*_t55);
-    const trailer3_real_t _t75 = _t11*(-_t38*_t54 - _t39*_t55);
-    const trailer3_real_t _t76 = -_t13*_t73;
-    const trailer3_real_t _t77 = -_t14*_t73 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t78 = -_t16*_t76 - _t17*_t77;
-    const trailer3_real_t _t79 = -_t16*_t77 + _t17*_t76;
-    const trailer3_real_t _t80 = _t20*_t78;
-    const trailer3_real_t _t81 = _t19*(_t40*_t78 + _t41*_t79);
-    const trailer3_real_t _t82 = _t19*(_t42*_t78 + _t43*_t79);
-    const trailer3_real_t _t83 = -_t21*_t80 + _t76;
-    const trailer3_real_t _t84 = -_t22*_t80 + _t77;
-    const trailer3_real_t _t85 = -_t24*_t83 - _t25*_t84;
-    const trailer3_real_t _t86 = -_t24*_t84 + _t25*_t83;
-    const trailer3_real_t _t87 = _t28*_t85;
-    const trailer3_real_t _t88 = _t27*(_t44*_t85 + _t45*_t86);
-    const trailer3_real_t _t89 = _t27*(_t46*_t85 + _t47*_t86);
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t90 = -K_theta_cart_x_tractor*_t8 + K_theta_cart_x_tractor_2*_t9;
-    const trailer3_real_t _t91 = -K_theta_cart_x_tractor*_t9 - K_theta_cart_x_tractor_2*_t8;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t92 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t17;
-    const trailer3_real_t _t93 = -K_theta_cart2_x_tractor*_t17 - K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t29 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t30 = -_t12*_t8;
+    const trailer3_real_t _t31 = -_t13*_t30 + TRAILER3_LIT(1.0);
+    const trailer3_real_t _t32 = _t29*_t31;
+    const trailer3_real_t _t33 = -K_theta_cart2_x_tractor*_t17 - K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t34 = -_t14*_t30;
+    const trailer3_real_t _t35 = _t33*_t34;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t94 = -K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
-    const trailer3_real_t _t95 = -K_theta_cart3_x_tractor*_t25 - K_theta_cart3_x_tractor_2*_t24;
-    const trailer3_real_t _t96 = _t70*_t94;
-    const trailer3_real_t _t97 = _t70*_t95;
-    const trailer3_real_t _t98 = _t63*_t92 + _t96;
-    const trailer3_real_t _t99 = _t63*_t93 + _t97;
-    const trailer3_real_t _t100 = _t56*_t90 + _t98;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t101 = J_theta_cart_right*_t57;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t102 = J_theta_cart_left*_t58;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t103 = J_theta_cart2_right*_t64;
+    const trailer3_real_t _t36 = -K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t37 = -_t16*_t31 - _t17*_t34;
+    const trailer3_real_t _t38 = _t20*_t37;
+    const trailer3_real_t _t39 = -_t21*_t38 + _t31;
+    const trailer3_real_t _t40 = _t36*_t39;
+    const trailer3_real_t _t41 = -K_theta_cart3_x_tractor*_t25 - K_theta_cart3_x_tractor_2*_t24;
+    const trailer3_real_t _t42 = -_t22*_t38 + _t34;
+    const trailer3_real_t _t43 = _t41*_t42;
+    const trailer3_real_t _t44 = -TRAILER3_LIT(0.3)*_t9;
+    const trailer3_real_t _t45 = -_t12*_t44;
+    const trailer3_real_t _t46 = -_t13*_t45;
+    const trailer3_real_t _t47 = _t29*_t46;
+    const trailer3_real_t _t48 = -_t14*_t45 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t49 = _t33*_t48;
+    const trailer3_real_t _t50 = _t47 + _t49;
+    const trailer3_real_t _t51 = -_t16*_t46 - _t17*_t48;
+    const trailer3_real_t _t52 = _t20*_t51;
+    const trailer3_real_t _t53 = -_t21*_t52 + _t46;
+    const trailer3_real_t _t54 = _t36*_t53;
+    const trailer3_real_t _t55 = -_t22*_t52 + _t48;
+    const trailer3_real_t _t56 = _t41*_t55;
+    const trailer3_real_t _t57 = _t54 + _t56;
+    const trailer3_real_t span_1 = span[0];
+    const trailer3_real_t _t58 = TRAILER3_LIT(1.0)/span_1;
+    const trailer3_real_t qd_now0 = qdot_now[0];
+    const trailer3_real_t qd_then0 = qdot_then[0];
+    const trailer3_real_t _t59 = _t58*(qd_now0 - qd_then0);
+    const trailer3_real_t qd_now1 = qdot_now[1];
+    const trailer3_real_t qd_then1 = qdot_then[1];
+    const trailer3_real_t _t60 = _t58*(qd_now1 - qd_then1);
+    const trailer3_real_t _t61 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t62 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t65 = TRAILER3_LIT(0.2)*radius_cart_left;
+    const trailer3_real_t _t66 = -TRAILER3_LIT(0.6)*radius_cart_left;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(0.2)*radius_cart_right;
+    const trailer3_real_t _t68 = -TRAILER3_LIT(0.6)*radius_cart_right;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*radius_cart2_left;
+    const trailer3_real_t _t70 = -TRAILER3_LIT(0.6)*radius_cart2_left;
+    const trailer3_real_t _t71 = -TRAILER3_LIT(0.2)*radius_cart2_right;
+    const trailer3_real_t _t72 = -TRAILER3_LIT(0.6)*radius_cart2_right;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*radius_cart3_left;
+    const trailer3_real_t _t74 = -TRAILER3_LIT(0.6)*radius_cart3_left;
+    const trailer3_real_t _t75 = -TRAILER3_LIT(0.2)*radius_cart3_right;
+    const trailer3_real_t _t76 = -TRAILER3_LIT(0.6)*radius_cart3_right;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.207)*_t2;
+    const trailer3_real_t _t78 = -TRAILER3_LIT(0.207)*_t3;
+    const trailer3_real_t _t79 = -TRAILER3_LIT(0.3)*_t8;
+    const trailer3_real_t _t80 = _t11*(-_t65*_t8 + _t66*_t9);
+    const trailer3_real_t _t81 = _t11*(-_t67*_t8 + _t68*_t9);
+    const trailer3_real_t _t82 = -_t16*_t34 + _t17*_t31;
+    const trailer3_real_t _t83 = _t19*(_t37*_t69 + _t70*_t82);
+    const trailer3_real_t _t84 = _t19*(_t37*_t71 + _t72*_t82);
+    const trailer3_real_t _t85 = -_t24*_t39 - _t25*_t42;
+    const trailer3_real_t _t86 = -_t24*_t42 + _t25*_t39;
+    const trailer3_real_t _t87 = _t28*_t85;
+    const trailer3_real_t _t88 = _t27*(_t73*_t85 + _t74*_t86);
+    const trailer3_real_t _t89 = _t27*(_t75*_t85 + _t76*_t86);
+    const trailer3_real_t _t90 = _t11*(-_t44*_t65 - _t66*_t79);
+    const trailer3_real_t _t91 = _t11*(-_t44*_t67 - _t68*_t79);
+    const trailer3_real_t _t92 = -_t16*_t48 + _t17*_t46;
+    const trailer3_real_t _t93 = _t19*(_t51*_t69 + _t70*_t92);
+    const trailer3_real_t _t94 = _t19*(_t51*_t71 + _t72*_t92);
+    const trailer3_real_t _t95 = -_t24*_t53 - _t25*_t55;
+    const trailer3_real_t _t96 = -_t24*_t55 + _t25*_t53;
+    const trailer3_real_t _t97 = _t28*_t95;
+    const trailer3_real_t _t98 = _t27*(_t73*_t95 + _t74*_t96);
+    const trailer3_real_t _t99 = _t27*(_t75*_t95 + _t76*_t96);
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t100 = -K_theta_cart_x_tractor*_t8 + K_theta_cart_x_tractor_2*_t9;
+    const trailer3_real_t _t101 = -K_theta_cart_x_tractor*_t9 - K_theta_cart_x_tractor_2*_t8;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t104 = J_theta_cart2_left*_t65;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t105 = J_theta_cart3_right*_t71;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t106 = J_theta_cart3_left*_t72;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
     const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t107 = J_x_tractor + _t100;
+    const trailer3_real_t _t102 = J_theta_cart2_left*_t84*_t84 + J_theta_cart2_right*_t83*_t83
+            + J_theta_cart3_left*_t89*_t89 + J_theta_cart3_right*_t88*_t88
+            + J_theta_cart_left*_t81*_t81 + J_theta_cart_right*_t80*_t80 + J_theta_left*_t3*_t3
+            + J_theta_right*_t2*_t2 + J_x_tractor;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t108 = J_theta_cart*_t56 - _t13*_t98 - _t14*_t99 + _t90;
+    const trailer3_real_t _t103 = J_theta_cart*_t30*_t30 + TRAILER3_LIT(2.0)*_t100*_t30 + _t102;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t109 = J_theta_cart2*_t63 - _t21*_t96 - _t22*_t97 + _t59*_t92
-            + _t60*_t93;
+    const trailer3_real_t _t104 = J_theta_cart2*_t38*_t38 + _t103 + _t32*_t38 + _t35*_t38
+            + _t38*(_t32 + _t35);
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t110 = J_theta_cart3*_t70 + _t66*_t94 + _t67*_t95;
-    const trailer3_real_t _t111 = _t87*_t94;
-    const trailer3_real_t _t112 = _t87*_t95;
-    const trailer3_real_t _t113 = _t111 + _t80*_t92;
-    const trailer3_real_t _t114 = _t112 + _t80*_t93;
-    const trailer3_real_t _t115 = _t113 + _t73*_t90;
-    const trailer3_real_t _t116 = _t114 + _t73*_t91;
+    const trailer3_real_t _t105 = J_theta_cart3*_t87*_t87 + _t104 + _t40*_t87 + _t43*_t87
+            + _t87*(_t40 + _t43);
+    const trailer3_real_t _t106 = J_theta_cart2_left*_t84*_t94 + J_theta_cart2_right*_t83*_t93
+            + J_theta_cart3_left*_t89*_t99 + J_theta_cart3_right*_t88*_t98
+            + J_theta_cart_left*_t81*_t91 + J_theta_cart_right*_t80*_t90 + J_theta_left*_t3*_t78
+            + J_theta_right*_t2*_t77;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t117 = K_theta_tractor_x_tractor_2 + _t115;
-    const trailer3_real_t _t118 = J_theta_cart_right*_t74;
-    const trailer3_real_t _t119 = J_theta_cart_left*_t75;
-    const trailer3_real_t _t120 = J_theta_cart2_right*_t81;
-    const trailer3_real_t _t121 = J_theta_cart2_left*_t82;
-    const trailer3_real_t _t122 = J_theta_cart3_right*_t88;
-    const trailer3_real_t _t123 = J_theta_cart3_left*_t89;
+    const trailer3_real_t _t107 = K_theta_tractor_x_tractor_2 + _t106;
+    const trailer3_real_t _t108 = J_theta_cart*_t30*_t45 + _t100*_t45 - TRAILER3_LIT(0.3)*_t101*_t30
+            + _t107;
+    const trailer3_real_t _t109 = J_theta_cart2*_t38*_t52 + _t108 + _t32*_t52 + _t35*_t52
+            + _t38*_t50;
+    const trailer3_real_t _t110 = J_theta_cart3*_t87*_t97 + _t109 + _t40*_t97 + _t43*_t97
+            + _t57*_t87;
+    const trailer3_real_t _t111 = J_theta_cart2_left*_t94*_t94 + J_theta_cart2_right*_t93*_t93
+            + J_theta_cart3_left*_t99*_t99 + J_theta_cart3_right*_t98*_t98
+            + J_theta_cart_left*_t91*_t91 + J_theta_cart_right*_t90*_t90 + J_theta_left*_t78*_t78
+            + J_theta_right*_t77*_t77;
     const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t124 = J_theta_tractor - TRAILER3_LIT(0.3)*_t116;
-    const trailer3_real_t _t125 = J_theta_cart*_t73 - _t113*_t13 - _t114*_t14
-            - TRAILER3_LIT(0.3)*_t91;
-    const trailer3_real_t _t126 = J_theta_cart2*_t80 - _t111*_t21 - _t112*_t22 + _t76*_t92
-            + _t77*_t93;
-    const trailer3_real_t _t127 = J_theta_cart3*_t87 + _t83*_t94 + _t84*_t95;
-    const trailer3_real_t _t128 = _t101*_t57 + _t102*_t58 + _t103*_t64 + _t104*_t65 + _t105*_t71
-            + _t106*_t72 + _t107 + _t108*_t56 + _t109*_t63 + _t110*_t70 + _t2*_t50 + _t3*_t51;
-    const trailer3_real_t _t129 = _t117 + _t118*_t57 + _t119*_t58 + _t120*_t64 + _t121*_t65
-            + _t122*_t71 + _t123*_t72 + _t125*_t56 + _t126*_t63 + _t127*_t70 + _t2*_t52 + _t3*_t53;
-    const trailer3_real_t _t130 = _t118*_t74 + _t119*_t75 + _t120*_t81 + _t121*_t82 + _t122*_t88
-            + _t123*_t89 + _t124 + _t125*_t73 + _t126*_t80 + _t127*_t87 + _t48*_t52 + _t49*_t53;
-    const trailer3_real_t _t131 = _t128*_t34 + _t129*_t32;
-    const trailer3_real_t _t132 = _t128*_t35 + _t129*_t33;
-    const trailer3_real_t _t133 = _t129*_t34 + _t130*_t32;
-    const trailer3_real_t _t134 = _t129*_t35 + _t130*_t33;
-    const trailer3_real_t _t135 = _t131*_t34 + _t133*_t32;
-    const trailer3_real_t _t136 = _t132*_t34 + _t134*_t32;
-    const trailer3_real_t _t137 = _t132*_t35 + _t134*_t33;
+    const trailer3_real_t _t112 = J_theta_tractor + _t111;
+    const trailer3_real_t _t113 = J_theta_cart*_t45*_t45 - TRAILER3_LIT(0.6)*_t101*_t45 + _t112;
+    const trailer3_real_t _t114 = J_theta_cart2*_t52*_t52 + _t113 + _t47*_t52 + _t49*_t52
+            + _t50*_t52;
+    const trailer3_real_t _t115 = J_theta_cart3*_t97*_t97 + _t114 + _t54*_t97 + _t56*_t97
+            + _t57*_t97;
+    const trailer3_real_t _t116 = _t105*_t63 + _t110*_t61;
+    const trailer3_real_t _t117 = _t105*_t64 + _t110*_t62;
+    const trailer3_real_t _t118 = _t110*_t63 + _t115*_t61;
+    const trailer3_real_t _t119 = _t110*_t64 + _t115*_t62;
+    const trailer3_real_t _t120 = _t116*_t63 + _t118*_t61;
+    const trailer3_real_t _t121 = _t117*_t63 + _t119*_t61;
+    const trailer3_real_t _t122 = _t117*_t64 + _t119*_t62;
     const trailer3_real_t up0 = u_prev[0];
     const trailer3_real_t up1 = u_prev[1];
-    H1hat[0] = -_t135*_t30 - _t136*_t31 + up0;
-    H1hat[1] = -_t136*_t30 - _t137*_t31 + up1;
+    H1hat[0] = -_t120*_t59 - _t121*_t60 + up0;
+    H1hat[1] = -_t121*_t59 - _t122*_t60 + up1;
 }
 
 /* trailer3_minimal_tde_mhat: documented in trailer3_laws.h.
@@ -235,7 +230,7 @@ void trailer3_minimal_tde_mhat(const trailer3_params_t *p, const trailer3_real_t
 }
 
 /* trailer3_minimal_minv_norm: documented in trailer3_laws.h.
-   operations after CSE: 106 add, 218 mul, 5 div, 6 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 104 add, 233 mul, 5 div, 6 sin/cos, 1 sqrt, 1 fabs */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm)
 {
@@ -281,141 +276,136 @@ void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_
     const trailer3_real_t _t27 = -TRAILER3_LIT(0.6)*_t26;
     const trailer3_real_t _t28 = TRAILER3_LIT(1.0)/_t27;
     const trailer3_real_t _t29 = _t26*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t32 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t33 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t34 = _t11*_t2;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*radius_cart_left;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(0.6)*radius_cart_left;
-    const trailer3_real_t _t37 = _t10*(_t2*_t35 + _t3*_t36);
-    const trailer3_real_t _t38 = -TRAILER3_LIT(0.2)*radius_cart_right;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(0.6)*radius_cart_right;
-    const trailer3_real_t _t40 = _t10*(_t2*_t38 + _t3*_t39);
-    const trailer3_real_t _t41 = _t12*_t34 + TRAILER3_LIT(1.0);
-    const trailer3_real_t _t42 = -_t13*_t34;
-    const trailer3_real_t _t43 = _t15*_t41 - _t16*_t42;
-    const trailer3_real_t _t44 = _t20*_t43;
-    const trailer3_real_t _t45 = _t15*_t42 + _t16*_t41;
-    const trailer3_real_t _t46 = TRAILER3_LIT(0.2)*radius_cart2_left;
-    const trailer3_real_t _t47 = -TRAILER3_LIT(0.6)*radius_cart2_left;
-    const trailer3_real_t _t48 = _t19*(_t43*_t46 + _t45*_t47);
-    const trailer3_real_t _t49 = -TRAILER3_LIT(0.2)*radius_cart2_right;
-    const trailer3_real_t _t50 = -TRAILER3_LIT(0.6)*radius_cart2_right;
-    const trailer3_real_t _t51 = _t19*(_t43*_t49 + _t45*_t50);
-    const trailer3_real_t _t52 = _t21*_t44 + _t41;
-    const trailer3_real_t _t53 = -_t22*_t44 + _t42;
-    const trailer3_real_t _t54 = _t24*_t52 - _t25*_t53;
-    const trailer3_real_t _t55 = _t29*_t54;
-    const trailer3_real_t _t56 = _t24*_t53 + _t25*_t52;
-    const trailer3_real_t _t57 = TRAILER3_LIT(0.2)*radius_cart3_left;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(0.6)*radius_cart3_left;
-    const trailer3_real_t _t59 = _t28*(_t54*_t57 + _t56*_t58);
-    const trailer3_real_t _t60 = -TRAILER3_LIT(0.2)*radius_cart3_right;
-    const trailer3_real_t _t61 = -TRAILER3_LIT(0.6)*radius_cart3_right;
-    const trailer3_real_t _t62 = _t28*(_t54*_t60 + _t56*_t61);
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t63 = J_theta_right*_t6;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t64 = J_theta_left*_t7;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t65 = J_theta_cart_right*_t37;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t66 = J_theta_cart_left*_t40;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t67 = J_theta_cart2_right*_t48;
-    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t68 = J_theta_cart2_left*_t51;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t69 = J_theta_cart3_right*_t59;
-    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t70 = J_theta_cart3_left*_t62;
-    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t71 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t72 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t30 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t31 = _t11*_t2;
+    const trailer3_real_t _t32 = _t12*_t31 + TRAILER3_LIT(1.0);
+    const trailer3_real_t _t33 = _t30*_t32;
+    const trailer3_real_t _t34 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer3_real_t _t35 = -_t13*_t31;
+    const trailer3_real_t _t36 = _t34*_t35;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t73 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
-    const trailer3_real_t _t74 = _t55*_t73;
-    const trailer3_real_t _t75 = _t44*_t72 + _t74;
-    const trailer3_real_t _t76 = _t34*_t71 + _t75;
+    const trailer3_real_t _t37 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t38 = _t15*_t32 - _t16*_t35;
+    const trailer3_real_t _t39 = _t20*_t38;
+    const trailer3_real_t _t40 = _t21*_t39 + _t32;
+    const trailer3_real_t _t41 = _t37*_t40;
+    const trailer3_real_t _t42 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const trailer3_real_t _t43 = -_t22*_t39 + _t35;
+    const trailer3_real_t _t44 = _t42*_t43;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t46 = -_t11*_t45;
+    const trailer3_real_t _t47 = _t12*_t46;
+    const trailer3_real_t _t48 = _t30*_t47;
+    const trailer3_real_t _t49 = -_t13*_t46 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t50 = _t34*_t49;
+    const trailer3_real_t _t51 = _t48 + _t50;
+    const trailer3_real_t _t52 = _t15*_t47 - _t16*_t49;
+    const trailer3_real_t _t53 = _t20*_t52;
+    const trailer3_real_t _t54 = _t21*_t53 + _t47;
+    const trailer3_real_t _t55 = _t37*_t54;
+    const trailer3_real_t _t56 = -_t22*_t53 + _t49;
+    const trailer3_real_t _t57 = _t42*_t56;
+    const trailer3_real_t _t58 = _t55 + _t57;
+    const trailer3_real_t _t59 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t61 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t63 = _t24*_t40 - _t25*_t43;
+    const trailer3_real_t _t64 = _t29*_t63;
+    const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.2)*radius_cart_left;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(0.6)*radius_cart_left;
+    const trailer3_real_t _t68 = _t10*(_t2*_t66 + _t3*_t67);
+    const trailer3_real_t _t69 = -TRAILER3_LIT(0.2)*radius_cart_right;
+    const trailer3_real_t _t70 = -TRAILER3_LIT(0.6)*radius_cart_right;
+    const trailer3_real_t _t71 = _t10*(_t2*_t69 + _t3*_t70);
+    const trailer3_real_t _t72 = _t15*_t35 + _t16*_t32;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*radius_cart2_left;
+    const trailer3_real_t _t74 = -TRAILER3_LIT(0.6)*radius_cart2_left;
+    const trailer3_real_t _t75 = _t19*(_t38*_t73 + _t72*_t74);
+    const trailer3_real_t _t76 = -TRAILER3_LIT(0.2)*radius_cart2_right;
+    const trailer3_real_t _t77 = -TRAILER3_LIT(0.6)*radius_cart2_right;
+    const trailer3_real_t _t78 = _t19*(_t38*_t76 + _t72*_t77);
+    const trailer3_real_t _t79 = _t24*_t43 + _t25*_t40;
+    const trailer3_real_t _t80 = TRAILER3_LIT(0.2)*radius_cart3_left;
+    const trailer3_real_t _t81 = -TRAILER3_LIT(0.6)*radius_cart3_left;
+    const trailer3_real_t _t82 = _t28*(_t63*_t80 + _t79*_t81);
+    const trailer3_real_t _t83 = -TRAILER3_LIT(0.2)*radius_cart3_right;
+    const trailer3_real_t _t84 = -TRAILER3_LIT(0.6)*radius_cart3_right;
+    const trailer3_real_t _t85 = _t28*(_t63*_t83 + _t79*_t84);
+    const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
     const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t77 = J_x_tractor + _t76;
-    const trailer3_real_t _t78 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const trailer3_real_t _t79 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
-    const trailer3_real_t _t80 = _t55*_t79;
-    const trailer3_real_t _t81 = _t44*_t78 + _t80;
+    const trailer3_real_t _t86 = J_theta_cart2_left*_t78*_t78 + J_theta_cart2_right*_t75*_t75
+            + J_theta_cart3_left*_t85*_t85 + J_theta_cart3_right*_t82*_t82
+            + J_theta_cart_left*_t71*_t71 + J_theta_cart_right*_t68*_t68 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t82 = J_theta_cart*_t34 + _t12*_t75 - _t13*_t81 + _t71;
+    const trailer3_real_t _t87 = J_theta_cart*_t31*_t31 + TRAILER3_LIT(2.0)*_t31*_t65 + _t86;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t83 = J_theta_cart2*_t44 + _t21*_t74 - _t22*_t80 + _t41*_t72 + _t42*_t78;
+    const trailer3_real_t _t88 = J_theta_cart2*_t39*_t39 + _t33*_t39 + _t36*_t39
+            + _t39*(_t33 + _t36) + _t87;
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t84 = J_theta_cart3*_t55 + _t52*_t73 + _t53*_t79;
-    const trailer3_real_t _t85 = _t34*_t82 + _t37*_t65 + _t40*_t66 + _t44*_t83 + _t48*_t67
-            + _t51*_t68 + _t55*_t84 + _t59*_t69 + _t6*_t63 + _t62*_t70 + _t64*_t7 + _t77;
-    const trailer3_real_t _t86 = -TRAILER3_LIT(0.3)*_t3;
-    const trailer3_real_t _t87 = -_t11*_t86;
-    const trailer3_real_t _t88 = _t12*_t87;
-    const trailer3_real_t _t89 = -_t13*_t87 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t90 = _t15*_t88 - _t16*_t89;
-    const trailer3_real_t _t91 = _t20*_t90;
-    const trailer3_real_t _t92 = _t21*_t91 + _t88;
-    const trailer3_real_t _t93 = -_t22*_t91 + _t89;
-    const trailer3_real_t _t94 = _t24*_t92 - _t25*_t93;
-    const trailer3_real_t _t95 = _t29*_t94;
-    const trailer3_real_t _t96 = _t73*_t95;
-    const trailer3_real_t _t97 = _t72*_t91 + _t96;
-    const trailer3_real_t _t98 = _t71*_t87 + _t97;
+    const trailer3_real_t _t89 = J_theta_cart3*_t64*_t64 + _t41*_t64 + _t44*_t64
+            + _t64*(_t41 + _t44) + _t88;
+    const trailer3_real_t _t90 = _t24*_t54 - _t25*_t56;
+    const trailer3_real_t _t91 = _t29*_t90;
+    const trailer3_real_t _t92 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const trailer3_real_t _t93 = TRAILER3_LIT(0.207)*_t6;
+    const trailer3_real_t _t94 = -TRAILER3_LIT(0.207)*_t7;
+    const trailer3_real_t _t95 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t96 = _t10*(-_t45*_t66 - _t67*_t95);
+    const trailer3_real_t _t97 = _t10*(-_t45*_t69 - _t70*_t95);
+    const trailer3_real_t _t98 = _t15*_t49 + _t16*_t47;
+    const trailer3_real_t _t99 = _t19*(_t52*_t73 + _t74*_t98);
+    const trailer3_real_t _t100 = _t19*(_t52*_t76 + _t77*_t98);
+    const trailer3_real_t _t101 = _t24*_t56 + _t25*_t54;
+    const trailer3_real_t _t102 = _t28*(_t101*_t81 + _t80*_t90);
+    const trailer3_real_t _t103 = _t28*(_t101*_t84 + _t83*_t90);
+    const trailer3_real_t _t104 = J_theta_cart2_left*_t100*_t78 + J_theta_cart2_right*_t75*_t99
+            + J_theta_cart3_left*_t103*_t85 + J_theta_cart3_right*_t102*_t82
+            + J_theta_cart_left*_t71*_t97 + J_theta_cart_right*_t68*_t96 + J_theta_left*_t7*_t94
+            + J_theta_right*_t6*_t93;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t99 = K_theta_tractor_x_tractor_2 + _t98;
-    const trailer3_real_t _t100 = TRAILER3_LIT(0.207)*_t6;
-    const trailer3_real_t _t101 = J_theta_right*_t100;
-    const trailer3_real_t _t102 = -TRAILER3_LIT(0.207)*_t7;
-    const trailer3_real_t _t103 = J_theta_left*_t102;
-    const trailer3_real_t _t104 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t105 = _t10*(-_t104*_t36 - _t35*_t86);
-    const trailer3_real_t _t106 = J_theta_cart_right*_t105;
-    const trailer3_real_t _t107 = _t10*(-_t104*_t39 - _t38*_t86);
-    const trailer3_real_t _t108 = J_theta_cart_left*_t107;
-    const trailer3_real_t _t109 = _t15*_t89 + _t16*_t88;
-    const trailer3_real_t _t110 = _t19*(_t109*_t47 + _t46*_t90);
-    const trailer3_real_t _t111 = J_theta_cart2_right*_t110;
-    const trailer3_real_t _t112 = _t19*(_t109*_t50 + _t49*_t90);
-    const trailer3_real_t _t113 = J_theta_cart2_left*_t112;
-    const trailer3_real_t _t114 = _t24*_t93 + _t25*_t92;
-    const trailer3_real_t _t115 = _t28*(_t114*_t58 + _t57*_t94);
-    const trailer3_real_t _t116 = J_theta_cart3_right*_t115;
-    const trailer3_real_t _t117 = _t28*(_t114*_t61 + _t60*_t94);
-    const trailer3_real_t _t118 = J_theta_cart3_left*_t117;
-    const trailer3_real_t _t119 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const trailer3_real_t _t120 = _t79*_t95;
-    const trailer3_real_t _t121 = _t120 + _t78*_t91;
-    const trailer3_real_t _t122 = J_theta_cart*_t87 - TRAILER3_LIT(0.3)*_t119 + _t12*_t97
-            - _t121*_t13;
-    const trailer3_real_t _t123 = J_theta_cart2*_t91 - _t120*_t22 + _t21*_t96 + _t72*_t88
-            + _t78*_t89;
-    const trailer3_real_t _t124 = J_theta_cart3*_t95 + _t73*_t92 + _t79*_t93;
-    const trailer3_real_t _t125 = _t101*_t6 + _t103*_t7 + _t106*_t37 + _t108*_t40 + _t111*_t48
-            + _t113*_t51 + _t116*_t59 + _t118*_t62 + _t122*_t34 + _t123*_t44 + _t124*_t55 + _t99;
-    const trailer3_real_t _t126 = _t125*_t32 + _t33*_t85;
-    const trailer3_real_t _t127 = _t119*_t87 + _t121;
+    const trailer3_real_t _t105 = K_theta_tractor_x_tractor_2 + _t104;
+    const trailer3_real_t _t106 = J_theta_cart*_t31*_t46 + _t105 - TRAILER3_LIT(0.3)*_t31*_t92
+            + _t46*_t65;
+    const trailer3_real_t _t107 = J_theta_cart2*_t39*_t53 + _t106 + _t33*_t53 + _t36*_t53
+            + _t39*_t51;
+    const trailer3_real_t _t108 = J_theta_cart3*_t64*_t91 + _t107 + _t41*_t91 + _t44*_t91
+            + _t58*_t64;
+    const trailer3_real_t _t109 = _t108*_t61 + _t62*_t89;
+    const trailer3_real_t _t110 = J_theta_cart2_left*_t100*_t100 + J_theta_cart2_right*_t99*_t99
+            + J_theta_cart3_left*_t103*_t103 + J_theta_cart3_right*_t102*_t102
+            + J_theta_cart_left*_t97*_t97 + J_theta_cart_right*_t96*_t96 + J_theta_left*_t94*_t94
+            + J_theta_right*_t93*_t93;
     const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t128 = J_theta_tractor - TRAILER3_LIT(0.3)*_t127;
-    const trailer3_real_t _t129 = _t100*_t101 + _t102*_t103 + _t105*_t106 + _t107*_t108
-            + _t110*_t111 + _t112*_t113 + _t115*_t116 + _t117*_t118 + _t122*_t87 + _t123*_t91
-            + _t124*_t95 + _t128;
-    const trailer3_real_t _t130 = _t125*_t33 + _t129*_t32;
-    const trailer3_real_t _t131 = _t126*_t31 + _t130*_t30;
-    const trailer3_real_t _t132 = _t131*_t131;
-    const trailer3_real_t _t133 = _t125*_t30 + _t31*_t85;
-    const trailer3_real_t _t134 = _t125*_t31 + _t129*_t30;
-    const trailer3_real_t _t135 = _t133*_t31 + _t134*_t30;
-    const trailer3_real_t _t136 = _t126*_t33 + _t130*_t32;
-    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t132 + _t135*_t135
-            + _t136*_t136)*(TRAILER3_LIT(1.0)/TRAILER3_FABS(_t132 - _t135*_t136));
+    const trailer3_real_t _t111 = J_theta_tractor + _t110;
+    const trailer3_real_t _t112 = J_theta_cart*_t46*_t46 + _t111 - TRAILER3_LIT(0.6)*_t46*_t92;
+    const trailer3_real_t _t113 = J_theta_cart2*_t53*_t53 + _t112 + _t48*_t53 + _t50*_t53
+            + _t51*_t53;
+    const trailer3_real_t _t114 = J_theta_cart3*_t91*_t91 + _t113 + _t55*_t91 + _t57*_t91
+            + _t58*_t91;
+    const trailer3_real_t _t115 = _t108*_t62 + _t114*_t61;
+    const trailer3_real_t _t116 = _t109*_t60 + _t115*_t59;
+    const trailer3_real_t _t117 = _t116*_t116;
+    const trailer3_real_t _t118 = _t108*_t59 + _t60*_t89;
+    const trailer3_real_t _t119 = _t108*_t60 + _t114*_t59;
+    const trailer3_real_t _t120 = _t118*_t60 + _t119*_t59;
+    const trailer3_real_t _t121 = _t109*_t62 + _t115*_t61;
+    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t117 + _t120*_t120
+            + _t121*_t121)*(TRAILER3_LIT(1.0)/TRAILER3_FABS(_t117 - _t120*_t121));
 }
 
 /* trailer3_minimal_minv_norm_mhat: documented in trailer3_laws.h.
@@ -427,10 +417,10 @@ void trailer3_minimal_minv_norm_mhat(const trailer3_params_t *p, const trailer3_
 }
 
 /* trailer3_minimal_mhat: documented in trailer3_laws.h.
-   operations after CSE: 103 add, 212 mul, 4 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 101 add, 227 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_mhat(const trailer3_params_t *p, const trailer3_real_t *q, trailer3_real_t *M)
 {
-    trailer3_real_t kept[43];
+    trailer3_real_t kept[42];
     trailer3_k_minimal_mhat_keep(p, kept);
     trailer3_k_minimal_mhat(kept, q, M);
 }
@@ -498,7 +488,7 @@ void trailer3_minimal_omega_difference(const trailer3_real_t *newer, const trail
 }
 
 /* trailer3_minimal_tdc_law: documented in trailer3_laws.h.
-   operations after CSE: 111 add, 220 mul, 4 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 109 add, 235 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -548,155 +538,149 @@ void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t 
     const trailer3_real_t _t27 = -TRAILER3_LIT(0.6)*_t26;
     const trailer3_real_t _t28 = TRAILER3_LIT(1.0)/_t27;
     const trailer3_real_t _t29 = _t26*_t28;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t _t30 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t31 = _t11*_t2;
+    const trailer3_real_t _t32 = _t12*_t31 + TRAILER3_LIT(1.0);
+    const trailer3_real_t _t33 = _t30*_t32;
+    const trailer3_real_t _t34 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer3_real_t _t35 = -_t13*_t31;
+    const trailer3_real_t _t36 = _t34*_t35;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t _t37 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t38 = _t15*_t32 - _t16*_t35;
+    const trailer3_real_t _t39 = _t20*_t38;
+    const trailer3_real_t _t40 = _t21*_t39 + _t32;
+    const trailer3_real_t _t41 = _t37*_t40;
+    const trailer3_real_t _t42 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const trailer3_real_t _t43 = -_t22*_t39 + _t35;
+    const trailer3_real_t _t44 = _t42*_t43;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t46 = -_t11*_t45;
+    const trailer3_real_t _t47 = _t12*_t46;
+    const trailer3_real_t _t48 = _t30*_t47;
+    const trailer3_real_t _t49 = -_t13*_t46 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t50 = _t34*_t49;
+    const trailer3_real_t _t51 = _t48 + _t50;
+    const trailer3_real_t _t52 = _t15*_t47 - _t16*_t49;
+    const trailer3_real_t _t53 = _t20*_t52;
+    const trailer3_real_t _t54 = _t21*_t53 + _t47;
+    const trailer3_real_t _t55 = _t37*_t54;
+    const trailer3_real_t _t56 = -_t22*_t53 + _t49;
+    const trailer3_real_t _t57 = _t42*_t56;
+    const trailer3_real_t _t58 = _t55 + _t57;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t30 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t59 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t31 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer3_real_t _t32 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t33 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(0.3)*_t3;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t36 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t38 = TRAILER3_LIT(0.2)*radius_cart_left;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(0.6)*radius_cart_left;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(0.2)*radius_cart_right;
-    const trailer3_real_t _t41 = -TRAILER3_LIT(0.6)*radius_cart_right;
-    const trailer3_real_t _t42 = _t11*_t2;
-    const trailer3_real_t _t43 = _t10*(_t2*_t38 + _t3*_t39);
-    const trailer3_real_t _t44 = _t10*(_t2*_t40 + _t3*_t41);
-    const trailer3_real_t _t45 = _t12*_t42 + TRAILER3_LIT(1.0);
-    const trailer3_real_t _t46 = -_t13*_t42;
-    const trailer3_real_t _t47 = _t15*_t45 - _t16*_t46;
-    const trailer3_real_t _t48 = _t15*_t46 + _t16*_t45;
-    const trailer3_real_t _t49 = TRAILER3_LIT(0.2)*radius_cart2_left;
-    const trailer3_real_t _t50 = -TRAILER3_LIT(0.6)*radius_cart2_left;
-    const trailer3_real_t _t51 = -TRAILER3_LIT(0.2)*radius_cart2_right;
-    const trailer3_real_t _t52 = -TRAILER3_LIT(0.6)*radius_cart2_right;
-    const trailer3_real_t _t53 = _t20*_t47;
-    const trailer3_real_t _t54 = _t19*(_t47*_t49 + _t48*_t50);
-    const trailer3_real_t _t55 = _t19*(_t47*_t51 + _t48*_t52);
-    const trailer3_real_t _t56 = _t21*_t53 + _t45;
-    const trailer3_real_t _t57 = -_t22*_t53 + _t46;
-    const trailer3_real_t _t58 = _t24*_t56 - _t25*_t57;
-    const trailer3_real_t _t59 = _t24*_t57 + _t25*_t56;
-    const trailer3_real_t _t60 = TRAILER3_LIT(0.2)*radius_cart3_left;
-    const trailer3_real_t _t61 = -TRAILER3_LIT(0.6)*radius_cart3_left;
-    const trailer3_real_t _t62 = -TRAILER3_LIT(0.2)*radius_cart3_right;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(0.6)*radius_cart3_right;
-    const trailer3_real_t _t64 = _t29*_t58;
-    const trailer3_real_t _t65 = _t28*(_t58*_t60 + _t59*_t61);
-    const trailer3_real_t _t66 = _t28*(_t58*_t62 + _t59*_t63);
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.207)*_t6;
-    const trailer3_real_t _t68 = -TRAILER3_LIT(0.207)*_t7;
-    const trailer3_real_t _t69 = -_t11*_t34;
-    const trailer3_real_t _t70 = _t10*(-_t34*_t38 - _t35*_t39);
-    const trailer3_real_t _t71 = _t10*(-_t34*_t40 - _t35*_t41);
-    const trailer3_real_t _t72 = _t12*_t69;
-    const trailer3_real_t _t73 = -_t13*_t69 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t74 = _t15*_t72 - _t16*_t73;
-    const trailer3_real_t _t75 = _t15*_t73 + _t16*_t72;
-    const trailer3_real_t _t76 = _t20*_t74;
-    const trailer3_real_t _t77 = _t19*(_t49*_t74 + _t50*_t75);
-    const trailer3_real_t _t78 = _t19*(_t51*_t74 + _t52*_t75);
-    const trailer3_real_t _t79 = _t21*_t76 + _t72;
-    const trailer3_real_t _t80 = -_t22*_t76 + _t73;
-    const trailer3_real_t _t81 = _t24*_t79 - _t25*_t80;
-    const trailer3_real_t _t82 = _t24*_t80 + _t25*_t79;
-    const trailer3_real_t _t83 = _t29*_t81;
-    const trailer3_real_t _t84 = _t28*(_t60*_t81 + _t61*_t82);
-    const trailer3_real_t _t85 = _t28*(_t62*_t81 + _t63*_t82);
+    const trailer3_real_t _t60 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t61 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t62 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t65 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.2)*radius_cart_left;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(0.6)*radius_cart_left;
+    const trailer3_real_t _t68 = -TRAILER3_LIT(0.2)*radius_cart_right;
+    const trailer3_real_t _t69 = -TRAILER3_LIT(0.6)*radius_cart_right;
+    const trailer3_real_t _t70 = _t10*(_t2*_t66 + _t3*_t67);
+    const trailer3_real_t _t71 = _t10*(_t2*_t68 + _t3*_t69);
+    const trailer3_real_t _t72 = _t15*_t35 + _t16*_t32;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*radius_cart2_left;
+    const trailer3_real_t _t74 = -TRAILER3_LIT(0.6)*radius_cart2_left;
+    const trailer3_real_t _t75 = -TRAILER3_LIT(0.2)*radius_cart2_right;
+    const trailer3_real_t _t76 = -TRAILER3_LIT(0.6)*radius_cart2_right;
+    const trailer3_real_t _t77 = _t19*(_t38*_t73 + _t72*_t74);
+    const trailer3_real_t _t78 = _t19*(_t38*_t75 + _t72*_t76);
+    const trailer3_real_t _t79 = _t24*_t40 - _t25*_t43;
+    const trailer3_real_t _t80 = _t24*_t43 + _t25*_t40;
+    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*radius_cart3_left;
+    const trailer3_real_t _t82 = -TRAILER3_LIT(0.6)*radius_cart3_left;
+    const trailer3_real_t _t83 = -TRAILER3_LIT(0.2)*radius_cart3_right;
+    const trailer3_real_t _t84 = -TRAILER3_LIT(0.6)*radius_cart3_right;
+    const trailer3_real_t _t85 = _t29*_t79;
+    const trailer3_real_t _t86 = _t28*(_t79*_t81 + _t80*_t82);
+    const trailer3_real_t _t87 = _t28*(_t79*_t83 + _t80*_t84);
+    const trailer3_real_t _t88 = TRAILER3_LIT(0.207)*_t6;
+    const trailer3_real_t _t89 = -TRAILER3_LIT(0.207)*_t7;
+    const trailer3_real_t _t90 = _t10*(-_t45*_t66 - _t63*_t67);
+    const trailer3_real_t _t91 = _t10*(-_t45*_t68 - _t63*_t69);
+    const trailer3_real_t _t92 = _t15*_t49 + _t16*_t47;
+    const trailer3_real_t _t93 = _t19*(_t52*_t73 + _t74*_t92);
+    const trailer3_real_t _t94 = _t19*(_t52*_t75 + _t76*_t92);
+    const trailer3_real_t _t95 = _t24*_t54 - _t25*_t56;
+    const trailer3_real_t _t96 = _t24*_t56 + _t25*_t54;
+    const trailer3_real_t _t97 = _t29*_t95;
+    const trailer3_real_t _t98 = _t28*(_t81*_t95 + _t82*_t96);
+    const trailer3_real_t _t99 = _t28*(_t83*_t95 + _t84*_t96);
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t86 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t87 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t88 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const trailer3_real_t _t89 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t90 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
-    const trailer3_real_t _t91 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
-    const trailer3_real_t _t92 = _t64*_t90;
-    const trailer3_real_t _t93 = _t64*_t91;
-    const trailer3_real_t _t94 = _t53*_t88 + _t92;
-    const trailer3_real_t _t95 = _t53*_t89 + _t93;
-    const trailer3_real_t _t96 = _t42*_t86 + _t94;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t97 = J_theta_right*_t6;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t98 = J_theta_left*_t7;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t99 = J_theta_cart_right*_t43;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t100 = J_theta_cart_left*_t44;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t101 = J_theta_cart2_right*_t54;
+    const trailer3_real_t _t100 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t101 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t102 = J_theta_cart2_left*_t55;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t103 = J_theta_cart3_right*_t65;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t104 = J_theta_cart3_left*_t66;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
     const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t105 = J_x_tractor + _t96;
+    const trailer3_real_t _t102 = J_theta_cart2_left*_t78*_t78 + J_theta_cart2_right*_t77*_t77
+            + J_theta_cart3_left*_t87*_t87 + J_theta_cart3_right*_t86*_t86
+            + J_theta_cart_left*_t71*_t71 + J_theta_cart_right*_t70*_t70 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t106 = J_theta_cart*_t42 + _t12*_t94 - _t13*_t95 + _t86;
+    const trailer3_real_t _t103 = J_theta_cart*_t31*_t31 + TRAILER3_LIT(2.0)*_t100*_t31 + _t102;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t107 = J_theta_cart2*_t53 + _t21*_t92 - _t22*_t93 + _t45*_t88
-            + _t46*_t89;
+    const trailer3_real_t _t104 = J_theta_cart2*_t39*_t39 + _t103 + _t33*_t39 + _t36*_t39
+            + _t39*(_t33 + _t36);
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t108 = J_theta_cart3*_t64 + _t56*_t90 + _t57*_t91;
-    const trailer3_real_t _t109 = _t83*_t90;
-    const trailer3_real_t _t110 = _t83*_t91;
-    const trailer3_real_t _t111 = _t109 + _t76*_t88;
-    const trailer3_real_t _t112 = _t110 + _t76*_t89;
-    const trailer3_real_t _t113 = _t111 + _t69*_t86;
-    const trailer3_real_t _t114 = _t112 + _t69*_t87;
+    const trailer3_real_t _t105 = J_theta_cart3*_t85*_t85 + _t104 + _t41*_t85 + _t44*_t85
+            + _t85*(_t41 + _t44);
+    const trailer3_real_t _t106 = J_theta_cart2_left*_t78*_t94 + J_theta_cart2_right*_t77*_t93
+            + J_theta_cart3_left*_t87*_t99 + J_theta_cart3_right*_t86*_t98
+            + J_theta_cart_left*_t71*_t91 + J_theta_cart_right*_t70*_t90 + J_theta_left*_t7*_t89
+            + J_theta_right*_t6*_t88;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t115 = K_theta_tractor_x_tractor_2 + _t113;
-    const trailer3_real_t _t116 = J_theta_right*_t67;
-    const trailer3_real_t _t117 = J_theta_left*_t68;
-    const trailer3_real_t _t118 = J_theta_cart_right*_t70;
-    const trailer3_real_t _t119 = J_theta_cart_left*_t71;
-    const trailer3_real_t _t120 = J_theta_cart2_right*_t77;
-    const trailer3_real_t _t121 = J_theta_cart2_left*_t78;
-    const trailer3_real_t _t122 = J_theta_cart3_right*_t84;
-    const trailer3_real_t _t123 = J_theta_cart3_left*_t85;
+    const trailer3_real_t _t107 = K_theta_tractor_x_tractor_2 + _t106;
+    const trailer3_real_t _t108 = J_theta_cart*_t31*_t46 + _t100*_t46 - TRAILER3_LIT(0.3)*_t101*_t31
+            + _t107;
+    const trailer3_real_t _t109 = J_theta_cart2*_t39*_t53 + _t108 + _t33*_t53 + _t36*_t53
+            + _t39*_t51;
+    const trailer3_real_t _t110 = J_theta_cart3*_t85*_t97 + _t109 + _t41*_t97 + _t44*_t97
+            + _t58*_t85;
+    const trailer3_real_t _t111 = J_theta_cart2_left*_t94*_t94 + J_theta_cart2_right*_t93*_t93
+            + J_theta_cart3_left*_t99*_t99 + J_theta_cart3_right*_t98*_t98
+            + J_theta_cart_left*_t91*_t91 + J_theta_cart_right*_t90*_t90 + J_theta_left*_t89*_t89
+            + J_theta_right*_t88*_t88;
     const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t124 = J_theta_tractor - TRAILER3_LIT(0.3)*_t114;
-    const trailer3_real_t _t125 = J_theta_cart*_t69 + _t111*_t12 - _t112*_t13
-            - TRAILER3_LIT(0.3)*_t87;
-    const trailer3_real_t _t126 = J_theta_cart2*_t76 + _t109*_t21 - _t110*_t22 + _t72*_t88
-            + _t73*_t89;
-    const trailer3_real_t _t127 = J_theta_cart3*_t83 + _t79*_t90 + _t80*_t91;
-    const trailer3_real_t _t128 = _t100*_t44 + _t101*_t54 + _t102*_t55 + _t103*_t65 + _t104*_t66
-            + _t105 + _t106*_t42 + _t107*_t53 + _t108*_t64 + _t43*_t99 + _t6*_t97 + _t7*_t98;
-    const trailer3_real_t _t129 = _t115 + _t116*_t6 + _t117*_t7 + _t118*_t43 + _t119*_t44
-            + _t120*_t54 + _t121*_t55 + _t122*_t65 + _t123*_t66 + _t125*_t42 + _t126*_t53
-            + _t127*_t64;
-    const trailer3_real_t _t130 = _t116*_t67 + _t117*_t68 + _t118*_t70 + _t119*_t71 + _t120*_t77
-            + _t121*_t78 + _t122*_t84 + _t123*_t85 + _t124 + _t125*_t69 + _t126*_t76 + _t127*_t83;
-    const trailer3_real_t _t131 = _t128*_t36 + _t129*_t32;
-    const trailer3_real_t _t132 = _t128*_t37 + _t129*_t33;
-    const trailer3_real_t _t133 = _t129*_t36 + _t130*_t32;
-    const trailer3_real_t _t134 = _t129*_t37 + _t130*_t33;
-    const trailer3_real_t _t135 = _t131*_t36 + _t133*_t32;
-    const trailer3_real_t _t136 = _t132*_t36 + _t134*_t32;
-    const trailer3_real_t _t137 = _t132*_t37 + _t134*_t33;
+    const trailer3_real_t _t112 = J_theta_tractor + _t111;
+    const trailer3_real_t _t113 = J_theta_cart*_t46*_t46 - TRAILER3_LIT(0.6)*_t101*_t46 + _t112;
+    const trailer3_real_t _t114 = J_theta_cart2*_t53*_t53 + _t113 + _t48*_t53 + _t50*_t53
+            + _t51*_t53;
+    const trailer3_real_t _t115 = J_theta_cart3*_t97*_t97 + _t114 + _t55*_t97 + _t57*_t97
+            + _t58*_t97;
+    const trailer3_real_t _t116 = _t105*_t64 + _t110*_t61;
+    const trailer3_real_t _t117 = _t105*_t65 + _t110*_t62;
+    const trailer3_real_t _t118 = _t110*_t64 + _t115*_t61;
+    const trailer3_real_t _t119 = _t110*_t65 + _t115*_t62;
+    const trailer3_real_t _t120 = _t116*_t64 + _t118*_t61;
+    const trailer3_real_t _t121 = _t117*_t64 + _t119*_t61;
+    const trailer3_real_t _t122 = _t117*_t65 + _t119*_t62;
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t135*_t30 + _t136*_t31;
-    u[1] = H1hat1 + _t136*_t30 + _t137*_t31;
+    u[0] = H1hat0 + _t120*_t59 + _t121*_t60;
+    u[1] = H1hat1 + _t121*_t59 + _t122*_t60;
 }
 
 /* trailer3_minimal_tdc_law_mhat: documented in trailer3_laws.h.
@@ -710,7 +694,7 @@ void trailer3_minimal_tdc_law_mhat(const trailer3_params_t *p, const trailer3_re
 }
 
 /* trailer3_minimal_tdroc_law: documented in trailer3_laws.h.
-   operations after CSE: 118 add, 234 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 116 add, 249 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -759,170 +743,164 @@ void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_
     const trailer3_real_t _t27 = -TRAILER3_LIT(0.6)*_t26;
     const trailer3_real_t _t28 = TRAILER3_LIT(1.0)/_t27;
     const trailer3_real_t _t29 = _t26*_t28;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t _t30 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t31 = _t11*_t2;
+    const trailer3_real_t _t32 = _t12*_t31 + TRAILER3_LIT(1.0);
+    const trailer3_real_t _t33 = _t30*_t32;
+    const trailer3_real_t _t34 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer3_real_t _t35 = -_t13*_t31;
+    const trailer3_real_t _t36 = _t34*_t35;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t _t37 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t38 = _t15*_t32 - _t16*_t35;
+    const trailer3_real_t _t39 = _t20*_t38;
+    const trailer3_real_t _t40 = _t21*_t39 + _t32;
+    const trailer3_real_t _t41 = _t37*_t40;
+    const trailer3_real_t _t42 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const trailer3_real_t _t43 = -_t22*_t39 + _t35;
+    const trailer3_real_t _t44 = _t42*_t43;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t46 = -_t11*_t45;
+    const trailer3_real_t _t47 = _t12*_t46;
+    const trailer3_real_t _t48 = _t30*_t47;
+    const trailer3_real_t _t49 = -_t13*_t46 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t50 = _t34*_t49;
+    const trailer3_real_t _t51 = _t48 + _t50;
+    const trailer3_real_t _t52 = _t15*_t47 - _t16*_t49;
+    const trailer3_real_t _t53 = _t20*_t52;
+    const trailer3_real_t _t54 = _t21*_t53 + _t47;
+    const trailer3_real_t _t55 = _t37*_t54;
+    const trailer3_real_t _t56 = -_t22*_t53 + _t49;
+    const trailer3_real_t _t57 = _t42*_t56;
+    const trailer3_real_t _t58 = _t55 + _t57;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t30 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t59 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t31 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t60 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer3_real_t p12_0 = p12[0];
     const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t32 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t _t61 = e0*p12_0 + edot0*p22_0;
     const trailer3_real_t p12_1 = p12[1];
     const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t33 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t34 = trailer3_norm2(_t32, _t33);
+    const trailer3_real_t _t62 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t63 = trailer3_norm2(_t61, _t62);
     const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t35 = TRAILER3_LIT(1.0)/(TRAILER3_FMAX(_t34, eps_1));
-    const trailer3_real_t _t36 = _t32*_t35;
-    const trailer3_real_t _t37 = _t33*_t35;
-    const trailer3_real_t _t38 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t39 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(0.3)*_t3;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t43 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t44 = TRAILER3_LIT(0.2)*radius_cart_left;
-    const trailer3_real_t _t45 = -TRAILER3_LIT(0.6)*radius_cart_left;
-    const trailer3_real_t _t46 = -TRAILER3_LIT(0.2)*radius_cart_right;
-    const trailer3_real_t _t47 = -TRAILER3_LIT(0.6)*radius_cart_right;
-    const trailer3_real_t _t48 = _t11*_t2;
-    const trailer3_real_t _t49 = _t10*(_t2*_t44 + _t3*_t45);
-    const trailer3_real_t _t50 = _t10*(_t2*_t46 + _t3*_t47);
-    const trailer3_real_t _t51 = _t12*_t48 + TRAILER3_LIT(1.0);
-    const trailer3_real_t _t52 = -_t13*_t48;
-    const trailer3_real_t _t53 = _t15*_t51 - _t16*_t52;
-    const trailer3_real_t _t54 = _t15*_t52 + _t16*_t51;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.2)*radius_cart2_left;
-    const trailer3_real_t _t56 = -TRAILER3_LIT(0.6)*radius_cart2_left;
-    const trailer3_real_t _t57 = -TRAILER3_LIT(0.2)*radius_cart2_right;
-    const trailer3_real_t _t58 = -TRAILER3_LIT(0.6)*radius_cart2_right;
-    const trailer3_real_t _t59 = _t20*_t53;
-    const trailer3_real_t _t60 = _t19*(_t53*_t55 + _t54*_t56);
-    const trailer3_real_t _t61 = _t19*(_t53*_t57 + _t54*_t58);
-    const trailer3_real_t _t62 = _t21*_t59 + _t51;
-    const trailer3_real_t _t63 = -_t22*_t59 + _t52;
-    const trailer3_real_t _t64 = _t24*_t62 - _t25*_t63;
-    const trailer3_real_t _t65 = _t24*_t63 + _t25*_t62;
-    const trailer3_real_t _t66 = TRAILER3_LIT(0.2)*radius_cart3_left;
-    const trailer3_real_t _t67 = -TRAILER3_LIT(0.6)*radius_cart3_left;
-    const trailer3_real_t _t68 = -TRAILER3_LIT(0.2)*radius_cart3_right;
-    const trailer3_real_t _t69 = -TRAILER3_LIT(0.6)*radius_cart3_right;
-    const trailer3_real_t _t70 = _t29*_t64;
-    const trailer3_real_t _t71 = _t28*(_t64*_t66 + _t65*_t67);
-    const trailer3_real_t _t72 = _t28*(_t64*_t68 + _t65*_t69);
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.207)*_t6;
-    const trailer3_real_t _t74 = -TRAILER3_LIT(0.207)*_t7;
-    const trailer3_real_t _t75 = -_t11*_t40;
-    const trailer3_real_t _t76 = _t10*(-_t40*_t44 - _t41*_t45);
-    const trailer3_real_t _t77 = _t10*(-_t40*_t46 - _t41*_t47);
-    const trailer3_real_t _t78 = _t12*_t75;
-    const trailer3_real_t _t79 = -_t13*_t75 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
-    const trailer3_real_t _t80 = _t15*_t78 - _t16*_t79;
-    const trailer3_real_t _t81 = _t15*_t79 + _t16*_t78;
-    const trailer3_real_t _t82 = _t20*_t80;
-    const trailer3_real_t _t83 = _t19*(_t55*_t80 + _t56*_t81);
-    const trailer3_real_t _t84 = _t19*(_t57*_t80 + _t58*_t81);
-    const trailer3_real_t _t85 = _t21*_t82 + _t78;
-    const trailer3_real_t _t86 = -_t22*_t82 + _t79;
-    const trailer3_real_t _t87 = _t24*_t85 - _t25*_t86;
-    const trailer3_real_t _t88 = _t24*_t86 + _t25*_t85;
-    const trailer3_real_t _t89 = _t29*_t87;
-    const trailer3_real_t _t90 = _t28*(_t66*_t87 + _t67*_t88);
-    const trailer3_real_t _t91 = _t28*(_t68*_t87 + _t69*_t88);
+    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/(TRAILER3_FMAX(_t63, eps_1));
+    const trailer3_real_t _t65 = _t61*_t64;
+    const trailer3_real_t _t66 = _t62*_t64;
+    const trailer3_real_t _t67 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t68 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t70 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t71 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.2)*radius_cart_left;
+    const trailer3_real_t _t73 = -TRAILER3_LIT(0.6)*radius_cart_left;
+    const trailer3_real_t _t74 = -TRAILER3_LIT(0.2)*radius_cart_right;
+    const trailer3_real_t _t75 = -TRAILER3_LIT(0.6)*radius_cart_right;
+    const trailer3_real_t _t76 = _t10*(_t2*_t72 + _t3*_t73);
+    const trailer3_real_t _t77 = _t10*(_t2*_t74 + _t3*_t75);
+    const trailer3_real_t _t78 = _t15*_t35 + _t16*_t32;
+    const trailer3_real_t _t79 = TRAILER3_LIT(0.2)*radius_cart2_left;
+    const trailer3_real_t _t80 = -TRAILER3_LIT(0.6)*radius_cart2_left;
+    const trailer3_real_t _t81 = -TRAILER3_LIT(0.2)*radius_cart2_right;
+    const trailer3_real_t _t82 = -TRAILER3_LIT(0.6)*radius_cart2_right;
+    const trailer3_real_t _t83 = _t19*(_t38*_t79 + _t78*_t80);
+    const trailer3_real_t _t84 = _t19*(_t38*_t81 + _t78*_t82);
+    const trailer3_real_t _t85 = _t24*_t40 - _t25*_t43;
+    const trailer3_real_t _t86 = _t24*_t43 + _t25*_t40;
+    const trailer3_real_t _t87 = TRAILER3_LIT(0.2)*radius_cart3_left;
+    const trailer3_real_t _t88 = -TRAILER3_LIT(0.6)*radius_cart3_left;
+    const trailer3_real_t _t89 = -TRAILER3_LIT(0.2)*radius_cart3_right;
+    const trailer3_real_t _t90 = -TRAILER3_LIT(0.6)*radius_cart3_right;
+    const trailer3_real_t _t91 = _t29*_t85;
+    const trailer3_real_t _t92 = _t28*(_t85*_t87 + _t86*_t88);
+    const trailer3_real_t _t93 = _t28*(_t85*_t89 + _t86*_t90);
+    const trailer3_real_t _t94 = TRAILER3_LIT(0.207)*_t6;
+    const trailer3_real_t _t95 = -TRAILER3_LIT(0.207)*_t7;
+    const trailer3_real_t _t96 = _t10*(-_t45*_t72 - _t69*_t73);
+    const trailer3_real_t _t97 = _t10*(-_t45*_t74 - _t69*_t75);
+    const trailer3_real_t _t98 = _t15*_t49 + _t16*_t47;
+    const trailer3_real_t _t99 = _t19*(_t52*_t79 + _t80*_t98);
+    const trailer3_real_t _t100 = _t19*(_t52*_t81 + _t82*_t98);
+    const trailer3_real_t _t101 = _t24*_t54 - _t25*_t56;
+    const trailer3_real_t _t102 = _t24*_t56 + _t25*_t54;
+    const trailer3_real_t _t103 = _t101*_t29;
+    const trailer3_real_t _t104 = _t28*(_t101*_t87 + _t102*_t88);
+    const trailer3_real_t _t105 = _t28*(_t101*_t89 + _t102*_t90);
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t92 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t93 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t94 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const trailer3_real_t _t95 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t96 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
-    const trailer3_real_t _t97 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
-    const trailer3_real_t _t98 = _t70*_t96;
-    const trailer3_real_t _t99 = _t70*_t97;
-    const trailer3_real_t _t100 = _t59*_t94 + _t98;
-    const trailer3_real_t _t101 = _t59*_t95 + _t99;
-    const trailer3_real_t _t102 = _t100 + _t48*_t92;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t103 = J_theta_right*_t6;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t104 = J_theta_left*_t7;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t105 = J_theta_cart_right*_t49;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t106 = J_theta_cart_left*_t50;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t107 = J_theta_cart2_right*_t60;
+    const trailer3_real_t _t106 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t107 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t108 = J_theta_cart2_left*_t61;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t109 = J_theta_cart3_right*_t71;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t110 = J_theta_cart3_left*_t72;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
     const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t111 = J_x_tractor + _t102;
+    const trailer3_real_t _t108 = J_theta_cart2_left*_t84*_t84 + J_theta_cart2_right*_t83*_t83
+            + J_theta_cart3_left*_t93*_t93 + J_theta_cart3_right*_t92*_t92
+            + J_theta_cart_left*_t77*_t77 + J_theta_cart_right*_t76*_t76 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t112 = J_theta_cart*_t48 + _t100*_t12 - _t101*_t13 + _t92;
+    const trailer3_real_t _t109 = J_theta_cart*_t31*_t31 + TRAILER3_LIT(2.0)*_t106*_t31 + _t108;
     const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t113 = J_theta_cart2*_t59 + _t21*_t98 - _t22*_t99 + _t51*_t94
-            + _t52*_t95;
+    const trailer3_real_t _t110 = J_theta_cart2*_t39*_t39 + _t109 + _t33*_t39 + _t36*_t39
+            + _t39*(_t33 + _t36);
     const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t114 = J_theta_cart3*_t70 + _t62*_t96 + _t63*_t97;
-    const trailer3_real_t _t115 = _t89*_t96;
-    const trailer3_real_t _t116 = _t89*_t97;
-    const trailer3_real_t _t117 = _t115 + _t82*_t94;
-    const trailer3_real_t _t118 = _t116 + _t82*_t95;
-    const trailer3_real_t _t119 = _t117 + _t75*_t92;
-    const trailer3_real_t _t120 = _t118 + _t75*_t93;
+    const trailer3_real_t _t111 = J_theta_cart3*_t91*_t91 + _t110 + _t41*_t91 + _t44*_t91
+            + _t91*(_t41 + _t44);
+    const trailer3_real_t _t112 = J_theta_cart2_left*_t100*_t84 + J_theta_cart2_right*_t83*_t99
+            + J_theta_cart3_left*_t105*_t93 + J_theta_cart3_right*_t104*_t92
+            + J_theta_cart_left*_t77*_t97 + J_theta_cart_right*_t76*_t96 + J_theta_left*_t7*_t95
+            + J_theta_right*_t6*_t94;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t121 = K_theta_tractor_x_tractor_2 + _t119;
-    const trailer3_real_t _t122 = J_theta_right*_t73;
-    const trailer3_real_t _t123 = J_theta_left*_t74;
-    const trailer3_real_t _t124 = J_theta_cart_right*_t76;
-    const trailer3_real_t _t125 = J_theta_cart_left*_t77;
-    const trailer3_real_t _t126 = J_theta_cart2_right*_t83;
-    const trailer3_real_t _t127 = J_theta_cart2_left*_t84;
-    const trailer3_real_t _t128 = J_theta_cart3_right*_t90;
-    const trailer3_real_t _t129 = J_theta_cart3_left*_t91;
+    const trailer3_real_t _t113 = K_theta_tractor_x_tractor_2 + _t112;
+    const trailer3_real_t _t114 = J_theta_cart*_t31*_t46 + _t106*_t46 - TRAILER3_LIT(0.3)*_t107*_t31
+            + _t113;
+    const trailer3_real_t _t115 = J_theta_cart2*_t39*_t53 + _t114 + _t33*_t53 + _t36*_t53
+            + _t39*_t51;
+    const trailer3_real_t _t116 = J_theta_cart3*_t103*_t91 + _t103*_t41 + _t103*_t44 + _t115
+            + _t58*_t91;
+    const trailer3_real_t _t117 = J_theta_cart2_left*_t100*_t100 + J_theta_cart2_right*_t99*_t99
+            + J_theta_cart3_left*_t105*_t105 + J_theta_cart3_right*_t104*_t104
+            + J_theta_cart_left*_t97*_t97 + J_theta_cart_right*_t96*_t96 + J_theta_left*_t95*_t95
+            + J_theta_right*_t94*_t94;
     const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t130 = J_theta_tractor - TRAILER3_LIT(0.3)*_t120;
-    const trailer3_real_t _t131 = J_theta_cart*_t75 + _t117*_t12 - _t118*_t13
-            - TRAILER3_LIT(0.3)*_t93;
-    const trailer3_real_t _t132 = J_theta_cart2*_t82 + _t115*_t21 - _t116*_t22 + _t78*_t94
-            + _t79*_t95;
-    const trailer3_real_t _t133 = J_theta_cart3*_t89 + _t85*_t96 + _t86*_t97;
-    const trailer3_real_t _t134 = _t103*_t6 + _t104*_t7 + _t105*_t49 + _t106*_t50 + _t107*_t60
-            + _t108*_t61 + _t109*_t71 + _t110*_t72 + _t111 + _t112*_t48 + _t113*_t59 + _t114*_t70;
-    const trailer3_real_t _t135 = _t121 + _t122*_t6 + _t123*_t7 + _t124*_t49 + _t125*_t50
-            + _t126*_t60 + _t127*_t61 + _t128*_t71 + _t129*_t72 + _t131*_t48 + _t132*_t59
-            + _t133*_t70;
-    const trailer3_real_t _t136 = _t122*_t73 + _t123*_t74 + _t124*_t76 + _t125*_t77 + _t126*_t83
-            + _t127*_t84 + _t128*_t90 + _t129*_t91 + _t130 + _t131*_t75 + _t132*_t82 + _t133*_t89;
-    const trailer3_real_t _t137 = _t134*_t42 + _t135*_t38;
-    const trailer3_real_t _t138 = _t134*_t43 + _t135*_t39;
-    const trailer3_real_t _t139 = _t135*_t42 + _t136*_t38;
-    const trailer3_real_t _t140 = _t135*_t43 + _t136*_t39;
-    const trailer3_real_t _t141 = _t137*_t42 + _t139*_t38;
-    const trailer3_real_t _t142 = _t138*_t42 + _t140*_t38;
-    const trailer3_real_t _t143 = _t138*_t43 + _t140*_t39;
+    const trailer3_real_t _t118 = J_theta_tractor + _t117;
+    const trailer3_real_t _t119 = J_theta_cart*_t46*_t46 - TRAILER3_LIT(0.6)*_t107*_t46 + _t118;
+    const trailer3_real_t _t120 = J_theta_cart2*_t53*_t53 + _t119 + _t48*_t53 + _t50*_t53
+            + _t51*_t53;
+    const trailer3_real_t _t121 = J_theta_cart3*_t103*_t103 + _t103*_t55 + _t103*_t57 + _t103*_t58
+            + _t120;
+    const trailer3_real_t _t122 = _t111*_t70 + _t116*_t67;
+    const trailer3_real_t _t123 = _t111*_t71 + _t116*_t68;
+    const trailer3_real_t _t124 = _t116*_t70 + _t121*_t67;
+    const trailer3_real_t _t125 = _t116*_t71 + _t121*_t68;
+    const trailer3_real_t _t126 = _t122*_t70 + _t124*_t67;
+    const trailer3_real_t _t127 = _t123*_t70 + _t125*_t67;
+    const trailer3_real_t _t128 = _t123*_t71 + _t125*_t68;
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
     const trailer3_real_t gain_1 = gain[0];
-    u[0] = H1hat0 + _t141*_t30 + _t142*_t31 + gain_1*(_t141*_t36 + _t142*_t37);
-    u[1] = H1hat1 + _t142*_t30 + _t143*_t31 + gain_1*(_t142*_t36 + _t143*_t37);
-    s[0] = _t32;
-    s[1] = _t33;
-    s_norm[0] = _t34;
+    u[0] = H1hat0 + _t126*_t59 + _t127*_t60 + gain_1*(_t126*_t65 + _t127*_t66);
+    u[1] = H1hat1 + _t127*_t59 + _t128*_t60 + gain_1*(_t127*_t65 + _t128*_t66);
+    s[0] = _t61;
+    s[1] = _t62;
+    s_norm[0] = _t63;
 }
 
 /* trailer3_minimal_tdroc_law_mhat: documented in trailer3_laws.h.
@@ -938,7 +916,7 @@ void trailer3_minimal_tdroc_law_mhat(const trailer3_params_t *p, const trailer3_
 }
 
 /* trailer3_minimal_roc_law: documented in trailer3_laws.h.
-   operations after CSE: 214 add, 385 mul, 6 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 215 add, 410 mul, 6 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -946,14 +924,14 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
     const trailer3_real_t *eps, trailer3_real_t *u, trailer3_real_t *s, trailer3_real_t *s_norm,
     trailer3_real_t *gain)
 {
-    trailer3_real_t kept[45];
+    trailer3_real_t kept[44];
     trailer3_k_minimal_roc_law_keep(p, kept);
     trailer3_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u,
             s, s_norm, gain);
 }
 
 /* trailer3_minimal_asmc_law: documented in trailer3_laws.h.
-   operations after CSE: 210 add, 382 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 211 add, 407 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -961,7 +939,7 @@ void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t
     const trailer3_real_t *eps, const trailer3_real_t *adapt, trailer3_real_t *u,
     trailer3_real_t *s, trailer3_real_t *s_norm, trailer3_real_t *gain_next)
 {
-    trailer3_real_t kept[45];
+    trailer3_real_t kept[44];
     trailer3_k_minimal_roc_law_keep(p, kept);
     trailer3_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps,
             adapt, u, s, s_norm, gain_next);

@@ -61,7 +61,7 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     Returns:
         xdot: array of 16 (shape 16x1, row-major)
 
-    operations after CSE: 202 add, 374 mul, 5 div, 8 sin/cos, 0 sqrt
+    operations after CSE: 203 add, 399 mul, 5 div, 8 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, theta_cart2, theta_cart3, _, _, _, _, _, _, _, _, thetadot_right, thetadot_left = _flat(x, 16, "x")
     tau_right, tau_left = _flat(tau, 2, "tau")
@@ -163,176 +163,169 @@ def plant_state_derivative(x: ArrayLike, tau: ArrayLike, pp: Any) -> NDArray[np.
     _t66 = _t64*_t65
     _t67 = -_t22*_t51 + _t54
     _t68 = _t64*_t67
-    _t69 = 0.3*_t2
-    _t70 = 0.2*radius_cart_left
-    _t71 = -0.6*radius_cart_left
-    _t72 = -0.2*radius_cart_right
-    _t73 = -0.6*radius_cart_right
-    _t74 = _t10*(_t2*_t70 + _t3*_t71)
-    _t75 = _t10*(_t2*_t72 + _t3*_t73)
-    _t76 = _t15*_t44 + _t16*_t43
-    _t77 = 0.2*radius_cart2_left
-    _t78 = -0.6*radius_cart2_left
-    _t79 = -0.2*radius_cart2_right
-    _t80 = -0.6*radius_cart2_right
-    _t81 = _t19*(_t45*_t77 + _t76*_t78)
-    _t82 = _t19*(_t45*_t79 + _t76*_t80)
-    _t83 = _t24*_t57 + _t25*_t56
-    _t84 = 0.2*radius_cart3_left
-    _t85 = -0.6*radius_cart3_left
-    _t86 = -0.2*radius_cart3_right
-    _t87 = -0.6*radius_cart3_right
-    _t88 = _t28*(_t58*_t84 + _t83*_t85)
-    _t89 = _t28*(_t58*_t86 + _t83*_t87)
-    _t90 = 0.207*_t6
-    _t91 = -0.207*_t7
-    _t92 = _t10*(-_t34*_t70 - _t69*_t71)
-    _t93 = _t10*(-_t34*_t72 - _t69*_t73)
-    _t94 = _t15*_t48 + _t16*_t47
-    _t95 = _t19*(_t49*_t77 + _t78*_t94)
-    _t96 = _t19*(_t49*_t79 + _t80*_t94)
-    _t97 = _t24*_t61 + _t25*_t60
-    _t98 = _t28*(_t62*_t84 + _t85*_t97)
-    _t99 = _t28*(_t62*_t86 + _t87*_t97)
-    _t100 = _t32*_t6 + _t38*_t90
-    _t101 = _t32*_t7 + _t38*_t91
-    _t102 = _t32*_t74 + _t38*_t92
-    _t103 = _t32*_t75 + _t38*_t93
-    _t104 = _t32*_t81 + _t38*_t95
-    _t105 = _t32*_t82 + _t38*_t96
-    _t106 = _t32*_t88 + _t38*_t98
-    _t107 = _t32*_t89 + _t38*_t99
-    _t108 = _t38*_t38
-    _t109 = _t39*_t39
-    _t110 = _t51*_t51
-    _t111 = _t64*_t64
-    _t112 = 0.3*_t108
-    _t113 = _t109*_t13
-    _t114 = _t109*_t12
-    _t115 = _t110*_t22
-    _t116 = _t110*_t21
-    _t117 = -_t32*_t38
-    _t118 = -_t117*_t4*_t5
-    _t119 = -_t2*_t42 - _t3*_t40
-    _t120 = _t2*_t40 - _t3*_t42
-    _t121 = _t112*_t2 - _t118*_t3 - _t119
-    _t122 = _t112*_t3 + _t118*_t2 - _t120
-    _t123 = _t11*_t121
-    _t124 = _t10*(_t121*_t70 + _t122*_t71)
-    _t125 = _t10*(_t121*_t72 + _t122*_t73)
-    _t126 = -_t15*_t55 - _t16*_t53
-    _t127 = _t15*_t53 - _t16*_t55
-    _t128 = _t112 + _t113 + _t12*_t123
-    _t129 = _t114 + _t118 - _t123*_t13
-    _t130 = -_t126 + _t128*_t15 - _t129*_t16
-    _t131 = -_t127 + _t128*_t16 + _t129*_t15
-    _t132 = _t130*_t20
-    _t133 = _t19*(_t130*_t77 + _t131*_t78)
-    _t134 = _t19*(_t130*_t79 + _t131*_t80)
-    _t135 = -_t24*_t68 - _t25*_t66
-    _t136 = _t24*_t66 - _t25*_t68
-    _t137 = _t115 + _t128 + _t132*_t21
-    _t138 = _t116 + _t129 - _t132*_t22
-    _t139 = -_t135 + _t137*_t24 - _t138*_t25
-    _t140 = -_t136 + _t137*_t25 + _t138*_t24
-    _t141 = _t139*_t29
-    _t142 = _t28*(_t139*_t84 + _t140*_t85)
-    _t143 = _t28*(_t139*_t86 + _t140*_t87)
-    _t144 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
-    _t145 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2
-    _t146 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16
-    _t147 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15
-    _t148 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25
-    _t149 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24
-    _t150 = _t148*_t59
-    _t151 = _t149*_t59
-    _t152 = _t146*_t46 + _t150
-    _t153 = _t147*_t46 + _t151
-    _t154 = _t144*_t33 + _t152
-    _t155 = J_theta_right*_t6
-    _t156 = J_theta_left*_t7
-    _t157 = J_theta_cart_right*_t74
-    _t158 = J_theta_cart_left*_t75
-    _t159 = J_theta_cart2_right*_t81
-    _t160 = J_theta_cart2_left*_t82
-    _t161 = J_theta_cart3_right*_t88
-    _t162 = J_theta_cart3_left*_t89
-    _t163 = J_x_tractor + _t154
-    _t164 = J_theta_cart*_t33 + _t12*_t152 - _t13*_t153 + _t144
-    _t165 = J_theta_cart2*_t46 + _t146*_t43 + _t147*_t44 + _t150*_t21 - _t151*_t22
-    _t166 = J_theta_cart3*_t59 + _t148*_t56 + _t149*_t57
-    _t167 = _t148*_t63
-    _t168 = _t149*_t63
-    _t169 = _t146*_t50 + _t167
-    _t170 = _t147*_t50 + _t168
-    _t171 = _t144*_t35 + _t169
-    _t172 = _t145*_t35 + _t170
-    _t173 = K_theta_tractor_x_tractor_2 + _t171
-    _t174 = J_theta_right*_t90
-    _t175 = J_theta_left*_t91
-    _t176 = J_theta_cart_right*_t92
-    _t177 = J_theta_cart_left*_t93
-    _t178 = J_theta_cart2_right*_t95
-    _t179 = J_theta_cart2_left*_t96
-    _t180 = J_theta_cart3_right*_t98
-    _t181 = J_theta_cart3_left*_t99
-    _t182 = J_theta_tractor - 0.3*_t172
-    _t183 = J_theta_cart*_t35 + _t12*_t169 - _t13*_t170 - 0.3*_t145
-    _t184 = J_theta_cart2*_t50 + _t146*_t47 + _t147*_t48 + _t167*_t21 - _t168*_t22
-    _t185 = J_theta_cart3*_t63 + _t148*_t60 + _t149*_t61
-    _t186 = _t155*_t6 + _t156*_t7 + _t157*_t74 + _t158*_t75 + _t159*_t81 + _t160*_t82 + _t161*_t88 + _t162*_t89 + _t163 + _t164*_t33 + _t165*_t46 + _t166*_t59
-    _t187 = _t173 + _t174*_t6 + _t175*_t7 + _t176*_t74 + _t177*_t75 + _t178*_t81 + _t179*_t82 + _t180*_t88 + _t181*_t89 + _t183*_t33 + _t184*_t46 + _t185*_t59
-    _t188 = _t174*_t90 + _t175*_t91 + _t176*_t92 + _t177*_t93 + _t178*_t95 + _t179*_t96 + _t180*_t98 + _t181*_t99 + _t182 + _t183*_t35 + _t184*_t50 + _t185*_t63
-    _t189 = _t109*_t13 + _t112 + _t12*_t123
-    _t190 = _t109*_t12 + _t118 - _t123*_t13
-    _t191 = _t110*_t22 + _t132*_t21 + _t189
-    _t192 = _t110*_t21 - _t132*_t22 + _t190
-    _t193 = -_t111*_t149 + _t141*_t148
-    _t194 = _t111*_t148 + _t141*_t149
-    _t195 = -_t110*_t147 + _t132*_t146 + _t193
-    _t196 = _t110*_t146 + _t132*_t147 + _t194
-    _t197 = -_t109*_t145 + _t123*_t144 + _t195
-    _t198 = _t109*_t144 + _t123*_t145 + _t196
-    _t199 = K_theta_tractor_x_tractor*_t108 + _t197
-    _t200 = J_theta_cart_right*_t124
-    _t201 = J_theta_cart_left*_t125
-    _t202 = J_theta_cart2_right*_t133
-    _t203 = J_theta_cart2_left*_t134
-    _t204 = J_theta_cart3_right*_t142
-    _t205 = J_theta_cart3_left*_t143
-    _t206 = -K_theta_tractor_x_tractor*_t118 - 0.3*_t198
-    _t207 = J_theta_cart*_t123 + _t112*_t144 + _t118*_t145 + _t12*_t195 - _t13*_t196
-    _t208 = J_theta_cart2*_t132 + _t146*_t189 + _t147*_t190 + _t193*_t21 - _t194*_t22
-    _t209 = J_theta_cart3*_t141 + _t148*_t191 + _t149*_t192
-    _t210 = _t199 + _t200*_t74 + _t201*_t75 + _t202*_t81 + _t203*_t82 + _t204*_t88 + _t205*_t89 + _t207*_t33 + _t208*_t46 + _t209*_t59
-    _t211 = _t200*_t92 + _t201*_t93 + _t202*_t95 + _t203*_t96 + _t204*_t98 + _t205*_t99 + _t206 + _t207*_t35 + _t208*_t50 + _t209*_t63
-    _t212 = -_t210 + _t6*tau_right + _t7*tau_left
-    _t213 = -_t211 + _t90*tau_right + _t91*tau_left
-    _t214 = _t186*_t188 - _t187*_t187
-    _t215 = 1.0/_t214
-    _t216 = _t215*(-_t187*_t213 + _t188*_t212)
-    _t217 = _t215*(_t186*_t213 - _t187*_t212)
-    _t218 = _t216*_t6 + _t217*_t90
-    _t219 = _t216*_t7 + _t217*_t91
-    _t220 = _t32*math.cos(theta_tractor)
-    _t221 = _t32*math.sin(theta_tractor)
+    _t69 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16
+    _t70 = _t43*_t69
+    _t71 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15
+    _t72 = _t44*_t71
+    _t73 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25
+    _t74 = _t56*_t73
+    _t75 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24
+    _t76 = _t57*_t75
+    _t77 = _t15*_t44 + _t16*_t43
+    _t78 = -0.2*radius_cart2_right
+    _t79 = -0.6*radius_cart2_right
+    _t80 = _t19*(_t45*_t78 + _t77*_t79)
+    _t81 = J_theta_cart2_left*_t80
+    _t82 = 0.2*radius_cart2_left
+    _t83 = -0.6*radius_cart2_left
+    _t84 = _t19*(_t45*_t82 + _t77*_t83)
+    _t85 = J_theta_cart2_right*_t84
+    _t86 = _t24*_t57 + _t25*_t56
+    _t87 = -0.2*radius_cart3_right
+    _t88 = -0.6*radius_cart3_right
+    _t89 = _t28*(_t58*_t87 + _t86*_t88)
+    _t90 = J_theta_cart3_left*_t89
+    _t91 = 0.2*radius_cart3_left
+    _t92 = -0.6*radius_cart3_left
+    _t93 = _t28*(_t58*_t91 + _t86*_t92)
+    _t94 = J_theta_cart3_right*_t93
+    _t95 = -0.2*radius_cart_right
+    _t96 = -0.6*radius_cart_right
+    _t97 = _t10*(_t2*_t95 + _t3*_t96)
+    _t98 = J_theta_cart_left*_t97
+    _t99 = 0.2*radius_cart_left
+    _t100 = -0.6*radius_cart_left
+    _t101 = _t10*(_t100*_t3 + _t2*_t99)
+    _t102 = J_theta_cart_right*_t101
+    _t103 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2
+    _t104 = 0.3*_t103
+    _t105 = J_theta_cart*_t33
+    _t106 = J_theta_cart2*_t46
+    _t107 = _t47*_t69
+    _t108 = _t48*_t71
+    _t109 = _t107 + _t108
+    _t110 = J_theta_cart3*_t59
+    _t111 = _t60*_t73
+    _t112 = _t61*_t75
+    _t113 = _t111 + _t112
+    _t114 = _t38*_t38
+    _t115 = 0.3*_t114
+    _t116 = -_t32*_t38
+    _t117 = -_t116*_t4*_t5
+    _t118 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3
+    _t119 = _t103*_t117 + _t115*_t118
+    _t120 = _t39*_t39
+    _t121 = -_t2*_t42 - _t3*_t40
+    _t122 = _t115*_t2 - _t117*_t3 - _t121
+    _t123 = _t11*_t122
+    _t124 = _t115 + _t12*_t123 + _t120*_t13
+    _t125 = _t117 + _t12*_t120 - _t123*_t13
+    _t126 = _t124*_t69 + _t125*_t71
+    _t127 = _t51*_t51
+    _t128 = -_t15*_t55 - _t16*_t53
+    _t129 = _t120*_t13
+    _t130 = _t115 + _t12*_t123 + _t129
+    _t131 = _t12*_t120
+    _t132 = _t117 - _t123*_t13 + _t131
+    _t133 = -_t128 + _t130*_t15 - _t132*_t16
+    _t134 = _t133*_t20
+    _t135 = _t127*_t69 + _t134*_t71
+    _t136 = -_t127*_t71 + _t134*_t69
+    _t137 = _t124 + _t127*_t22 + _t134*_t21
+    _t138 = _t125 + _t127*_t21 - _t134*_t22
+    _t139 = _t137*_t73 + _t138*_t75
+    _t140 = _t64*_t64
+    _t141 = -_t24*_t68 - _t25*_t66
+    _t142 = _t127*_t22
+    _t143 = _t130 + _t134*_t21 + _t142
+    _t144 = _t127*_t21
+    _t145 = _t132 - _t134*_t22 + _t144
+    _t146 = -_t141 + _t143*_t24 - _t145*_t25
+    _t147 = _t146*_t29
+    _t148 = _t140*_t73 + _t147*_t75
+    _t149 = -_t140*_t75 + _t147*_t73
+    _t150 = 0.3*_t2
+    _t151 = 0.207*_t6
+    _t152 = -0.207*_t7
+    _t153 = _t10*(-_t100*_t150 - _t34*_t99)
+    _t154 = _t10*(-_t150*_t96 - _t34*_t95)
+    _t155 = _t15*_t48 + _t16*_t47
+    _t156 = _t19*(_t155*_t83 + _t49*_t82)
+    _t157 = _t19*(_t155*_t79 + _t49*_t78)
+    _t158 = _t24*_t61 + _t25*_t60
+    _t159 = _t28*(_t158*_t92 + _t62*_t91)
+    _t160 = _t28*(_t158*_t88 + _t62*_t87)
+    _t161 = _t151*_t38 + _t32*_t6
+    _t162 = _t152*_t38 + _t32*_t7
+    _t163 = _t101*_t32 + _t153*_t38
+    _t164 = _t154*_t38 + _t32*_t97
+    _t165 = _t156*_t38 + _t32*_t84
+    _t166 = _t157*_t38 + _t32*_t80
+    _t167 = _t159*_t38 + _t32*_t93
+    _t168 = _t160*_t38 + _t32*_t89
+    _t169 = _t2*_t40 - _t3*_t42
+    _t170 = _t115*_t3 + _t117*_t2 - _t169
+    _t171 = _t10*(_t100*_t170 + _t122*_t99)
+    _t172 = _t10*(_t122*_t95 + _t170*_t96)
+    _t173 = _t15*_t53 - _t16*_t55
+    _t174 = _t130*_t16 + _t132*_t15 - _t173
+    _t175 = _t19*(_t133*_t82 + _t174*_t83)
+    _t176 = _t19*(_t133*_t78 + _t174*_t79)
+    _t177 = _t24*_t66 - _t25*_t68
+    _t178 = _t143*_t25 + _t145*_t24 - _t177
+    _t179 = _t28*(_t146*_t91 + _t178*_t92)
+    _t180 = _t28*(_t146*_t87 + _t178*_t88)
+    _t181 = J_theta_cart2_left*_t80*_t80 + J_theta_cart2_right*_t84*_t84 + J_theta_cart3_left*_t89*_t89 + J_theta_cart3_right*_t93*_t93 + J_theta_cart_left*_t97*_t97 + J_theta_cart_right*_t101*_t101 + J_theta_left*_t7*_t7 + J_theta_right*_t6*_t6 + J_x_tractor
+    _t182 = J_theta_cart*_t33*_t33 + 2.0*_t118*_t33 + _t181
+    _t183 = J_theta_cart2*_t46*_t46 + _t182 + _t46*_t70 + _t46*_t72 + _t46*(_t70 + _t72)
+    _t184 = J_theta_cart3*_t59*_t59 + _t183 + _t59*_t74 + _t59*_t76 + _t59*(_t74 + _t76)
+    _t185 = J_theta_left*_t152*_t7 + J_theta_right*_t151*_t6 + _t102*_t153 + _t154*_t98 + _t156*_t85 + _t157*_t81 + _t159*_t94 + _t160*_t90
+    _t186 = K_theta_tractor_x_tractor_2 + _t185
+    _t187 = -_t104*_t33 + _t105*_t35 + _t118*_t35 + _t186
+    _t188 = _t106*_t50 + _t109*_t46 + _t187 + _t50*_t70 + _t50*_t72
+    _t189 = _t110*_t63 + _t113*_t59 + _t188 + _t63*_t74 + _t63*_t76
+    _t190 = J_theta_cart2_left*_t157*_t157 + J_theta_cart2_right*_t156*_t156 + J_theta_cart3_left*_t160*_t160 + J_theta_cart3_right*_t159*_t159 + J_theta_cart_left*_t154*_t154 + J_theta_cart_right*_t153*_t153 + J_theta_left*_t152*_t152 + J_theta_right*_t151*_t151
+    _t191 = J_theta_tractor + _t190
+    _t192 = J_theta_cart*_t35*_t35 - 0.6*_t103*_t35 + _t191
+    _t193 = J_theta_cart2*_t50*_t50 + _t107*_t50 + _t108*_t50 + _t109*_t50 + _t192
+    _t194 = J_theta_cart3*_t63*_t63 + _t111*_t63 + _t112*_t63 + _t113*_t63 + _t193
+    _t195 = _t102*_t171 + _t172*_t98 + _t175*_t85 + _t176*_t81 + _t179*_t94 + _t180*_t90
+    _t196 = K_theta_tractor_x_tractor*_t114 + _t195
+    _t197 = -_t103*_t120 + _t105*_t123 + _t118*_t123 + _t119*_t33 + _t196
+    _t198 = _t106*_t134 + _t126*_t46 + _t135*_t44 + _t136*_t43 + _t197
+    _t199 = _t110*_t147 + _t139*_t59 + _t148*_t57 + _t149*_t56 + _t198
+    _t200 = J_theta_cart2_left*_t157*_t176 + J_theta_cart2_right*_t156*_t175 + J_theta_cart3_left*_t160*_t180 + J_theta_cart3_right*_t159*_t179 + J_theta_cart_left*_t154*_t172 + J_theta_cart_right*_t153*_t171
+    _t201 = -K_theta_tractor_x_tractor*_t117 + _t200
+    _t202 = J_theta_cart*_t123*_t35 - _t104*_t123 - 0.3*_t118*_t120 + _t119*_t35 + _t201
+    _t203 = J_theta_cart2*_t134*_t50 + _t126*_t50 + _t135*_t48 + _t136*_t47 + _t202
+    _t204 = J_theta_cart3*_t147*_t63 + _t139*_t63 + _t148*_t61 + _t149*_t60 + _t203
+    _t205 = -_t199 + _t6*tau_right + _t7*tau_left
+    _t206 = _t151*tau_right + _t152*tau_left - _t204
+    _t207 = _t184*_t194 - _t189*_t189
+    _t208 = 1.0/_t207
+    _t209 = _t208*(-_t189*_t206 + _t194*_t205)
+    _t210 = _t208*(_t184*_t206 - _t189*_t205)
+    _t211 = _t151*_t210 + _t209*_t6
+    _t212 = _t152*_t210 + _t209*_t7
+    _t213 = _t32*math.cos(theta_tractor)
+    _t214 = _t32*math.sin(theta_tractor)
     xdot = np.array([
-        _t220,
-        _t221,
+        _t213,
+        _t214,
         _t38,
         _t39,
         _t51,
         _t64,
-        _t100,
-        _t101,
-        _t102,
-        _t103,
-        _t104,
-        _t105,
-        _t106,
-        _t107,
-        _t218,
-        _t219,
+        _t161,
+        _t162,
+        _t163,
+        _t164,
+        _t165,
+        _t166,
+        _t167,
+        _t168,
+        _t211,
+        _t212,
     ])
     return xdot
 

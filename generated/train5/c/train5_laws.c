@@ -31,7 +31,7 @@ void train5_tdroc_weighted_gain(const train5_real_t *minv_norm, const train5_rea
 }
 
 /* train5_minimal_tde: documented in train5_laws.h.
-   operations after CSE: 181 add, 350 mul, 7 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 177 add, 373 mul, 7 div, 10 sin/cos, 0 sqrt */
 void train5_minimal_tde(const train5_params_t *p, const train5_real_t *q_prev,
     const train5_real_t *u_prev, const train5_real_t *qdot_now, const train5_real_t *qdot_then,
     const train5_real_t *span, train5_real_t *H1hat)
@@ -101,227 +101,219 @@ void train5_minimal_tde(const train5_params_t *p, const train5_real_t *q_prev,
     const train5_real_t _t44 = -TRAIN5_LIT(0.6)*_t8;
     const train5_real_t _t45 = TRAIN5_LIT(1.0)/_t44;
     const train5_real_t _t46 = _t45*_t8;
-    const train5_real_t span_1 = span[0];
-    const train5_real_t _t47 = TRAIN5_LIT(1.0)/span_1;
-    const train5_real_t qd_now0 = qdot_now[0];
-    const train5_real_t qd_then0 = qdot_then[0];
-    const train5_real_t _t48 = _t47*(qd_now0 - qd_then0);
-    const train5_real_t qd_now1 = qdot_now[1];
-    const train5_real_t qd_then1 = qdot_then[1];
-    const train5_real_t _t49 = _t47*(qd_now1 - qd_then1);
-    const train5_real_t _t50 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t51 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t52 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t53 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t54 = TRAIN5_LIT(0.2)*radius_cart_left;
-    const train5_real_t _t55 = -TRAIN5_LIT(0.6)*radius_cart_left;
-    const train5_real_t _t56 = -TRAIN5_LIT(0.2)*radius_cart_right;
-    const train5_real_t _t57 = -TRAIN5_LIT(0.6)*radius_cart_right;
-    const train5_real_t _t58 = TRAIN5_LIT(0.2)*radius_cart2_left;
-    const train5_real_t _t59 = -TRAIN5_LIT(0.6)*radius_cart2_left;
-    const train5_real_t _t60 = -TRAIN5_LIT(0.2)*radius_cart2_right;
-    const train5_real_t _t61 = -TRAIN5_LIT(0.6)*radius_cart2_right;
-    const train5_real_t _t62 = TRAIN5_LIT(0.2)*radius_cart3_left;
-    const train5_real_t _t63 = -TRAIN5_LIT(0.6)*radius_cart3_left;
-    const train5_real_t _t64 = -TRAIN5_LIT(0.2)*radius_cart3_right;
-    const train5_real_t _t65 = -TRAIN5_LIT(0.6)*radius_cart3_right;
-    const train5_real_t _t66 = TRAIN5_LIT(0.2)*radius_cart4_left;
-    const train5_real_t _t67 = -TRAIN5_LIT(0.6)*radius_cart4_left;
-    const train5_real_t _t68 = -TRAIN5_LIT(0.2)*radius_cart4_right;
-    const train5_real_t _t69 = -TRAIN5_LIT(0.6)*radius_cart4_right;
-    const train5_real_t _t70 = TRAIN5_LIT(0.2)*radius_cart5_left;
-    const train5_real_t _t71 = -TRAIN5_LIT(0.6)*radius_cart5_left;
-    const train5_real_t _t72 = -TRAIN5_LIT(0.2)*radius_cart5_right;
-    const train5_real_t _t73 = -TRAIN5_LIT(0.6)*radius_cart5_right;
-    const train5_real_t _t74 = TRAIN5_LIT(0.207)*_t2;
-    const train5_real_t _t75 = -TRAIN5_LIT(0.207)*_t3;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t76 = J_theta_right*_t2;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t77 = J_theta_left*_t3;
-    const train5_real_t _t78 = J_theta_right*_t74;
-    const train5_real_t _t79 = J_theta_left*_t75;
-    const train5_real_t _t80 = -TRAIN5_LIT(0.3)*_t11;
-    const train5_real_t _t81 = -TRAIN5_LIT(0.3)*_t10;
-    const train5_real_t _t82 = -_t10*_t14;
-    const train5_real_t _t83 = _t13*(-_t10*_t54 + _t11*_t55);
-    const train5_real_t _t84 = _t13*(-_t10*_t56 + _t11*_t57);
-    const train5_real_t _t85 = -_t15*_t82 + TRAIN5_LIT(1.0);
-    const train5_real_t _t86 = -_t16*_t82;
-    const train5_real_t _t87 = -_t18*_t85 - _t19*_t86;
-    const train5_real_t _t88 = -_t18*_t86 + _t19*_t85;
-    const train5_real_t _t89 = _t22*_t87;
-    const train5_real_t _t90 = _t21*(_t58*_t87 + _t59*_t88);
-    const train5_real_t _t91 = _t21*(_t60*_t87 + _t61*_t88);
-    const train5_real_t _t92 = -_t23*_t89 + _t85;
-    const train5_real_t _t93 = -_t24*_t89 + _t86;
-    const train5_real_t _t94 = -_t26*_t92 - _t27*_t93;
-    const train5_real_t _t95 = -_t26*_t93 + _t27*_t92;
-    const train5_real_t _t96 = _t30*_t94;
-    const train5_real_t _t97 = _t29*(_t62*_t94 + _t63*_t95);
-    const train5_real_t _t98 = _t29*(_t64*_t94 + _t65*_t95);
-    const train5_real_t _t99 = -_t31*_t96 + _t92;
-    const train5_real_t _t100 = -_t32*_t96 + _t93;
-    const train5_real_t _t101 = -_t100*_t35 - _t34*_t99;
-    const train5_real_t _t102 = -_t100*_t34 + _t35*_t99;
-    const train5_real_t _t103 = _t101*_t38;
-    const train5_real_t _t104 = _t37*(_t101*_t66 + _t102*_t67);
-    const train5_real_t _t105 = _t37*(_t101*_t68 + _t102*_t69);
-    const train5_real_t _t106 = -_t103*_t39 + _t99;
-    const train5_real_t _t107 = _t100 - _t103*_t40;
-    const train5_real_t _t108 = -_t106*_t42 - _t107*_t43;
-    const train5_real_t _t109 = _t106*_t43 - _t107*_t42;
-    const train5_real_t _t110 = _t108*_t46;
-    const train5_real_t _t111 = _t45*(_t108*_t70 + _t109*_t71);
-    const train5_real_t _t112 = _t45*(_t108*_t72 + _t109*_t73);
-    const train5_real_t _t113 = -_t14*_t80;
-    const train5_real_t _t114 = _t13*(-_t54*_t80 - _t55*_t81);
-    const train5_real_t _t115 = _t13*(-_t56*_t80 - _t57*_t81);
-    const train5_real_t _t116 = -_t113*_t15;
-    const train5_real_t _t117 = -_t113*_t16 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
-    const train5_real_t _t118 = -_t116*_t18 - _t117*_t19;
-    const train5_real_t _t119 = _t116*_t19 - _t117*_t18;
-    const train5_real_t _t120 = _t118*_t22;
-    const train5_real_t _t121 = _t21*(_t118*_t58 + _t119*_t59);
-    const train5_real_t _t122 = _t21*(_t118*_t60 + _t119*_t61);
-    const train5_real_t _t123 = _t116 - _t120*_t23;
-    const train5_real_t _t124 = _t117 - _t120*_t24;
-    const train5_real_t _t125 = -_t123*_t26 - _t124*_t27;
-    const train5_real_t _t126 = _t123*_t27 - _t124*_t26;
-    const train5_real_t _t127 = _t125*_t30;
-    const train5_real_t _t128 = _t29*(_t125*_t62 + _t126*_t63);
-    const train5_real_t _t129 = _t29*(_t125*_t64 + _t126*_t65);
-    const train5_real_t _t130 = _t123 - _t127*_t31;
-    const train5_real_t _t131 = _t124 - _t127*_t32;
-    const train5_real_t _t132 = -_t130*_t34 - _t131*_t35;
-    const train5_real_t _t133 = _t130*_t35 - _t131*_t34;
-    const train5_real_t _t134 = _t132*_t38;
-    const train5_real_t _t135 = _t37*(_t132*_t66 + _t133*_t67);
-    const train5_real_t _t136 = _t37*(_t132*_t68 + _t133*_t69);
-    const train5_real_t _t137 = _t130 - _t134*_t39;
-    const train5_real_t _t138 = _t131 - _t134*_t40;
-    const train5_real_t _t139 = -_t137*_t42 - _t138*_t43;
-    const train5_real_t _t140 = _t137*_t43 - _t138*_t42;
-    const train5_real_t _t141 = _t139*_t46;
-    const train5_real_t _t142 = _t45*(_t139*_t70 + _t140*_t71);
-    const train5_real_t _t143 = _t45*(_t139*_t72 + _t140*_t73);
-    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t144 = -K_theta_cart_x_tractor*_t10 + K_theta_cart_x_tractor_2*_t11;
-    const train5_real_t _t145 = -K_theta_cart_x_tractor*_t11 - K_theta_cart_x_tractor_2*_t10;
     const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t146 = -K_theta_cart2_x_tractor*_t18 + K_theta_cart2_x_tractor_2*_t19;
-    const train5_real_t _t147 = -K_theta_cart2_x_tractor*_t19 - K_theta_cart2_x_tractor_2*_t18;
+    const train5_real_t _t47 = -K_theta_cart2_x_tractor*_t18 + K_theta_cart2_x_tractor_2*_t19;
+    const train5_real_t _t48 = -_t10*_t14;
+    const train5_real_t _t49 = -_t15*_t48 + TRAIN5_LIT(1.0);
+    const train5_real_t _t50 = _t47*_t49;
+    const train5_real_t _t51 = -K_theta_cart2_x_tractor*_t19 - K_theta_cart2_x_tractor_2*_t18;
+    const train5_real_t _t52 = -_t16*_t48;
+    const train5_real_t _t53 = _t51*_t52;
     const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
     const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t148 = -K_theta_cart3_x_tractor*_t26 + K_theta_cart3_x_tractor_2*_t27;
-    const train5_real_t _t149 = -K_theta_cart3_x_tractor*_t27 - K_theta_cart3_x_tractor_2*_t26;
+    const train5_real_t _t54 = -K_theta_cart3_x_tractor*_t26 + K_theta_cart3_x_tractor_2*_t27;
+    const train5_real_t _t55 = -_t18*_t49 - _t19*_t52;
+    const train5_real_t _t56 = _t22*_t55;
+    const train5_real_t _t57 = -_t23*_t56 + _t49;
+    const train5_real_t _t58 = _t54*_t57;
+    const train5_real_t _t59 = -K_theta_cart3_x_tractor*_t27 - K_theta_cart3_x_tractor_2*_t26;
+    const train5_real_t _t60 = -_t24*_t56 + _t52;
+    const train5_real_t _t61 = _t59*_t60;
     const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
     const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t150 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t35;
-    const train5_real_t _t151 = -K_theta_cart4_x_tractor*_t35 - K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t62 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t35;
+    const train5_real_t _t63 = -_t26*_t57 - _t27*_t60;
+    const train5_real_t _t64 = _t30*_t63;
+    const train5_real_t _t65 = -_t31*_t64 + _t57;
+    const train5_real_t _t66 = _t62*_t65;
+    const train5_real_t _t67 = -K_theta_cart4_x_tractor*_t35 - K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t68 = -_t32*_t64 + _t60;
+    const train5_real_t _t69 = _t67*_t68;
     const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
     const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t152 = -K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t153 = -K_theta_cart5_x_tractor*_t43 - K_theta_cart5_x_tractor_2*_t42;
-    const train5_real_t _t154 = _t110*_t152;
-    const train5_real_t _t155 = _t110*_t153;
-    const train5_real_t _t156 = _t103*_t150 + _t154;
-    const train5_real_t _t157 = _t103*_t151 + _t155;
-    const train5_real_t _t158 = _t148*_t96 + _t156;
-    const train5_real_t _t159 = _t149*_t96 + _t157;
-    const train5_real_t _t160 = _t146*_t89 + _t158;
-    const train5_real_t _t161 = _t147*_t89 + _t159;
-    const train5_real_t _t162 = _t144*_t82 + _t160;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t163 = J_theta_cart_right*_t83;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t164 = J_theta_cart_left*_t84;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t165 = J_theta_cart2_right*_t90;
+    const train5_real_t _t70 = -K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t71 = -_t34*_t65 - _t35*_t68;
+    const train5_real_t _t72 = _t38*_t71;
+    const train5_real_t _t73 = -_t39*_t72 + _t65;
+    const train5_real_t _t74 = _t70*_t73;
+    const train5_real_t _t75 = -K_theta_cart5_x_tractor*_t43 - K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t76 = -_t40*_t72 + _t68;
+    const train5_real_t _t77 = _t75*_t76;
+    const train5_real_t _t78 = -TRAIN5_LIT(0.3)*_t11;
+    const train5_real_t _t79 = -_t14*_t78;
+    const train5_real_t _t80 = -_t15*_t79;
+    const train5_real_t _t81 = _t47*_t80;
+    const train5_real_t _t82 = -_t16*_t79 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t83 = _t51*_t82;
+    const train5_real_t _t84 = _t81 + _t83;
+    const train5_real_t _t85 = -_t18*_t80 - _t19*_t82;
+    const train5_real_t _t86 = _t22*_t85;
+    const train5_real_t _t87 = -_t23*_t86 + _t80;
+    const train5_real_t _t88 = _t54*_t87;
+    const train5_real_t _t89 = -_t24*_t86 + _t82;
+    const train5_real_t _t90 = _t59*_t89;
+    const train5_real_t _t91 = _t88 + _t90;
+    const train5_real_t _t92 = -_t26*_t87 - _t27*_t89;
+    const train5_real_t _t93 = _t30*_t92;
+    const train5_real_t _t94 = -_t31*_t93 + _t87;
+    const train5_real_t _t95 = _t62*_t94;
+    const train5_real_t _t96 = -_t32*_t93 + _t89;
+    const train5_real_t _t97 = _t67*_t96;
+    const train5_real_t _t98 = _t95 + _t97;
+    const train5_real_t _t99 = -_t34*_t94 - _t35*_t96;
+    const train5_real_t _t100 = _t38*_t99;
+    const train5_real_t _t101 = -_t100*_t39 + _t94;
+    const train5_real_t _t102 = _t101*_t70;
+    const train5_real_t _t103 = -_t100*_t40 + _t96;
+    const train5_real_t _t104 = _t103*_t75;
+    const train5_real_t _t105 = _t102 + _t104;
+    const train5_real_t span_1 = span[0];
+    const train5_real_t _t106 = TRAIN5_LIT(1.0)/span_1;
+    const train5_real_t qd_now0 = qdot_now[0];
+    const train5_real_t qd_then0 = qdot_then[0];
+    const train5_real_t _t107 = _t106*(qd_now0 - qd_then0);
+    const train5_real_t qd_now1 = qdot_now[1];
+    const train5_real_t qd_then1 = qdot_then[1];
+    const train5_real_t _t108 = _t106*(qd_now1 - qd_then1);
+    const train5_real_t _t109 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t110 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t111 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t112 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t113 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t114 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t115 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t116 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t117 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t118 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t119 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t120 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t121 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t123 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t124 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t125 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t126 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t127 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t128 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t129 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t130 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t131 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t132 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t133 = TRAIN5_LIT(0.207)*_t2;
+    const train5_real_t _t134 = -TRAIN5_LIT(0.207)*_t3;
+    const train5_real_t _t135 = -TRAIN5_LIT(0.3)*_t10;
+    const train5_real_t _t136 = _t13*(-_t10*_t113 + _t11*_t114);
+    const train5_real_t _t137 = _t13*(-_t10*_t115 + _t11*_t116);
+    const train5_real_t _t138 = -_t18*_t52 + _t19*_t49;
+    const train5_real_t _t139 = _t21*(_t117*_t55 + _t118*_t138);
+    const train5_real_t _t140 = _t21*(_t119*_t55 + _t120*_t138);
+    const train5_real_t _t141 = -_t26*_t60 + _t27*_t57;
+    const train5_real_t _t142 = _t29*(_t121*_t63 + _t122*_t141);
+    const train5_real_t _t143 = _t29*(_t123*_t63 + _t124*_t141);
+    const train5_real_t _t144 = -_t34*_t68 + _t35*_t65;
+    const train5_real_t _t145 = _t37*(_t125*_t71 + _t126*_t144);
+    const train5_real_t _t146 = _t37*(_t127*_t71 + _t128*_t144);
+    const train5_real_t _t147 = -_t42*_t73 - _t43*_t76;
+    const train5_real_t _t148 = -_t42*_t76 + _t43*_t73;
+    const train5_real_t _t149 = _t147*_t46;
+    const train5_real_t _t150 = _t45*(_t129*_t147 + _t130*_t148);
+    const train5_real_t _t151 = _t45*(_t131*_t147 + _t132*_t148);
+    const train5_real_t _t152 = _t13*(-_t113*_t78 - _t114*_t135);
+    const train5_real_t _t153 = _t13*(-_t115*_t78 - _t116*_t135);
+    const train5_real_t _t154 = -_t18*_t82 + _t19*_t80;
+    const train5_real_t _t155 = _t21*(_t117*_t85 + _t118*_t154);
+    const train5_real_t _t156 = _t21*(_t119*_t85 + _t120*_t154);
+    const train5_real_t _t157 = -_t26*_t89 + _t27*_t87;
+    const train5_real_t _t158 = _t29*(_t121*_t92 + _t122*_t157);
+    const train5_real_t _t159 = _t29*(_t123*_t92 + _t124*_t157);
+    const train5_real_t _t160 = -_t34*_t96 + _t35*_t94;
+    const train5_real_t _t161 = _t37*(_t125*_t99 + _t126*_t160);
+    const train5_real_t _t162 = _t37*(_t127*_t99 + _t128*_t160);
+    const train5_real_t _t163 = -_t101*_t42 - _t103*_t43;
+    const train5_real_t _t164 = _t101*_t43 - _t103*_t42;
+    const train5_real_t _t165 = _t163*_t46;
+    const train5_real_t _t166 = _t45*(_t129*_t163 + _t130*_t164);
+    const train5_real_t _t167 = _t45*(_t131*_t163 + _t132*_t164);
+    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const train5_real_t _t168 = -K_theta_cart_x_tractor*_t10 + K_theta_cart_x_tractor_2*_t11;
+    const train5_real_t _t169 = -K_theta_cart_x_tractor*_t11 - K_theta_cart_x_tractor_2*_t10;
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t166 = J_theta_cart2_left*_t91;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t167 = J_theta_cart3_right*_t97;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t168 = J_theta_cart3_left*_t98;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t169 = J_theta_cart4_right*_t104;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t170 = J_theta_cart4_left*_t105;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t171 = J_theta_cart5_right*_t111;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t172 = J_theta_cart5_left*_t112;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
     const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t173 = J_x_tractor + _t162;
+    const train5_real_t _t170 = J_theta_cart2_left*_t140*_t140 + J_theta_cart2_right*_t139*_t139
+            + J_theta_cart3_left*_t143*_t143 + J_theta_cart3_right*_t142*_t142
+            + J_theta_cart4_left*_t146*_t146 + J_theta_cart4_right*_t145*_t145
+            + J_theta_cart5_left*_t151*_t151 + J_theta_cart5_right*_t150*_t150
+            + J_theta_cart_left*_t137*_t137 + J_theta_cart_right*_t136*_t136 + J_theta_left*_t3*_t3
+            + J_theta_right*_t2*_t2 + J_x_tractor;
     const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t174 = J_theta_cart*_t82 + _t144 - _t15*_t160 - _t16*_t161;
+    const train5_real_t _t171 = J_theta_cart*_t48*_t48 + TRAIN5_LIT(2.0)*_t168*_t48 + _t170;
     const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t175 = J_theta_cart2*_t89 + _t146*_t85 + _t147*_t86 - _t158*_t23
-            - _t159*_t24;
+    const train5_real_t _t172 = J_theta_cart2*_t56*_t56 + _t171 + _t50*_t56 + _t53*_t56
+            + _t56*(_t50 + _t53);
     const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t176 = J_theta_cart3*_t96 + _t148*_t92 + _t149*_t93 - _t156*_t31
-            - _t157*_t32;
+    const train5_real_t _t173 = J_theta_cart3*_t64*_t64 + _t172 + _t58*_t64 + _t61*_t64
+            + _t64*(_t58 + _t61);
     const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t177 = J_theta_cart4*_t103 + _t100*_t151 + _t150*_t99 - _t154*_t39
-            - _t155*_t40;
+    const train5_real_t _t174 = J_theta_cart4*_t72*_t72 + _t173 + _t66*_t72 + _t69*_t72
+            + _t72*(_t66 + _t69);
     const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t178 = J_theta_cart5*_t110 + _t106*_t152 + _t107*_t153;
-    const train5_real_t _t179 = _t141*_t152;
-    const train5_real_t _t180 = _t141*_t153;
-    const train5_real_t _t181 = _t134*_t150 + _t179;
-    const train5_real_t _t182 = _t134*_t151 + _t180;
-    const train5_real_t _t183 = _t127*_t148 + _t181;
-    const train5_real_t _t184 = _t127*_t149 + _t182;
-    const train5_real_t _t185 = _t120*_t146 + _t183;
-    const train5_real_t _t186 = _t120*_t147 + _t184;
-    const train5_real_t _t187 = _t113*_t144 + _t185;
-    const train5_real_t _t188 = _t113*_t145 + _t186;
+    const train5_real_t _t175 = J_theta_cart5*_t149*_t149 + _t149*_t74 + _t149*_t77
+            + _t149*(_t74 + _t77) + _t174;
+    const train5_real_t _t176 = J_theta_cart2_left*_t140*_t156 + J_theta_cart2_right*_t139*_t155
+            + J_theta_cart3_left*_t143*_t159 + J_theta_cart3_right*_t142*_t158
+            + J_theta_cart4_left*_t146*_t162 + J_theta_cart4_right*_t145*_t161
+            + J_theta_cart5_left*_t151*_t167 + J_theta_cart5_right*_t150*_t166
+            + J_theta_cart_left*_t137*_t153 + J_theta_cart_right*_t136*_t152
+            + J_theta_left*_t134*_t3 + J_theta_right*_t133*_t2;
     const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t189 = K_theta_tractor_x_tractor_2 + _t187;
-    const train5_real_t _t190 = J_theta_cart_right*_t114;
-    const train5_real_t _t191 = J_theta_cart_left*_t115;
-    const train5_real_t _t192 = J_theta_cart2_right*_t121;
-    const train5_real_t _t193 = J_theta_cart2_left*_t122;
-    const train5_real_t _t194 = J_theta_cart3_right*_t128;
-    const train5_real_t _t195 = J_theta_cart3_left*_t129;
-    const train5_real_t _t196 = J_theta_cart4_right*_t135;
-    const train5_real_t _t197 = J_theta_cart4_left*_t136;
-    const train5_real_t _t198 = J_theta_cart5_right*_t142;
-    const train5_real_t _t199 = J_theta_cart5_left*_t143;
+    const train5_real_t _t177 = K_theta_tractor_x_tractor_2 + _t176;
+    const train5_real_t _t178 = J_theta_cart*_t48*_t79 + _t168*_t79 - TRAIN5_LIT(0.3)*_t169*_t48
+            + _t177;
+    const train5_real_t _t179 = J_theta_cart2*_t56*_t86 + _t178 + _t50*_t86 + _t53*_t86 + _t56*_t84;
+    const train5_real_t _t180 = J_theta_cart3*_t64*_t93 + _t179 + _t58*_t93 + _t61*_t93 + _t64*_t91;
+    const train5_real_t _t181 = J_theta_cart4*_t100*_t72 + _t100*_t66 + _t100*_t69 + _t180
+            + _t72*_t98;
+    const train5_real_t _t182 = J_theta_cart5*_t149*_t165 + _t105*_t149 + _t165*_t74 + _t165*_t77
+            + _t181;
+    const train5_real_t _t183 = J_theta_cart2_left*_t156*_t156 + J_theta_cart2_right*_t155*_t155
+            + J_theta_cart3_left*_t159*_t159 + J_theta_cart3_right*_t158*_t158
+            + J_theta_cart4_left*_t162*_t162 + J_theta_cart4_right*_t161*_t161
+            + J_theta_cart5_left*_t167*_t167 + J_theta_cart5_right*_t166*_t166
+            + J_theta_cart_left*_t153*_t153 + J_theta_cart_right*_t152*_t152
+            + J_theta_left*_t134*_t134 + J_theta_right*_t133*_t133;
     const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t200 = J_theta_tractor - TRAIN5_LIT(0.3)*_t188;
-    const train5_real_t _t201 = J_theta_cart*_t113 - TRAIN5_LIT(0.3)*_t145 - _t15*_t185
-            - _t16*_t186;
-    const train5_real_t _t202 = J_theta_cart2*_t120 + _t116*_t146 + _t117*_t147 - _t183*_t23
-            - _t184*_t24;
-    const train5_real_t _t203 = J_theta_cart3*_t127 + _t123*_t148 + _t124*_t149 - _t181*_t31
-            - _t182*_t32;
-    const train5_real_t _t204 = J_theta_cart4*_t134 + _t130*_t150 + _t131*_t151 - _t179*_t39
-            - _t180*_t40;
-    const train5_real_t _t205 = J_theta_cart5*_t141 + _t137*_t152 + _t138*_t153;
-    const train5_real_t _t206 = _t103*_t177 + _t104*_t169 + _t105*_t170 + _t110*_t178 + _t111*_t171
-            + _t112*_t172 + _t163*_t83 + _t164*_t84 + _t165*_t90 + _t166*_t91 + _t167*_t97
-            + _t168*_t98 + _t173 + _t174*_t82 + _t175*_t89 + _t176*_t96 + _t2*_t76 + _t3*_t77;
-    const train5_real_t _t207 = _t103*_t204 + _t104*_t196 + _t105*_t197 + _t110*_t205 + _t111*_t198
-            + _t112*_t199 + _t189 + _t190*_t83 + _t191*_t84 + _t192*_t90 + _t193*_t91 + _t194*_t97
-            + _t195*_t98 + _t2*_t78 + _t201*_t82 + _t202*_t89 + _t203*_t96 + _t3*_t79;
-    const train5_real_t _t208 = _t113*_t201 + _t114*_t190 + _t115*_t191 + _t120*_t202 + _t121*_t192
-            + _t122*_t193 + _t127*_t203 + _t128*_t194 + _t129*_t195 + _t134*_t204 + _t135*_t196
-            + _t136*_t197 + _t141*_t205 + _t142*_t198 + _t143*_t199 + _t200 + _t74*_t78 + _t75*_t79;
-    const train5_real_t _t209 = _t206*_t52 + _t207*_t50;
-    const train5_real_t _t210 = _t206*_t53 + _t207*_t51;
-    const train5_real_t _t211 = _t207*_t52 + _t208*_t50;
-    const train5_real_t _t212 = _t207*_t53 + _t208*_t51;
-    const train5_real_t _t213 = _t209*_t52 + _t211*_t50;
-    const train5_real_t _t214 = _t210*_t52 + _t212*_t50;
-    const train5_real_t _t215 = _t210*_t53 + _t212*_t51;
+    const train5_real_t _t184 = J_theta_tractor + _t183;
+    const train5_real_t _t185 = J_theta_cart*_t79*_t79 - TRAIN5_LIT(0.6)*_t169*_t79 + _t184;
+    const train5_real_t _t186 = J_theta_cart2*_t86*_t86 + _t185 + _t81*_t86 + _t83*_t86 + _t84*_t86;
+    const train5_real_t _t187 = J_theta_cart3*_t93*_t93 + _t186 + _t88*_t93 + _t90*_t93 + _t91*_t93;
+    const train5_real_t _t188 = J_theta_cart4*_t100*_t100 + _t100*_t95 + _t100*_t97 + _t100*_t98
+            + _t187;
+    const train5_real_t _t189 = J_theta_cart5*_t165*_t165 + _t102*_t165 + _t104*_t165 + _t105*_t165
+            + _t188;
+    const train5_real_t _t190 = _t109*_t182 + _t111*_t175;
+    const train5_real_t _t191 = _t110*_t182 + _t112*_t175;
+    const train5_real_t _t192 = _t109*_t189 + _t111*_t182;
+    const train5_real_t _t193 = _t110*_t189 + _t112*_t182;
+    const train5_real_t _t194 = _t109*_t192 + _t111*_t190;
+    const train5_real_t _t195 = _t109*_t193 + _t111*_t191;
+    const train5_real_t _t196 = _t110*_t193 + _t112*_t191;
     const train5_real_t up0 = u_prev[0];
     const train5_real_t up1 = u_prev[1];
-    H1hat[0] = -_t213*_t48 - _t214*_t49 + up0;
-    H1hat[1] = -_t214*_t48 - _t215*_t49 + up1;
+    H1hat[0] = -_t107*_t194 - _t108*_t195 + up0;
+    H1hat[1] = -_t107*_t195 - _t108*_t196 + up1;
 }
 
 /* train5_minimal_tde_mhat: documented in train5_laws.h.
@@ -336,7 +328,7 @@ void train5_minimal_tde_mhat(const train5_params_t *p, const train5_real_t *mhat
 }
 
 /* train5_minimal_minv_norm: documented in train5_laws.h.
-   operations after CSE: 178 add, 350 mul, 7 div, 10 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 174 add, 373 mul, 7 div, 10 sin/cos, 1 sqrt, 1 fabs */
 void train5_minimal_minv_norm(const train5_params_t *p, const train5_real_t *q, train5_real_t *norm)
 {
     const train5_real_t theta_tractor = q[2];
@@ -405,220 +397,210 @@ void train5_minimal_minv_norm(const train5_params_t *p, const train5_real_t *q, 
     const train5_real_t _t45 = -TRAIN5_LIT(0.6)*_t44;
     const train5_real_t _t46 = TRAIN5_LIT(1.0)/_t45;
     const train5_real_t _t47 = _t44*_t46;
-    const train5_real_t _t48 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t49 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t50 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t51 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t52 = _t11*_t2;
-    const train5_real_t _t53 = TRAIN5_LIT(0.2)*radius_cart_left;
-    const train5_real_t _t54 = -TRAIN5_LIT(0.6)*radius_cart_left;
-    const train5_real_t _t55 = _t10*(_t2*_t53 + _t3*_t54);
-    const train5_real_t _t56 = -TRAIN5_LIT(0.2)*radius_cart_right;
-    const train5_real_t _t57 = -TRAIN5_LIT(0.6)*radius_cart_right;
-    const train5_real_t _t58 = _t10*(_t2*_t56 + _t3*_t57);
-    const train5_real_t _t59 = _t12*_t52 + TRAIN5_LIT(1.0);
-    const train5_real_t _t60 = -_t13*_t52;
-    const train5_real_t _t61 = _t15*_t59 - _t16*_t60;
-    const train5_real_t _t62 = _t20*_t61;
-    const train5_real_t _t63 = _t15*_t60 + _t16*_t59;
-    const train5_real_t _t64 = TRAIN5_LIT(0.2)*radius_cart2_left;
-    const train5_real_t _t65 = -TRAIN5_LIT(0.6)*radius_cart2_left;
-    const train5_real_t _t66 = _t19*(_t61*_t64 + _t63*_t65);
-    const train5_real_t _t67 = -TRAIN5_LIT(0.2)*radius_cart2_right;
-    const train5_real_t _t68 = -TRAIN5_LIT(0.6)*radius_cart2_right;
-    const train5_real_t _t69 = _t19*(_t61*_t67 + _t63*_t68);
-    const train5_real_t _t70 = _t21*_t62 + _t59;
-    const train5_real_t _t71 = -_t22*_t62 + _t60;
-    const train5_real_t _t72 = _t24*_t70 - _t25*_t71;
-    const train5_real_t _t73 = _t29*_t72;
-    const train5_real_t _t74 = _t24*_t71 + _t25*_t70;
-    const train5_real_t _t75 = TRAIN5_LIT(0.2)*radius_cart3_left;
-    const train5_real_t _t76 = -TRAIN5_LIT(0.6)*radius_cart3_left;
-    const train5_real_t _t77 = _t28*(_t72*_t75 + _t74*_t76);
-    const train5_real_t _t78 = -TRAIN5_LIT(0.2)*radius_cart3_right;
-    const train5_real_t _t79 = -TRAIN5_LIT(0.6)*radius_cart3_right;
-    const train5_real_t _t80 = _t28*(_t72*_t78 + _t74*_t79);
-    const train5_real_t _t81 = _t30*_t73 + _t70;
-    const train5_real_t _t82 = -_t31*_t73 + _t71;
-    const train5_real_t _t83 = _t33*_t81 - _t34*_t82;
-    const train5_real_t _t84 = _t38*_t83;
-    const train5_real_t _t85 = _t33*_t82 + _t34*_t81;
-    const train5_real_t _t86 = TRAIN5_LIT(0.2)*radius_cart4_left;
-    const train5_real_t _t87 = -TRAIN5_LIT(0.6)*radius_cart4_left;
-    const train5_real_t _t88 = _t37*(_t83*_t86 + _t85*_t87);
-    const train5_real_t _t89 = -TRAIN5_LIT(0.2)*radius_cart4_right;
-    const train5_real_t _t90 = -TRAIN5_LIT(0.6)*radius_cart4_right;
-    const train5_real_t _t91 = _t37*(_t83*_t89 + _t85*_t90);
-    const train5_real_t _t92 = _t39*_t84 + _t81;
-    const train5_real_t _t93 = -_t40*_t84 + _t82;
-    const train5_real_t _t94 = _t42*_t92 - _t43*_t93;
-    const train5_real_t _t95 = _t47*_t94;
-    const train5_real_t _t96 = _t42*_t93 + _t43*_t92;
-    const train5_real_t _t97 = TRAIN5_LIT(0.2)*radius_cart5_left;
-    const train5_real_t _t98 = -TRAIN5_LIT(0.6)*radius_cart5_left;
-    const train5_real_t _t99 = _t46*(_t94*_t97 + _t96*_t98);
-    const train5_real_t _t100 = -TRAIN5_LIT(0.2)*radius_cart5_right;
-    const train5_real_t _t101 = -TRAIN5_LIT(0.6)*radius_cart5_right;
-    const train5_real_t _t102 = _t46*(_t100*_t94 + _t101*_t96);
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t103 = J_theta_right*_t6;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t104 = J_theta_left*_t7;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t105 = J_theta_cart_right*_t55;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t106 = J_theta_cart_left*_t58;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t107 = J_theta_cart2_right*_t66;
-    const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t108 = J_theta_cart2_left*_t69;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t109 = J_theta_cart3_right*_t77;
-    const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t110 = J_theta_cart3_left*_t80;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t111 = J_theta_cart4_right*_t88;
-    const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t112 = J_theta_cart4_left*_t91;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t113 = J_theta_cart5_right*_t99;
-    const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t114 = J_theta_cart5_left*_t102;
-    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t115 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
     const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
     const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t116 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t48 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t49 = _t11*_t2;
+    const train5_real_t _t50 = _t12*_t49 + TRAIN5_LIT(1.0);
+    const train5_real_t _t51 = _t48*_t50;
+    const train5_real_t _t52 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t53 = -_t13*_t49;
+    const train5_real_t _t54 = _t52*_t53;
     const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
     const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t117 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t55 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t56 = _t15*_t50 - _t16*_t53;
+    const train5_real_t _t57 = _t20*_t56;
+    const train5_real_t _t58 = _t21*_t57 + _t50;
+    const train5_real_t _t59 = _t55*_t58;
+    const train5_real_t _t60 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t61 = -_t22*_t57 + _t53;
+    const train5_real_t _t62 = _t60*_t61;
     const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
     const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t118 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t63 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t64 = _t24*_t58 - _t25*_t61;
+    const train5_real_t _t65 = _t29*_t64;
+    const train5_real_t _t66 = _t30*_t65 + _t58;
+    const train5_real_t _t67 = _t63*_t66;
+    const train5_real_t _t68 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t69 = -_t31*_t65 + _t61;
+    const train5_real_t _t70 = _t68*_t69;
     const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
     const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t119 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t120 = _t119*_t95;
-    const train5_real_t _t121 = _t118*_t84 + _t120;
-    const train5_real_t _t122 = _t117*_t73 + _t121;
-    const train5_real_t _t123 = _t116*_t62 + _t122;
-    const train5_real_t _t124 = _t115*_t52 + _t123;
+    const train5_real_t _t71 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t72 = _t33*_t66 - _t34*_t69;
+    const train5_real_t _t73 = _t38*_t72;
+    const train5_real_t _t74 = _t39*_t73 + _t66;
+    const train5_real_t _t75 = _t71*_t74;
+    const train5_real_t _t76 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t77 = -_t40*_t73 + _t69;
+    const train5_real_t _t78 = _t76*_t77;
+    const train5_real_t _t79 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t80 = -_t11*_t79;
+    const train5_real_t _t81 = _t12*_t80;
+    const train5_real_t _t82 = _t48*_t81;
+    const train5_real_t _t83 = -_t13*_t80 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t84 = _t52*_t83;
+    const train5_real_t _t85 = _t82 + _t84;
+    const train5_real_t _t86 = _t15*_t81 - _t16*_t83;
+    const train5_real_t _t87 = _t20*_t86;
+    const train5_real_t _t88 = _t21*_t87 + _t81;
+    const train5_real_t _t89 = _t55*_t88;
+    const train5_real_t _t90 = -_t22*_t87 + _t83;
+    const train5_real_t _t91 = _t60*_t90;
+    const train5_real_t _t92 = _t89 + _t91;
+    const train5_real_t _t93 = _t24*_t88 - _t25*_t90;
+    const train5_real_t _t94 = _t29*_t93;
+    const train5_real_t _t95 = _t30*_t94 + _t88;
+    const train5_real_t _t96 = _t63*_t95;
+    const train5_real_t _t97 = -_t31*_t94 + _t90;
+    const train5_real_t _t98 = _t68*_t97;
+    const train5_real_t _t99 = _t96 + _t98;
+    const train5_real_t _t100 = _t33*_t95 - _t34*_t97;
+    const train5_real_t _t101 = _t100*_t38;
+    const train5_real_t _t102 = _t101*_t39 + _t95;
+    const train5_real_t _t103 = _t102*_t71;
+    const train5_real_t _t104 = -_t101*_t40 + _t97;
+    const train5_real_t _t105 = _t104*_t76;
+    const train5_real_t _t106 = _t103 + _t105;
+    const train5_real_t _t107 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t108 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t109 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t110 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t111 = _t42*_t74 - _t43*_t77;
+    const train5_real_t _t112 = _t111*_t47;
+    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const train5_real_t _t113 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t114 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t115 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t116 = _t10*(_t114*_t2 + _t115*_t3);
+    const train5_real_t _t117 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t118 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t119 = _t10*(_t117*_t2 + _t118*_t3);
+    const train5_real_t _t120 = _t15*_t53 + _t16*_t50;
+    const train5_real_t _t121 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t123 = _t19*(_t120*_t122 + _t121*_t56);
+    const train5_real_t _t124 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t125 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t126 = _t19*(_t120*_t125 + _t124*_t56);
+    const train5_real_t _t127 = _t24*_t61 + _t25*_t58;
+    const train5_real_t _t128 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t129 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t130 = _t28*(_t127*_t129 + _t128*_t64);
+    const train5_real_t _t131 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t132 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t133 = _t28*(_t127*_t132 + _t131*_t64);
+    const train5_real_t _t134 = _t33*_t69 + _t34*_t66;
+    const train5_real_t _t135 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t136 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t137 = _t37*(_t134*_t136 + _t135*_t72);
+    const train5_real_t _t138 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t139 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t140 = _t37*(_t134*_t139 + _t138*_t72);
+    const train5_real_t _t141 = _t42*_t77 + _t43*_t74;
+    const train5_real_t _t142 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t143 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t144 = _t46*(_t111*_t142 + _t141*_t143);
+    const train5_real_t _t145 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t146 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t147 = _t46*(_t111*_t145 + _t141*_t146);
+    const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
+    const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
     const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t125 = J_x_tractor + _t124;
-    const train5_real_t _t126 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const train5_real_t _t127 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
-    const train5_real_t _t128 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
-    const train5_real_t _t129 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
-    const train5_real_t _t130 = _t129*_t95;
-    const train5_real_t _t131 = _t128*_t84 + _t130;
-    const train5_real_t _t132 = _t127*_t73 + _t131;
-    const train5_real_t _t133 = _t126*_t62 + _t132;
+    const train5_real_t _t148 = J_theta_cart2_left*_t126*_t126 + J_theta_cart2_right*_t123*_t123
+            + J_theta_cart3_left*_t133*_t133 + J_theta_cart3_right*_t130*_t130
+            + J_theta_cart4_left*_t140*_t140 + J_theta_cart4_right*_t137*_t137
+            + J_theta_cart5_left*_t147*_t147 + J_theta_cart5_right*_t144*_t144
+            + J_theta_cart_left*_t119*_t119 + J_theta_cart_right*_t116*_t116 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t134 = J_theta_cart*_t52 + _t115 + _t12*_t123 - _t13*_t133;
+    const train5_real_t _t149 = J_theta_cart*_t49*_t49 + TRAIN5_LIT(2.0)*_t113*_t49 + _t148;
     const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t135 = J_theta_cart2*_t62 + _t116*_t59 + _t122*_t21 + _t126*_t60
-            - _t132*_t22;
+    const train5_real_t _t150 = J_theta_cart2*_t57*_t57 + _t149 + _t51*_t57 + _t54*_t57
+            + _t57*(_t51 + _t54);
     const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t136 = J_theta_cart3*_t73 + _t117*_t70 + _t121*_t30 + _t127*_t71
-            - _t131*_t31;
+    const train5_real_t _t151 = J_theta_cart3*_t65*_t65 + _t150 + _t59*_t65 + _t62*_t65
+            + _t65*(_t59 + _t62);
     const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t137 = J_theta_cart4*_t84 + _t118*_t81 + _t120*_t39 + _t128*_t82
-            - _t130*_t40;
+    const train5_real_t _t152 = J_theta_cart4*_t73*_t73 + _t151 + _t67*_t73 + _t70*_t73
+            + _t73*(_t67 + _t70);
     const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t138 = J_theta_cart5*_t95 + _t119*_t92 + _t129*_t93;
-    const train5_real_t _t139 = _t102*_t114 + _t103*_t6 + _t104*_t7 + _t105*_t55 + _t106*_t58
-            + _t107*_t66 + _t108*_t69 + _t109*_t77 + _t110*_t80 + _t111*_t88 + _t112*_t91
-            + _t113*_t99 + _t125 + _t134*_t52 + _t135*_t62 + _t136*_t73 + _t137*_t84 + _t138*_t95;
-    const train5_real_t _t140 = -TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t _t141 = -_t11*_t140;
-    const train5_real_t _t142 = _t12*_t141;
-    const train5_real_t _t143 = -_t13*_t141 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
-    const train5_real_t _t144 = _t142*_t15 - _t143*_t16;
-    const train5_real_t _t145 = _t144*_t20;
-    const train5_real_t _t146 = _t142 + _t145*_t21;
-    const train5_real_t _t147 = _t143 - _t145*_t22;
-    const train5_real_t _t148 = _t146*_t24 - _t147*_t25;
-    const train5_real_t _t149 = _t148*_t29;
-    const train5_real_t _t150 = _t146 + _t149*_t30;
-    const train5_real_t _t151 = _t147 - _t149*_t31;
-    const train5_real_t _t152 = _t150*_t33 - _t151*_t34;
-    const train5_real_t _t153 = _t152*_t38;
-    const train5_real_t _t154 = _t150 + _t153*_t39;
-    const train5_real_t _t155 = _t151 - _t153*_t40;
-    const train5_real_t _t156 = _t154*_t42 - _t155*_t43;
-    const train5_real_t _t157 = _t156*_t47;
-    const train5_real_t _t158 = _t119*_t157;
-    const train5_real_t _t159 = _t118*_t153 + _t158;
-    const train5_real_t _t160 = _t117*_t149 + _t159;
-    const train5_real_t _t161 = _t116*_t145 + _t160;
-    const train5_real_t _t162 = _t115*_t141 + _t161;
+    const train5_real_t _t153 = J_theta_cart5*_t112*_t112 + _t112*_t75 + _t112*_t78
+            + _t112*(_t75 + _t78) + _t152;
+    const train5_real_t _t154 = _t102*_t42 - _t104*_t43;
+    const train5_real_t _t155 = _t154*_t47;
+    const train5_real_t _t156 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const train5_real_t _t157 = TRAIN5_LIT(0.207)*_t6;
+    const train5_real_t _t158 = -TRAIN5_LIT(0.207)*_t7;
+    const train5_real_t _t159 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t160 = _t10*(-_t114*_t79 - _t115*_t159);
+    const train5_real_t _t161 = _t10*(-_t117*_t79 - _t118*_t159);
+    const train5_real_t _t162 = _t15*_t83 + _t16*_t81;
+    const train5_real_t _t163 = _t19*(_t121*_t86 + _t122*_t162);
+    const train5_real_t _t164 = _t19*(_t124*_t86 + _t125*_t162);
+    const train5_real_t _t165 = _t24*_t90 + _t25*_t88;
+    const train5_real_t _t166 = _t28*(_t128*_t93 + _t129*_t165);
+    const train5_real_t _t167 = _t28*(_t131*_t93 + _t132*_t165);
+    const train5_real_t _t168 = _t33*_t97 + _t34*_t95;
+    const train5_real_t _t169 = _t37*(_t100*_t135 + _t136*_t168);
+    const train5_real_t _t170 = _t37*(_t100*_t138 + _t139*_t168);
+    const train5_real_t _t171 = _t102*_t43 + _t104*_t42;
+    const train5_real_t _t172 = _t46*(_t142*_t154 + _t143*_t171);
+    const train5_real_t _t173 = _t46*(_t145*_t154 + _t146*_t171);
+    const train5_real_t _t174 = J_theta_cart2_left*_t126*_t164 + J_theta_cart2_right*_t123*_t163
+            + J_theta_cart3_left*_t133*_t167 + J_theta_cart3_right*_t130*_t166
+            + J_theta_cart4_left*_t140*_t170 + J_theta_cart4_right*_t137*_t169
+            + J_theta_cart5_left*_t147*_t173 + J_theta_cart5_right*_t144*_t172
+            + J_theta_cart_left*_t119*_t161 + J_theta_cart_right*_t116*_t160
+            + J_theta_left*_t158*_t7 + J_theta_right*_t157*_t6;
     const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t163 = K_theta_tractor_x_tractor_2 + _t162;
-    const train5_real_t _t164 = TRAIN5_LIT(0.207)*_t6;
-    const train5_real_t _t165 = J_theta_right*_t164;
-    const train5_real_t _t166 = -TRAIN5_LIT(0.207)*_t7;
-    const train5_real_t _t167 = J_theta_left*_t166;
-    const train5_real_t _t168 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t169 = _t10*(-_t140*_t53 - _t168*_t54);
-    const train5_real_t _t170 = J_theta_cart_right*_t169;
-    const train5_real_t _t171 = _t10*(-_t140*_t56 - _t168*_t57);
-    const train5_real_t _t172 = J_theta_cart_left*_t171;
-    const train5_real_t _t173 = _t142*_t16 + _t143*_t15;
-    const train5_real_t _t174 = _t19*(_t144*_t64 + _t173*_t65);
-    const train5_real_t _t175 = J_theta_cart2_right*_t174;
-    const train5_real_t _t176 = _t19*(_t144*_t67 + _t173*_t68);
-    const train5_real_t _t177 = J_theta_cart2_left*_t176;
-    const train5_real_t _t178 = _t146*_t25 + _t147*_t24;
-    const train5_real_t _t179 = _t28*(_t148*_t75 + _t178*_t76);
-    const train5_real_t _t180 = J_theta_cart3_right*_t179;
-    const train5_real_t _t181 = _t28*(_t148*_t78 + _t178*_t79);
-    const train5_real_t _t182 = J_theta_cart3_left*_t181;
-    const train5_real_t _t183 = _t150*_t34 + _t151*_t33;
-    const train5_real_t _t184 = _t37*(_t152*_t86 + _t183*_t87);
-    const train5_real_t _t185 = J_theta_cart4_right*_t184;
-    const train5_real_t _t186 = _t37*(_t152*_t89 + _t183*_t90);
-    const train5_real_t _t187 = J_theta_cart4_left*_t186;
-    const train5_real_t _t188 = _t154*_t43 + _t155*_t42;
-    const train5_real_t _t189 = _t46*(_t156*_t97 + _t188*_t98);
-    const train5_real_t _t190 = J_theta_cart5_right*_t189;
-    const train5_real_t _t191 = _t46*(_t100*_t156 + _t101*_t188);
-    const train5_real_t _t192 = J_theta_cart5_left*_t191;
-    const train5_real_t _t193 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const train5_real_t _t194 = _t129*_t157;
-    const train5_real_t _t195 = _t128*_t153 + _t194;
-    const train5_real_t _t196 = _t127*_t149 + _t195;
-    const train5_real_t _t197 = _t126*_t145 + _t196;
-    const train5_real_t _t198 = J_theta_cart*_t141 + _t12*_t161 - _t13*_t197
-            - TRAIN5_LIT(0.3)*_t193;
-    const train5_real_t _t199 = J_theta_cart2*_t145 + _t116*_t142 + _t126*_t143 + _t160*_t21
-            - _t196*_t22;
-    const train5_real_t _t200 = J_theta_cart3*_t149 + _t117*_t146 + _t127*_t147 + _t159*_t30
-            - _t195*_t31;
-    const train5_real_t _t201 = J_theta_cart4*_t153 + _t118*_t150 + _t128*_t151 + _t158*_t39
-            - _t194*_t40;
-    const train5_real_t _t202 = J_theta_cart5*_t157 + _t119*_t154 + _t129*_t155;
-    const train5_real_t _t203 = _t102*_t192 + _t163 + _t165*_t6 + _t167*_t7 + _t170*_t55
-            + _t172*_t58 + _t175*_t66 + _t177*_t69 + _t180*_t77 + _t182*_t80 + _t185*_t88
-            + _t187*_t91 + _t190*_t99 + _t198*_t52 + _t199*_t62 + _t200*_t73 + _t201*_t84
-            + _t202*_t95;
-    const train5_real_t _t204 = _t139*_t51 + _t203*_t50;
-    const train5_real_t _t205 = _t141*_t193 + _t197;
+    const train5_real_t _t175 = K_theta_tractor_x_tractor_2 + _t174;
+    const train5_real_t _t176 = J_theta_cart*_t49*_t80 + _t113*_t80 - TRAIN5_LIT(0.3)*_t156*_t49
+            + _t175;
+    const train5_real_t _t177 = J_theta_cart2*_t57*_t87 + _t176 + _t51*_t87 + _t54*_t87 + _t57*_t85;
+    const train5_real_t _t178 = J_theta_cart3*_t65*_t94 + _t177 + _t59*_t94 + _t62*_t94 + _t65*_t92;
+    const train5_real_t _t179 = J_theta_cart4*_t101*_t73 + _t101*_t67 + _t101*_t70 + _t178
+            + _t73*_t99;
+    const train5_real_t _t180 = J_theta_cart5*_t112*_t155 + _t106*_t112 + _t155*_t75 + _t155*_t78
+            + _t179;
+    const train5_real_t _t181 = _t109*_t180 + _t110*_t153;
+    const train5_real_t _t182 = J_theta_cart2_left*_t164*_t164 + J_theta_cart2_right*_t163*_t163
+            + J_theta_cart3_left*_t167*_t167 + J_theta_cart3_right*_t166*_t166
+            + J_theta_cart4_left*_t170*_t170 + J_theta_cart4_right*_t169*_t169
+            + J_theta_cart5_left*_t173*_t173 + J_theta_cart5_right*_t172*_t172
+            + J_theta_cart_left*_t161*_t161 + J_theta_cart_right*_t160*_t160
+            + J_theta_left*_t158*_t158 + J_theta_right*_t157*_t157;
     const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t206 = J_theta_tractor - TRAIN5_LIT(0.3)*_t205;
-    const train5_real_t _t207 = _t141*_t198 + _t145*_t199 + _t149*_t200 + _t153*_t201 + _t157*_t202
-            + _t164*_t165 + _t166*_t167 + _t169*_t170 + _t171*_t172 + _t174*_t175 + _t176*_t177
-            + _t179*_t180 + _t181*_t182 + _t184*_t185 + _t186*_t187 + _t189*_t190 + _t191*_t192
-            + _t206;
-    const train5_real_t _t208 = _t203*_t51 + _t207*_t50;
-    const train5_real_t _t209 = _t204*_t49 + _t208*_t48;
-    const train5_real_t _t210 = _t209*_t209;
-    const train5_real_t _t211 = _t139*_t49 + _t203*_t48;
-    const train5_real_t _t212 = _t203*_t49 + _t207*_t48;
-    const train5_real_t _t213 = _t211*_t49 + _t212*_t48;
-    const train5_real_t _t214 = _t204*_t51 + _t208*_t50;
-    norm[0] = TRAIN5_SQRT(TRAIN5_LIT(2.0)*_t210 + _t213*_t213
-            + _t214*_t214)*(TRAIN5_LIT(1.0)/TRAIN5_FABS(_t210 - _t213*_t214));
+    const train5_real_t _t183 = J_theta_tractor + _t182;
+    const train5_real_t _t184 = J_theta_cart*_t80*_t80 - TRAIN5_LIT(0.6)*_t156*_t80 + _t183;
+    const train5_real_t _t185 = J_theta_cart2*_t87*_t87 + _t184 + _t82*_t87 + _t84*_t87 + _t85*_t87;
+    const train5_real_t _t186 = J_theta_cart3*_t94*_t94 + _t185 + _t89*_t94 + _t91*_t94 + _t92*_t94;
+    const train5_real_t _t187 = J_theta_cart4*_t101*_t101 + _t101*_t96 + _t101*_t98 + _t101*_t99
+            + _t186;
+    const train5_real_t _t188 = J_theta_cart5*_t155*_t155 + _t103*_t155 + _t105*_t155 + _t106*_t155
+            + _t187;
+    const train5_real_t _t189 = _t109*_t188 + _t110*_t180;
+    const train5_real_t _t190 = _t107*_t189 + _t108*_t181;
+    const train5_real_t _t191 = _t190*_t190;
+    const train5_real_t _t192 = _t107*_t180 + _t108*_t153;
+    const train5_real_t _t193 = _t107*_t188 + _t108*_t180;
+    const train5_real_t _t194 = _t107*_t193 + _t108*_t192;
+    const train5_real_t _t195 = _t109*_t189 + _t110*_t181;
+    norm[0] = TRAIN5_SQRT(TRAIN5_LIT(2.0)*_t191 + _t194*_t194
+            + _t195*_t195)*(TRAIN5_LIT(1.0)/TRAIN5_FABS(_t191 - _t194*_t195));
 }
 
 /* train5_minimal_minv_norm_mhat: documented in train5_laws.h.
@@ -630,10 +612,10 @@ void train5_minimal_minv_norm_mhat(const train5_params_t *p, const train5_real_t
 }
 
 /* train5_minimal_mhat: documented in train5_laws.h.
-   operations after CSE: 175 add, 344 mul, 6 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 171 add, 367 mul, 6 div, 10 sin/cos, 0 sqrt */
 void train5_minimal_mhat(const train5_params_t *p, const train5_real_t *q, train5_real_t *M)
 {
-    train5_real_t kept[65];
+    train5_real_t kept[64];
     train5_k_minimal_mhat_keep(p, kept);
     train5_k_minimal_mhat(kept, q, M);
 }
@@ -701,7 +683,7 @@ void train5_minimal_omega_difference(const train5_real_t *newer, const train5_re
 }
 
 /* train5_minimal_tdc_law: documented in train5_laws.h.
-   operations after CSE: 183 add, 352 mul, 6 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 179 add, 375 mul, 6 div, 10 sin/cos, 0 sqrt */
 void train5_minimal_tdc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *e, const train5_real_t *edot, const train5_real_t *qddot_des,
     const train5_real_t *k1, const train5_real_t *k2, const train5_real_t *p12,
@@ -775,233 +757,223 @@ void train5_minimal_tdc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t _t45 = -TRAIN5_LIT(0.6)*_t44;
     const train5_real_t _t46 = TRAIN5_LIT(1.0)/_t45;
     const train5_real_t _t47 = _t44*_t46;
+    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const train5_real_t _t48 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t49 = _t11*_t2;
+    const train5_real_t _t50 = _t12*_t49 + TRAIN5_LIT(1.0);
+    const train5_real_t _t51 = _t48*_t50;
+    const train5_real_t _t52 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t53 = -_t13*_t49;
+    const train5_real_t _t54 = _t52*_t53;
+    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const train5_real_t _t55 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t56 = _t15*_t50 - _t16*_t53;
+    const train5_real_t _t57 = _t20*_t56;
+    const train5_real_t _t58 = _t21*_t57 + _t50;
+    const train5_real_t _t59 = _t55*_t58;
+    const train5_real_t _t60 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t61 = -_t22*_t57 + _t53;
+    const train5_real_t _t62 = _t60*_t61;
+    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
+    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
+    const train5_real_t _t63 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t64 = _t24*_t58 - _t25*_t61;
+    const train5_real_t _t65 = _t29*_t64;
+    const train5_real_t _t66 = _t30*_t65 + _t58;
+    const train5_real_t _t67 = _t63*_t66;
+    const train5_real_t _t68 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t69 = -_t31*_t65 + _t61;
+    const train5_real_t _t70 = _t68*_t69;
+    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
+    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
+    const train5_real_t _t71 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t72 = _t33*_t66 - _t34*_t69;
+    const train5_real_t _t73 = _t38*_t72;
+    const train5_real_t _t74 = _t39*_t73 + _t66;
+    const train5_real_t _t75 = _t71*_t74;
+    const train5_real_t _t76 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t77 = -_t40*_t73 + _t69;
+    const train5_real_t _t78 = _t76*_t77;
+    const train5_real_t _t79 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t80 = -_t11*_t79;
+    const train5_real_t _t81 = _t12*_t80;
+    const train5_real_t _t82 = _t48*_t81;
+    const train5_real_t _t83 = -_t13*_t80 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t84 = _t52*_t83;
+    const train5_real_t _t85 = _t82 + _t84;
+    const train5_real_t _t86 = _t15*_t81 - _t16*_t83;
+    const train5_real_t _t87 = _t20*_t86;
+    const train5_real_t _t88 = _t21*_t87 + _t81;
+    const train5_real_t _t89 = _t55*_t88;
+    const train5_real_t _t90 = -_t22*_t87 + _t83;
+    const train5_real_t _t91 = _t60*_t90;
+    const train5_real_t _t92 = _t89 + _t91;
+    const train5_real_t _t93 = _t24*_t88 - _t25*_t90;
+    const train5_real_t _t94 = _t29*_t93;
+    const train5_real_t _t95 = _t30*_t94 + _t88;
+    const train5_real_t _t96 = _t63*_t95;
+    const train5_real_t _t97 = -_t31*_t94 + _t90;
+    const train5_real_t _t98 = _t68*_t97;
+    const train5_real_t _t99 = _t96 + _t98;
+    const train5_real_t _t100 = _t33*_t95 - _t34*_t97;
+    const train5_real_t _t101 = _t100*_t38;
+    const train5_real_t _t102 = _t101*_t39 + _t95;
+    const train5_real_t _t103 = _t102*_t71;
+    const train5_real_t _t104 = -_t101*_t40 + _t97;
+    const train5_real_t _t105 = _t104*_t76;
+    const train5_real_t _t106 = _t103 + _t105;
     const train5_real_t e0 = e[0];
     const train5_real_t edot0 = edot[0];
     const train5_real_t qdd_des0 = qddot_des[0];
     const train5_real_t k1_0 = k1[0];
     const train5_real_t k2_0 = k2[0];
-    const train5_real_t _t48 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const train5_real_t _t107 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const train5_real_t e1 = e[1];
     const train5_real_t edot1 = edot[1];
     const train5_real_t qdd_des1 = qddot_des[1];
     const train5_real_t k1_1 = k1[1];
     const train5_real_t k2_1 = k2[1];
-    const train5_real_t _t49 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const train5_real_t _t50 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t51 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t52 = -TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t _t53 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t54 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t55 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t56 = TRAIN5_LIT(0.2)*radius_cart_left;
-    const train5_real_t _t57 = -TRAIN5_LIT(0.6)*radius_cart_left;
-    const train5_real_t _t58 = -TRAIN5_LIT(0.2)*radius_cart_right;
-    const train5_real_t _t59 = -TRAIN5_LIT(0.6)*radius_cart_right;
-    const train5_real_t _t60 = _t11*_t2;
-    const train5_real_t _t61 = _t10*(_t2*_t56 + _t3*_t57);
-    const train5_real_t _t62 = _t10*(_t2*_t58 + _t3*_t59);
-    const train5_real_t _t63 = _t12*_t60 + TRAIN5_LIT(1.0);
-    const train5_real_t _t64 = -_t13*_t60;
-    const train5_real_t _t65 = _t15*_t63 - _t16*_t64;
-    const train5_real_t _t66 = _t15*_t64 + _t16*_t63;
-    const train5_real_t _t67 = TRAIN5_LIT(0.2)*radius_cart2_left;
-    const train5_real_t _t68 = -TRAIN5_LIT(0.6)*radius_cart2_left;
-    const train5_real_t _t69 = -TRAIN5_LIT(0.2)*radius_cart2_right;
-    const train5_real_t _t70 = -TRAIN5_LIT(0.6)*radius_cart2_right;
-    const train5_real_t _t71 = _t20*_t65;
-    const train5_real_t _t72 = _t19*(_t65*_t67 + _t66*_t68);
-    const train5_real_t _t73 = _t19*(_t65*_t69 + _t66*_t70);
-    const train5_real_t _t74 = _t21*_t71 + _t63;
-    const train5_real_t _t75 = -_t22*_t71 + _t64;
-    const train5_real_t _t76 = _t24*_t74 - _t25*_t75;
-    const train5_real_t _t77 = _t24*_t75 + _t25*_t74;
-    const train5_real_t _t78 = TRAIN5_LIT(0.2)*radius_cart3_left;
-    const train5_real_t _t79 = -TRAIN5_LIT(0.6)*radius_cart3_left;
-    const train5_real_t _t80 = -TRAIN5_LIT(0.2)*radius_cart3_right;
-    const train5_real_t _t81 = -TRAIN5_LIT(0.6)*radius_cart3_right;
-    const train5_real_t _t82 = _t29*_t76;
-    const train5_real_t _t83 = _t28*(_t76*_t78 + _t77*_t79);
-    const train5_real_t _t84 = _t28*(_t76*_t80 + _t77*_t81);
-    const train5_real_t _t85 = _t30*_t82 + _t74;
-    const train5_real_t _t86 = -_t31*_t82 + _t75;
-    const train5_real_t _t87 = _t33*_t85 - _t34*_t86;
-    const train5_real_t _t88 = _t33*_t86 + _t34*_t85;
-    const train5_real_t _t89 = TRAIN5_LIT(0.2)*radius_cart4_left;
-    const train5_real_t _t90 = -TRAIN5_LIT(0.6)*radius_cart4_left;
-    const train5_real_t _t91 = -TRAIN5_LIT(0.2)*radius_cart4_right;
-    const train5_real_t _t92 = -TRAIN5_LIT(0.6)*radius_cart4_right;
-    const train5_real_t _t93 = _t38*_t87;
-    const train5_real_t _t94 = _t37*(_t87*_t89 + _t88*_t90);
-    const train5_real_t _t95 = _t37*(_t87*_t91 + _t88*_t92);
-    const train5_real_t _t96 = _t39*_t93 + _t85;
-    const train5_real_t _t97 = -_t40*_t93 + _t86;
-    const train5_real_t _t98 = _t42*_t96 - _t43*_t97;
-    const train5_real_t _t99 = _t42*_t97 + _t43*_t96;
-    const train5_real_t _t100 = TRAIN5_LIT(0.2)*radius_cart5_left;
-    const train5_real_t _t101 = -TRAIN5_LIT(0.6)*radius_cart5_left;
-    const train5_real_t _t102 = -TRAIN5_LIT(0.2)*radius_cart5_right;
-    const train5_real_t _t103 = -TRAIN5_LIT(0.6)*radius_cart5_right;
-    const train5_real_t _t104 = _t47*_t98;
-    const train5_real_t _t105 = _t46*(_t100*_t98 + _t101*_t99);
-    const train5_real_t _t106 = _t46*(_t102*_t98 + _t103*_t99);
-    const train5_real_t _t107 = TRAIN5_LIT(0.207)*_t6;
-    const train5_real_t _t108 = -TRAIN5_LIT(0.207)*_t7;
-    const train5_real_t _t109 = -_t11*_t52;
-    const train5_real_t _t110 = _t10*(-_t52*_t56 - _t53*_t57);
-    const train5_real_t _t111 = _t10*(-_t52*_t58 - _t53*_t59);
-    const train5_real_t _t112 = _t109*_t12;
-    const train5_real_t _t113 = -_t109*_t13 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
-    const train5_real_t _t114 = _t112*_t15 - _t113*_t16;
-    const train5_real_t _t115 = _t112*_t16 + _t113*_t15;
-    const train5_real_t _t116 = _t114*_t20;
-    const train5_real_t _t117 = _t19*(_t114*_t67 + _t115*_t68);
-    const train5_real_t _t118 = _t19*(_t114*_t69 + _t115*_t70);
-    const train5_real_t _t119 = _t112 + _t116*_t21;
-    const train5_real_t _t120 = _t113 - _t116*_t22;
-    const train5_real_t _t121 = _t119*_t24 - _t120*_t25;
-    const train5_real_t _t122 = _t119*_t25 + _t120*_t24;
-    const train5_real_t _t123 = _t121*_t29;
-    const train5_real_t _t124 = _t28*(_t121*_t78 + _t122*_t79);
-    const train5_real_t _t125 = _t28*(_t121*_t80 + _t122*_t81);
-    const train5_real_t _t126 = _t119 + _t123*_t30;
-    const train5_real_t _t127 = _t120 - _t123*_t31;
-    const train5_real_t _t128 = _t126*_t33 - _t127*_t34;
-    const train5_real_t _t129 = _t126*_t34 + _t127*_t33;
-    const train5_real_t _t130 = _t128*_t38;
-    const train5_real_t _t131 = _t37*(_t128*_t89 + _t129*_t90);
-    const train5_real_t _t132 = _t37*(_t128*_t91 + _t129*_t92);
-    const train5_real_t _t133 = _t126 + _t130*_t39;
-    const train5_real_t _t134 = _t127 - _t130*_t40;
-    const train5_real_t _t135 = _t133*_t42 - _t134*_t43;
-    const train5_real_t _t136 = _t133*_t43 + _t134*_t42;
-    const train5_real_t _t137 = _t135*_t47;
-    const train5_real_t _t138 = _t46*(_t100*_t135 + _t101*_t136);
-    const train5_real_t _t139 = _t46*(_t102*_t135 + _t103*_t136);
+    const train5_real_t _t108 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const train5_real_t _t109 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t110 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t111 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t112 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t113 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t114 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t115 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t116 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t117 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t118 = _t10*(_t114*_t2 + _t115*_t3);
+    const train5_real_t _t119 = _t10*(_t116*_t2 + _t117*_t3);
+    const train5_real_t _t120 = _t15*_t53 + _t16*_t50;
+    const train5_real_t _t121 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t123 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t124 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t125 = _t19*(_t120*_t122 + _t121*_t56);
+    const train5_real_t _t126 = _t19*(_t120*_t124 + _t123*_t56);
+    const train5_real_t _t127 = _t24*_t61 + _t25*_t58;
+    const train5_real_t _t128 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t129 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t130 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t131 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t132 = _t28*(_t127*_t129 + _t128*_t64);
+    const train5_real_t _t133 = _t28*(_t127*_t131 + _t130*_t64);
+    const train5_real_t _t134 = _t33*_t69 + _t34*_t66;
+    const train5_real_t _t135 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t136 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t137 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t138 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t139 = _t37*(_t134*_t136 + _t135*_t72);
+    const train5_real_t _t140 = _t37*(_t134*_t138 + _t137*_t72);
+    const train5_real_t _t141 = _t42*_t74 - _t43*_t77;
+    const train5_real_t _t142 = _t42*_t77 + _t43*_t74;
+    const train5_real_t _t143 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t144 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t145 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t146 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t147 = _t141*_t47;
+    const train5_real_t _t148 = _t46*(_t141*_t143 + _t142*_t144);
+    const train5_real_t _t149 = _t46*(_t141*_t145 + _t142*_t146);
+    const train5_real_t _t150 = TRAIN5_LIT(0.207)*_t6;
+    const train5_real_t _t151 = -TRAIN5_LIT(0.207)*_t7;
+    const train5_real_t _t152 = _t10*(-_t111*_t115 - _t114*_t79);
+    const train5_real_t _t153 = _t10*(-_t111*_t117 - _t116*_t79);
+    const train5_real_t _t154 = _t15*_t83 + _t16*_t81;
+    const train5_real_t _t155 = _t19*(_t121*_t86 + _t122*_t154);
+    const train5_real_t _t156 = _t19*(_t123*_t86 + _t124*_t154);
+    const train5_real_t _t157 = _t24*_t90 + _t25*_t88;
+    const train5_real_t _t158 = _t28*(_t128*_t93 + _t129*_t157);
+    const train5_real_t _t159 = _t28*(_t130*_t93 + _t131*_t157);
+    const train5_real_t _t160 = _t33*_t97 + _t34*_t95;
+    const train5_real_t _t161 = _t37*(_t100*_t135 + _t136*_t160);
+    const train5_real_t _t162 = _t37*(_t100*_t137 + _t138*_t160);
+    const train5_real_t _t163 = _t102*_t42 - _t104*_t43;
+    const train5_real_t _t164 = _t102*_t43 + _t104*_t42;
+    const train5_real_t _t165 = _t163*_t47;
+    const train5_real_t _t166 = _t46*(_t143*_t163 + _t144*_t164);
+    const train5_real_t _t167 = _t46*(_t145*_t163 + _t146*_t164);
     const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t140 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t141 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t142 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const train5_real_t _t143 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t144 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
-    const train5_real_t _t145 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t146 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
-    const train5_real_t _t147 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t148 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t149 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
-    const train5_real_t _t150 = _t104*_t148;
-    const train5_real_t _t151 = _t104*_t149;
-    const train5_real_t _t152 = _t146*_t93 + _t150;
-    const train5_real_t _t153 = _t147*_t93 + _t151;
-    const train5_real_t _t154 = _t144*_t82 + _t152;
-    const train5_real_t _t155 = _t145*_t82 + _t153;
-    const train5_real_t _t156 = _t142*_t71 + _t154;
-    const train5_real_t _t157 = _t143*_t71 + _t155;
-    const train5_real_t _t158 = _t140*_t60 + _t156;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t159 = J_theta_right*_t6;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t160 = J_theta_left*_t7;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t161 = J_theta_cart_right*_t61;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t162 = J_theta_cart_left*_t62;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t163 = J_theta_cart2_right*_t72;
+    const train5_real_t _t168 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t169 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t164 = J_theta_cart2_left*_t73;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t165 = J_theta_cart3_right*_t83;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t166 = J_theta_cart3_left*_t84;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t167 = J_theta_cart4_right*_t94;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t168 = J_theta_cart4_left*_t95;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t169 = J_theta_cart5_right*_t105;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t170 = J_theta_cart5_left*_t106;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
     const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t171 = J_x_tractor + _t158;
+    const train5_real_t _t170 = J_theta_cart2_left*_t126*_t126 + J_theta_cart2_right*_t125*_t125
+            + J_theta_cart3_left*_t133*_t133 + J_theta_cart3_right*_t132*_t132
+            + J_theta_cart4_left*_t140*_t140 + J_theta_cart4_right*_t139*_t139
+            + J_theta_cart5_left*_t149*_t149 + J_theta_cart5_right*_t148*_t148
+            + J_theta_cart_left*_t119*_t119 + J_theta_cart_right*_t118*_t118 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t172 = J_theta_cart*_t60 + _t12*_t156 - _t13*_t157 + _t140;
+    const train5_real_t _t171 = J_theta_cart*_t49*_t49 + TRAIN5_LIT(2.0)*_t168*_t49 + _t170;
     const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t173 = J_theta_cart2*_t71 + _t142*_t63 + _t143*_t64 + _t154*_t21
-            - _t155*_t22;
+    const train5_real_t _t172 = J_theta_cart2*_t57*_t57 + _t171 + _t51*_t57 + _t54*_t57
+            + _t57*(_t51 + _t54);
     const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t174 = J_theta_cart3*_t82 + _t144*_t74 + _t145*_t75 + _t152*_t30
-            - _t153*_t31;
+    const train5_real_t _t173 = J_theta_cart3*_t65*_t65 + _t172 + _t59*_t65 + _t62*_t65
+            + _t65*(_t59 + _t62);
     const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t175 = J_theta_cart4*_t93 + _t146*_t85 + _t147*_t86 + _t150*_t39
-            - _t151*_t40;
+    const train5_real_t _t174 = J_theta_cart4*_t73*_t73 + _t173 + _t67*_t73 + _t70*_t73
+            + _t73*(_t67 + _t70);
     const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t176 = J_theta_cart5*_t104 + _t148*_t96 + _t149*_t97;
-    const train5_real_t _t177 = _t137*_t148;
-    const train5_real_t _t178 = _t137*_t149;
-    const train5_real_t _t179 = _t130*_t146 + _t177;
-    const train5_real_t _t180 = _t130*_t147 + _t178;
-    const train5_real_t _t181 = _t123*_t144 + _t179;
-    const train5_real_t _t182 = _t123*_t145 + _t180;
-    const train5_real_t _t183 = _t116*_t142 + _t181;
-    const train5_real_t _t184 = _t116*_t143 + _t182;
-    const train5_real_t _t185 = _t109*_t140 + _t183;
-    const train5_real_t _t186 = _t109*_t141 + _t184;
+    const train5_real_t _t175 = J_theta_cart5*_t147*_t147 + _t147*_t75 + _t147*_t78
+            + _t147*(_t75 + _t78) + _t174;
+    const train5_real_t _t176 = J_theta_cart2_left*_t126*_t156 + J_theta_cart2_right*_t125*_t155
+            + J_theta_cart3_left*_t133*_t159 + J_theta_cart3_right*_t132*_t158
+            + J_theta_cart4_left*_t140*_t162 + J_theta_cart4_right*_t139*_t161
+            + J_theta_cart5_left*_t149*_t167 + J_theta_cart5_right*_t148*_t166
+            + J_theta_cart_left*_t119*_t153 + J_theta_cart_right*_t118*_t152
+            + J_theta_left*_t151*_t7 + J_theta_right*_t150*_t6;
     const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t187 = K_theta_tractor_x_tractor_2 + _t185;
-    const train5_real_t _t188 = J_theta_right*_t107;
-    const train5_real_t _t189 = J_theta_left*_t108;
-    const train5_real_t _t190 = J_theta_cart_right*_t110;
-    const train5_real_t _t191 = J_theta_cart_left*_t111;
-    const train5_real_t _t192 = J_theta_cart2_right*_t117;
-    const train5_real_t _t193 = J_theta_cart2_left*_t118;
-    const train5_real_t _t194 = J_theta_cart3_right*_t124;
-    const train5_real_t _t195 = J_theta_cart3_left*_t125;
-    const train5_real_t _t196 = J_theta_cart4_right*_t131;
-    const train5_real_t _t197 = J_theta_cart4_left*_t132;
-    const train5_real_t _t198 = J_theta_cart5_right*_t138;
-    const train5_real_t _t199 = J_theta_cart5_left*_t139;
+    const train5_real_t _t177 = K_theta_tractor_x_tractor_2 + _t176;
+    const train5_real_t _t178 = J_theta_cart*_t49*_t80 + _t168*_t80 - TRAIN5_LIT(0.3)*_t169*_t49
+            + _t177;
+    const train5_real_t _t179 = J_theta_cart2*_t57*_t87 + _t178 + _t51*_t87 + _t54*_t87 + _t57*_t85;
+    const train5_real_t _t180 = J_theta_cart3*_t65*_t94 + _t179 + _t59*_t94 + _t62*_t94 + _t65*_t92;
+    const train5_real_t _t181 = J_theta_cart4*_t101*_t73 + _t101*_t67 + _t101*_t70 + _t180
+            + _t73*_t99;
+    const train5_real_t _t182 = J_theta_cart5*_t147*_t165 + _t106*_t147 + _t165*_t75 + _t165*_t78
+            + _t181;
+    const train5_real_t _t183 = J_theta_cart2_left*_t156*_t156 + J_theta_cart2_right*_t155*_t155
+            + J_theta_cart3_left*_t159*_t159 + J_theta_cart3_right*_t158*_t158
+            + J_theta_cart4_left*_t162*_t162 + J_theta_cart4_right*_t161*_t161
+            + J_theta_cart5_left*_t167*_t167 + J_theta_cart5_right*_t166*_t166
+            + J_theta_cart_left*_t153*_t153 + J_theta_cart_right*_t152*_t152
+            + J_theta_left*_t151*_t151 + J_theta_right*_t150*_t150;
     const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t200 = J_theta_tractor - TRAIN5_LIT(0.3)*_t186;
-    const train5_real_t _t201 = J_theta_cart*_t109 + _t12*_t183 - _t13*_t184
-            - TRAIN5_LIT(0.3)*_t141;
-    const train5_real_t _t202 = J_theta_cart2*_t116 + _t112*_t142 + _t113*_t143 + _t181*_t21
-            - _t182*_t22;
-    const train5_real_t _t203 = J_theta_cart3*_t123 + _t119*_t144 + _t120*_t145 + _t179*_t30
-            - _t180*_t31;
-    const train5_real_t _t204 = J_theta_cart4*_t130 + _t126*_t146 + _t127*_t147 + _t177*_t39
-            - _t178*_t40;
-    const train5_real_t _t205 = J_theta_cart5*_t137 + _t133*_t148 + _t134*_t149;
-    const train5_real_t _t206 = _t104*_t176 + _t105*_t169 + _t106*_t170 + _t159*_t6 + _t160*_t7
-            + _t161*_t61 + _t162*_t62 + _t163*_t72 + _t164*_t73 + _t165*_t83 + _t166*_t84
-            + _t167*_t94 + _t168*_t95 + _t171 + _t172*_t60 + _t173*_t71 + _t174*_t82 + _t175*_t93;
-    const train5_real_t _t207 = _t104*_t205 + _t105*_t198 + _t106*_t199 + _t187 + _t188*_t6
-            + _t189*_t7 + _t190*_t61 + _t191*_t62 + _t192*_t72 + _t193*_t73 + _t194*_t83
-            + _t195*_t84 + _t196*_t94 + _t197*_t95 + _t201*_t60 + _t202*_t71 + _t203*_t82
-            + _t204*_t93;
-    const train5_real_t _t208 = _t107*_t188 + _t108*_t189 + _t109*_t201 + _t110*_t190 + _t111*_t191
-            + _t116*_t202 + _t117*_t192 + _t118*_t193 + _t123*_t203 + _t124*_t194 + _t125*_t195
-            + _t130*_t204 + _t131*_t196 + _t132*_t197 + _t137*_t205 + _t138*_t198 + _t139*_t199
-            + _t200;
-    const train5_real_t _t209 = _t206*_t54 + _t207*_t50;
-    const train5_real_t _t210 = _t206*_t55 + _t207*_t51;
-    const train5_real_t _t211 = _t207*_t54 + _t208*_t50;
-    const train5_real_t _t212 = _t207*_t55 + _t208*_t51;
-    const train5_real_t _t213 = _t209*_t54 + _t211*_t50;
-    const train5_real_t _t214 = _t210*_t54 + _t212*_t50;
-    const train5_real_t _t215 = _t210*_t55 + _t212*_t51;
+    const train5_real_t _t184 = J_theta_tractor + _t183;
+    const train5_real_t _t185 = J_theta_cart*_t80*_t80 - TRAIN5_LIT(0.6)*_t169*_t80 + _t184;
+    const train5_real_t _t186 = J_theta_cart2*_t87*_t87 + _t185 + _t82*_t87 + _t84*_t87 + _t85*_t87;
+    const train5_real_t _t187 = J_theta_cart3*_t94*_t94 + _t186 + _t89*_t94 + _t91*_t94 + _t92*_t94;
+    const train5_real_t _t188 = J_theta_cart4*_t101*_t101 + _t101*_t96 + _t101*_t98 + _t101*_t99
+            + _t187;
+    const train5_real_t _t189 = J_theta_cart5*_t165*_t165 + _t103*_t165 + _t105*_t165 + _t106*_t165
+            + _t188;
+    const train5_real_t _t190 = _t109*_t182 + _t112*_t175;
+    const train5_real_t _t191 = _t110*_t182 + _t113*_t175;
+    const train5_real_t _t192 = _t109*_t189 + _t112*_t182;
+    const train5_real_t _t193 = _t110*_t189 + _t113*_t182;
+    const train5_real_t _t194 = _t109*_t192 + _t112*_t190;
+    const train5_real_t _t195 = _t109*_t193 + _t112*_t191;
+    const train5_real_t _t196 = _t110*_t193 + _t113*_t191;
     const train5_real_t H1hat0 = H1hat[0];
     const train5_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t213*_t48 + _t214*_t49;
-    u[1] = H1hat1 + _t214*_t48 + _t215*_t49;
+    u[0] = H1hat0 + _t107*_t194 + _t108*_t195;
+    u[1] = H1hat1 + _t107*_t195 + _t108*_t196;
 }
 
 /* train5_minimal_tdc_law_mhat: documented in train5_laws.h.
@@ -1015,7 +987,7 @@ void train5_minimal_tdc_law_mhat(const train5_params_t *p, const train5_real_t *
 }
 
 /* train5_minimal_tdroc_law: documented in train5_laws.h.
-   operations after CSE: 190 add, 366 mul, 7 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 186 add, 389 mul, 7 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void train5_minimal_tdroc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *e, const train5_real_t *edot, const train5_real_t *qddot_des,
     const train5_real_t *k1, const train5_real_t *k2, const train5_real_t *p12,
@@ -1088,247 +1060,238 @@ void train5_minimal_tdroc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t _t45 = -TRAIN5_LIT(0.6)*_t44;
     const train5_real_t _t46 = TRAIN5_LIT(1.0)/_t45;
     const train5_real_t _t47 = _t44*_t46;
+    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const train5_real_t _t48 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t49 = _t11*_t2;
+    const train5_real_t _t50 = _t12*_t49 + TRAIN5_LIT(1.0);
+    const train5_real_t _t51 = _t48*_t50;
+    const train5_real_t _t52 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t53 = -_t13*_t49;
+    const train5_real_t _t54 = _t52*_t53;
+    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const train5_real_t _t55 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t56 = _t15*_t50 - _t16*_t53;
+    const train5_real_t _t57 = _t20*_t56;
+    const train5_real_t _t58 = _t21*_t57 + _t50;
+    const train5_real_t _t59 = _t55*_t58;
+    const train5_real_t _t60 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t61 = -_t22*_t57 + _t53;
+    const train5_real_t _t62 = _t60*_t61;
+    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
+    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
+    const train5_real_t _t63 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t64 = _t24*_t58 - _t25*_t61;
+    const train5_real_t _t65 = _t29*_t64;
+    const train5_real_t _t66 = _t30*_t65 + _t58;
+    const train5_real_t _t67 = _t63*_t66;
+    const train5_real_t _t68 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t69 = -_t31*_t65 + _t61;
+    const train5_real_t _t70 = _t68*_t69;
+    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
+    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
+    const train5_real_t _t71 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t72 = _t33*_t66 - _t34*_t69;
+    const train5_real_t _t73 = _t38*_t72;
+    const train5_real_t _t74 = _t39*_t73 + _t66;
+    const train5_real_t _t75 = _t71*_t74;
+    const train5_real_t _t76 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t77 = -_t40*_t73 + _t69;
+    const train5_real_t _t78 = _t76*_t77;
+    const train5_real_t _t79 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t80 = -_t11*_t79;
+    const train5_real_t _t81 = _t12*_t80;
+    const train5_real_t _t82 = _t48*_t81;
+    const train5_real_t _t83 = -_t13*_t80 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t84 = _t52*_t83;
+    const train5_real_t _t85 = _t82 + _t84;
+    const train5_real_t _t86 = _t15*_t81 - _t16*_t83;
+    const train5_real_t _t87 = _t20*_t86;
+    const train5_real_t _t88 = _t21*_t87 + _t81;
+    const train5_real_t _t89 = _t55*_t88;
+    const train5_real_t _t90 = -_t22*_t87 + _t83;
+    const train5_real_t _t91 = _t60*_t90;
+    const train5_real_t _t92 = _t89 + _t91;
+    const train5_real_t _t93 = _t24*_t88 - _t25*_t90;
+    const train5_real_t _t94 = _t29*_t93;
+    const train5_real_t _t95 = _t30*_t94 + _t88;
+    const train5_real_t _t96 = _t63*_t95;
+    const train5_real_t _t97 = -_t31*_t94 + _t90;
+    const train5_real_t _t98 = _t68*_t97;
+    const train5_real_t _t99 = _t96 + _t98;
+    const train5_real_t _t100 = _t33*_t95 - _t34*_t97;
+    const train5_real_t _t101 = _t100*_t38;
+    const train5_real_t _t102 = _t101*_t39 + _t95;
+    const train5_real_t _t103 = _t102*_t71;
+    const train5_real_t _t104 = -_t101*_t40 + _t97;
+    const train5_real_t _t105 = _t104*_t76;
+    const train5_real_t _t106 = _t103 + _t105;
     const train5_real_t e0 = e[0];
     const train5_real_t edot0 = edot[0];
     const train5_real_t qdd_des0 = qddot_des[0];
     const train5_real_t k1_0 = k1[0];
     const train5_real_t k2_0 = k2[0];
-    const train5_real_t _t48 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const train5_real_t _t107 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const train5_real_t e1 = e[1];
     const train5_real_t edot1 = edot[1];
     const train5_real_t qdd_des1 = qddot_des[1];
     const train5_real_t k1_1 = k1[1];
     const train5_real_t k2_1 = k2[1];
-    const train5_real_t _t49 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const train5_real_t _t108 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const train5_real_t p12_0 = p12[0];
     const train5_real_t p22_0 = p22[0];
-    const train5_real_t _t50 = e0*p12_0 + edot0*p22_0;
+    const train5_real_t _t109 = e0*p12_0 + edot0*p22_0;
     const train5_real_t p12_1 = p12[1];
     const train5_real_t p22_1 = p22[1];
-    const train5_real_t _t51 = e1*p12_1 + edot1*p22_1;
-    const train5_real_t _t52 = train5_norm2(_t50, _t51);
+    const train5_real_t _t110 = e1*p12_1 + edot1*p22_1;
+    const train5_real_t _t111 = train5_norm2(_t109, _t110);
     const train5_real_t eps_1 = eps[0];
-    const train5_real_t _t53 = TRAIN5_LIT(1.0)/(TRAIN5_FMAX(_t52, eps_1));
-    const train5_real_t _t54 = _t50*_t53;
-    const train5_real_t _t55 = _t51*_t53;
-    const train5_real_t _t56 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t57 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t58 = -TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t _t59 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t60 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t61 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t62 = TRAIN5_LIT(0.2)*radius_cart_left;
-    const train5_real_t _t63 = -TRAIN5_LIT(0.6)*radius_cart_left;
-    const train5_real_t _t64 = -TRAIN5_LIT(0.2)*radius_cart_right;
-    const train5_real_t _t65 = -TRAIN5_LIT(0.6)*radius_cart_right;
-    const train5_real_t _t66 = _t11*_t2;
-    const train5_real_t _t67 = _t10*(_t2*_t62 + _t3*_t63);
-    const train5_real_t _t68 = _t10*(_t2*_t64 + _t3*_t65);
-    const train5_real_t _t69 = _t12*_t66 + TRAIN5_LIT(1.0);
-    const train5_real_t _t70 = -_t13*_t66;
-    const train5_real_t _t71 = _t15*_t69 - _t16*_t70;
-    const train5_real_t _t72 = _t15*_t70 + _t16*_t69;
-    const train5_real_t _t73 = TRAIN5_LIT(0.2)*radius_cart2_left;
-    const train5_real_t _t74 = -TRAIN5_LIT(0.6)*radius_cart2_left;
-    const train5_real_t _t75 = -TRAIN5_LIT(0.2)*radius_cart2_right;
-    const train5_real_t _t76 = -TRAIN5_LIT(0.6)*radius_cart2_right;
-    const train5_real_t _t77 = _t20*_t71;
-    const train5_real_t _t78 = _t19*(_t71*_t73 + _t72*_t74);
-    const train5_real_t _t79 = _t19*(_t71*_t75 + _t72*_t76);
-    const train5_real_t _t80 = _t21*_t77 + _t69;
-    const train5_real_t _t81 = -_t22*_t77 + _t70;
-    const train5_real_t _t82 = _t24*_t80 - _t25*_t81;
-    const train5_real_t _t83 = _t24*_t81 + _t25*_t80;
-    const train5_real_t _t84 = TRAIN5_LIT(0.2)*radius_cart3_left;
-    const train5_real_t _t85 = -TRAIN5_LIT(0.6)*radius_cart3_left;
-    const train5_real_t _t86 = -TRAIN5_LIT(0.2)*radius_cart3_right;
-    const train5_real_t _t87 = -TRAIN5_LIT(0.6)*radius_cart3_right;
-    const train5_real_t _t88 = _t29*_t82;
-    const train5_real_t _t89 = _t28*(_t82*_t84 + _t83*_t85);
-    const train5_real_t _t90 = _t28*(_t82*_t86 + _t83*_t87);
-    const train5_real_t _t91 = _t30*_t88 + _t80;
-    const train5_real_t _t92 = -_t31*_t88 + _t81;
-    const train5_real_t _t93 = _t33*_t91 - _t34*_t92;
-    const train5_real_t _t94 = _t33*_t92 + _t34*_t91;
-    const train5_real_t _t95 = TRAIN5_LIT(0.2)*radius_cart4_left;
-    const train5_real_t _t96 = -TRAIN5_LIT(0.6)*radius_cart4_left;
-    const train5_real_t _t97 = -TRAIN5_LIT(0.2)*radius_cart4_right;
-    const train5_real_t _t98 = -TRAIN5_LIT(0.6)*radius_cart4_right;
-    const train5_real_t _t99 = _t38*_t93;
-    const train5_real_t _t100 = _t37*(_t93*_t95 + _t94*_t96);
-    const train5_real_t _t101 = _t37*(_t93*_t97 + _t94*_t98);
-    const train5_real_t _t102 = _t39*_t99 + _t91;
-    const train5_real_t _t103 = -_t40*_t99 + _t92;
-    const train5_real_t _t104 = _t102*_t42 - _t103*_t43;
-    const train5_real_t _t105 = _t102*_t43 + _t103*_t42;
-    const train5_real_t _t106 = TRAIN5_LIT(0.2)*radius_cart5_left;
-    const train5_real_t _t107 = -TRAIN5_LIT(0.6)*radius_cart5_left;
-    const train5_real_t _t108 = -TRAIN5_LIT(0.2)*radius_cart5_right;
-    const train5_real_t _t109 = -TRAIN5_LIT(0.6)*radius_cart5_right;
-    const train5_real_t _t110 = _t104*_t47;
-    const train5_real_t _t111 = _t46*(_t104*_t106 + _t105*_t107);
-    const train5_real_t _t112 = _t46*(_t104*_t108 + _t105*_t109);
-    const train5_real_t _t113 = TRAIN5_LIT(0.207)*_t6;
-    const train5_real_t _t114 = -TRAIN5_LIT(0.207)*_t7;
-    const train5_real_t _t115 = -_t11*_t58;
-    const train5_real_t _t116 = _t10*(-_t58*_t62 - _t59*_t63);
-    const train5_real_t _t117 = _t10*(-_t58*_t64 - _t59*_t65);
-    const train5_real_t _t118 = _t115*_t12;
-    const train5_real_t _t119 = -_t115*_t13 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
-    const train5_real_t _t120 = _t118*_t15 - _t119*_t16;
-    const train5_real_t _t121 = _t118*_t16 + _t119*_t15;
-    const train5_real_t _t122 = _t120*_t20;
-    const train5_real_t _t123 = _t19*(_t120*_t73 + _t121*_t74);
-    const train5_real_t _t124 = _t19*(_t120*_t75 + _t121*_t76);
-    const train5_real_t _t125 = _t118 + _t122*_t21;
-    const train5_real_t _t126 = _t119 - _t122*_t22;
-    const train5_real_t _t127 = _t125*_t24 - _t126*_t25;
-    const train5_real_t _t128 = _t125*_t25 + _t126*_t24;
-    const train5_real_t _t129 = _t127*_t29;
-    const train5_real_t _t130 = _t28*(_t127*_t84 + _t128*_t85);
-    const train5_real_t _t131 = _t28*(_t127*_t86 + _t128*_t87);
-    const train5_real_t _t132 = _t125 + _t129*_t30;
-    const train5_real_t _t133 = _t126 - _t129*_t31;
-    const train5_real_t _t134 = _t132*_t33 - _t133*_t34;
-    const train5_real_t _t135 = _t132*_t34 + _t133*_t33;
-    const train5_real_t _t136 = _t134*_t38;
-    const train5_real_t _t137 = _t37*(_t134*_t95 + _t135*_t96);
-    const train5_real_t _t138 = _t37*(_t134*_t97 + _t135*_t98);
-    const train5_real_t _t139 = _t132 + _t136*_t39;
-    const train5_real_t _t140 = _t133 - _t136*_t40;
-    const train5_real_t _t141 = _t139*_t42 - _t140*_t43;
-    const train5_real_t _t142 = _t139*_t43 + _t140*_t42;
-    const train5_real_t _t143 = _t141*_t47;
-    const train5_real_t _t144 = _t46*(_t106*_t141 + _t107*_t142);
-    const train5_real_t _t145 = _t46*(_t108*_t141 + _t109*_t142);
+    const train5_real_t _t112 = TRAIN5_LIT(1.0)/(TRAIN5_FMAX(_t111, eps_1));
+    const train5_real_t _t113 = _t109*_t112;
+    const train5_real_t _t114 = _t110*_t112;
+    const train5_real_t _t115 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t116 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t117 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t118 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t119 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t120 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t121 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t123 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t124 = _t10*(_t120*_t2 + _t121*_t3);
+    const train5_real_t _t125 = _t10*(_t122*_t2 + _t123*_t3);
+    const train5_real_t _t126 = _t15*_t53 + _t16*_t50;
+    const train5_real_t _t127 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t128 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t129 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t130 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t131 = _t19*(_t126*_t128 + _t127*_t56);
+    const train5_real_t _t132 = _t19*(_t126*_t130 + _t129*_t56);
+    const train5_real_t _t133 = _t24*_t61 + _t25*_t58;
+    const train5_real_t _t134 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t135 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t136 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t137 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t138 = _t28*(_t133*_t135 + _t134*_t64);
+    const train5_real_t _t139 = _t28*(_t133*_t137 + _t136*_t64);
+    const train5_real_t _t140 = _t33*_t69 + _t34*_t66;
+    const train5_real_t _t141 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t142 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t143 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t144 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t145 = _t37*(_t140*_t142 + _t141*_t72);
+    const train5_real_t _t146 = _t37*(_t140*_t144 + _t143*_t72);
+    const train5_real_t _t147 = _t42*_t74 - _t43*_t77;
+    const train5_real_t _t148 = _t42*_t77 + _t43*_t74;
+    const train5_real_t _t149 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t150 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t151 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t152 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t153 = _t147*_t47;
+    const train5_real_t _t154 = _t46*(_t147*_t149 + _t148*_t150);
+    const train5_real_t _t155 = _t46*(_t147*_t151 + _t148*_t152);
+    const train5_real_t _t156 = TRAIN5_LIT(0.207)*_t6;
+    const train5_real_t _t157 = -TRAIN5_LIT(0.207)*_t7;
+    const train5_real_t _t158 = _t10*(-_t117*_t121 - _t120*_t79);
+    const train5_real_t _t159 = _t10*(-_t117*_t123 - _t122*_t79);
+    const train5_real_t _t160 = _t15*_t83 + _t16*_t81;
+    const train5_real_t _t161 = _t19*(_t127*_t86 + _t128*_t160);
+    const train5_real_t _t162 = _t19*(_t129*_t86 + _t130*_t160);
+    const train5_real_t _t163 = _t24*_t90 + _t25*_t88;
+    const train5_real_t _t164 = _t28*(_t134*_t93 + _t135*_t163);
+    const train5_real_t _t165 = _t28*(_t136*_t93 + _t137*_t163);
+    const train5_real_t _t166 = _t33*_t97 + _t34*_t95;
+    const train5_real_t _t167 = _t37*(_t100*_t141 + _t142*_t166);
+    const train5_real_t _t168 = _t37*(_t100*_t143 + _t144*_t166);
+    const train5_real_t _t169 = _t102*_t42 - _t104*_t43;
+    const train5_real_t _t170 = _t102*_t43 + _t104*_t42;
+    const train5_real_t _t171 = _t169*_t47;
+    const train5_real_t _t172 = _t46*(_t149*_t169 + _t150*_t170);
+    const train5_real_t _t173 = _t46*(_t151*_t169 + _t152*_t170);
     const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t146 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t147 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t148 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const train5_real_t _t149 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t150 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
-    const train5_real_t _t151 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t152 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
-    const train5_real_t _t153 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t154 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t155 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
-    const train5_real_t _t156 = _t110*_t154;
-    const train5_real_t _t157 = _t110*_t155;
-    const train5_real_t _t158 = _t152*_t99 + _t156;
-    const train5_real_t _t159 = _t153*_t99 + _t157;
-    const train5_real_t _t160 = _t150*_t88 + _t158;
-    const train5_real_t _t161 = _t151*_t88 + _t159;
-    const train5_real_t _t162 = _t148*_t77 + _t160;
-    const train5_real_t _t163 = _t149*_t77 + _t161;
-    const train5_real_t _t164 = _t146*_t66 + _t162;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t165 = J_theta_right*_t6;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t166 = J_theta_left*_t7;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t167 = J_theta_cart_right*_t67;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t168 = J_theta_cart_left*_t68;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t169 = J_theta_cart2_right*_t78;
+    const train5_real_t _t174 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t175 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t170 = J_theta_cart2_left*_t79;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t171 = J_theta_cart3_right*_t89;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t172 = J_theta_cart3_left*_t90;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t173 = J_theta_cart4_right*_t100;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t174 = J_theta_cart4_left*_t101;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t175 = J_theta_cart5_right*_t111;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t176 = J_theta_cart5_left*_t112;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
     const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t177 = J_x_tractor + _t164;
+    const train5_real_t _t176 = J_theta_cart2_left*_t132*_t132 + J_theta_cart2_right*_t131*_t131
+            + J_theta_cart3_left*_t139*_t139 + J_theta_cart3_right*_t138*_t138
+            + J_theta_cart4_left*_t146*_t146 + J_theta_cart4_right*_t145*_t145
+            + J_theta_cart5_left*_t155*_t155 + J_theta_cart5_right*_t154*_t154
+            + J_theta_cart_left*_t125*_t125 + J_theta_cart_right*_t124*_t124 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
     const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t178 = J_theta_cart*_t66 + _t12*_t162 - _t13*_t163 + _t146;
+    const train5_real_t _t177 = J_theta_cart*_t49*_t49 + TRAIN5_LIT(2.0)*_t174*_t49 + _t176;
     const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t179 = J_theta_cart2*_t77 + _t148*_t69 + _t149*_t70 + _t160*_t21
-            - _t161*_t22;
+    const train5_real_t _t178 = J_theta_cart2*_t57*_t57 + _t177 + _t51*_t57 + _t54*_t57
+            + _t57*(_t51 + _t54);
     const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t180 = J_theta_cart3*_t88 + _t150*_t80 + _t151*_t81 + _t158*_t30
-            - _t159*_t31;
+    const train5_real_t _t179 = J_theta_cart3*_t65*_t65 + _t178 + _t59*_t65 + _t62*_t65
+            + _t65*(_t59 + _t62);
     const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t181 = J_theta_cart4*_t99 + _t152*_t91 + _t153*_t92 + _t156*_t39
-            - _t157*_t40;
+    const train5_real_t _t180 = J_theta_cart4*_t73*_t73 + _t179 + _t67*_t73 + _t70*_t73
+            + _t73*(_t67 + _t70);
     const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t182 = J_theta_cart5*_t110 + _t102*_t154 + _t103*_t155;
-    const train5_real_t _t183 = _t143*_t154;
-    const train5_real_t _t184 = _t143*_t155;
-    const train5_real_t _t185 = _t136*_t152 + _t183;
-    const train5_real_t _t186 = _t136*_t153 + _t184;
-    const train5_real_t _t187 = _t129*_t150 + _t185;
-    const train5_real_t _t188 = _t129*_t151 + _t186;
-    const train5_real_t _t189 = _t122*_t148 + _t187;
-    const train5_real_t _t190 = _t122*_t149 + _t188;
-    const train5_real_t _t191 = _t115*_t146 + _t189;
-    const train5_real_t _t192 = _t115*_t147 + _t190;
+    const train5_real_t _t181 = J_theta_cart5*_t153*_t153 + _t153*_t75 + _t153*_t78
+            + _t153*(_t75 + _t78) + _t180;
+    const train5_real_t _t182 = J_theta_cart2_left*_t132*_t162 + J_theta_cart2_right*_t131*_t161
+            + J_theta_cart3_left*_t139*_t165 + J_theta_cart3_right*_t138*_t164
+            + J_theta_cart4_left*_t146*_t168 + J_theta_cart4_right*_t145*_t167
+            + J_theta_cart5_left*_t155*_t173 + J_theta_cart5_right*_t154*_t172
+            + J_theta_cart_left*_t125*_t159 + J_theta_cart_right*_t124*_t158
+            + J_theta_left*_t157*_t7 + J_theta_right*_t156*_t6;
     const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t193 = K_theta_tractor_x_tractor_2 + _t191;
-    const train5_real_t _t194 = J_theta_right*_t113;
-    const train5_real_t _t195 = J_theta_left*_t114;
-    const train5_real_t _t196 = J_theta_cart_right*_t116;
-    const train5_real_t _t197 = J_theta_cart_left*_t117;
-    const train5_real_t _t198 = J_theta_cart2_right*_t123;
-    const train5_real_t _t199 = J_theta_cart2_left*_t124;
-    const train5_real_t _t200 = J_theta_cart3_right*_t130;
-    const train5_real_t _t201 = J_theta_cart3_left*_t131;
-    const train5_real_t _t202 = J_theta_cart4_right*_t137;
-    const train5_real_t _t203 = J_theta_cart4_left*_t138;
-    const train5_real_t _t204 = J_theta_cart5_right*_t144;
-    const train5_real_t _t205 = J_theta_cart5_left*_t145;
+    const train5_real_t _t183 = K_theta_tractor_x_tractor_2 + _t182;
+    const train5_real_t _t184 = J_theta_cart*_t49*_t80 + _t174*_t80 - TRAIN5_LIT(0.3)*_t175*_t49
+            + _t183;
+    const train5_real_t _t185 = J_theta_cart2*_t57*_t87 + _t184 + _t51*_t87 + _t54*_t87 + _t57*_t85;
+    const train5_real_t _t186 = J_theta_cart3*_t65*_t94 + _t185 + _t59*_t94 + _t62*_t94 + _t65*_t92;
+    const train5_real_t _t187 = J_theta_cart4*_t101*_t73 + _t101*_t67 + _t101*_t70 + _t186
+            + _t73*_t99;
+    const train5_real_t _t188 = J_theta_cart5*_t153*_t171 + _t106*_t153 + _t171*_t75 + _t171*_t78
+            + _t187;
+    const train5_real_t _t189 = J_theta_cart2_left*_t162*_t162 + J_theta_cart2_right*_t161*_t161
+            + J_theta_cart3_left*_t165*_t165 + J_theta_cart3_right*_t164*_t164
+            + J_theta_cart4_left*_t168*_t168 + J_theta_cart4_right*_t167*_t167
+            + J_theta_cart5_left*_t173*_t173 + J_theta_cart5_right*_t172*_t172
+            + J_theta_cart_left*_t159*_t159 + J_theta_cart_right*_t158*_t158
+            + J_theta_left*_t157*_t157 + J_theta_right*_t156*_t156;
     const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t206 = J_theta_tractor - TRAIN5_LIT(0.3)*_t192;
-    const train5_real_t _t207 = J_theta_cart*_t115 + _t12*_t189 - _t13*_t190
-            - TRAIN5_LIT(0.3)*_t147;
-    const train5_real_t _t208 = J_theta_cart2*_t122 + _t118*_t148 + _t119*_t149 + _t187*_t21
-            - _t188*_t22;
-    const train5_real_t _t209 = J_theta_cart3*_t129 + _t125*_t150 + _t126*_t151 + _t185*_t30
-            - _t186*_t31;
-    const train5_real_t _t210 = J_theta_cart4*_t136 + _t132*_t152 + _t133*_t153 + _t183*_t39
-            - _t184*_t40;
-    const train5_real_t _t211 = J_theta_cart5*_t143 + _t139*_t154 + _t140*_t155;
-    const train5_real_t _t212 = _t100*_t173 + _t101*_t174 + _t110*_t182 + _t111*_t175 + _t112*_t176
-            + _t165*_t6 + _t166*_t7 + _t167*_t67 + _t168*_t68 + _t169*_t78 + _t170*_t79 + _t171*_t89
-            + _t172*_t90 + _t177 + _t178*_t66 + _t179*_t77 + _t180*_t88 + _t181*_t99;
-    const train5_real_t _t213 = _t100*_t202 + _t101*_t203 + _t110*_t211 + _t111*_t204 + _t112*_t205
-            + _t193 + _t194*_t6 + _t195*_t7 + _t196*_t67 + _t197*_t68 + _t198*_t78 + _t199*_t79
-            + _t200*_t89 + _t201*_t90 + _t207*_t66 + _t208*_t77 + _t209*_t88 + _t210*_t99;
-    const train5_real_t _t214 = _t113*_t194 + _t114*_t195 + _t115*_t207 + _t116*_t196 + _t117*_t197
-            + _t122*_t208 + _t123*_t198 + _t124*_t199 + _t129*_t209 + _t130*_t200 + _t131*_t201
-            + _t136*_t210 + _t137*_t202 + _t138*_t203 + _t143*_t211 + _t144*_t204 + _t145*_t205
-            + _t206;
-    const train5_real_t _t215 = _t212*_t60 + _t213*_t56;
-    const train5_real_t _t216 = _t212*_t61 + _t213*_t57;
-    const train5_real_t _t217 = _t213*_t60 + _t214*_t56;
-    const train5_real_t _t218 = _t213*_t61 + _t214*_t57;
-    const train5_real_t _t219 = _t215*_t60 + _t217*_t56;
-    const train5_real_t _t220 = _t216*_t60 + _t218*_t56;
-    const train5_real_t _t221 = _t216*_t61 + _t218*_t57;
+    const train5_real_t _t190 = J_theta_tractor + _t189;
+    const train5_real_t _t191 = J_theta_cart*_t80*_t80 - TRAIN5_LIT(0.6)*_t175*_t80 + _t190;
+    const train5_real_t _t192 = J_theta_cart2*_t87*_t87 + _t191 + _t82*_t87 + _t84*_t87 + _t85*_t87;
+    const train5_real_t _t193 = J_theta_cart3*_t94*_t94 + _t192 + _t89*_t94 + _t91*_t94 + _t92*_t94;
+    const train5_real_t _t194 = J_theta_cart4*_t101*_t101 + _t101*_t96 + _t101*_t98 + _t101*_t99
+            + _t193;
+    const train5_real_t _t195 = J_theta_cart5*_t171*_t171 + _t103*_t171 + _t105*_t171 + _t106*_t171
+            + _t194;
+    const train5_real_t _t196 = _t115*_t188 + _t118*_t181;
+    const train5_real_t _t197 = _t116*_t188 + _t119*_t181;
+    const train5_real_t _t198 = _t115*_t195 + _t118*_t188;
+    const train5_real_t _t199 = _t116*_t195 + _t119*_t188;
+    const train5_real_t _t200 = _t115*_t198 + _t118*_t196;
+    const train5_real_t _t201 = _t115*_t199 + _t118*_t197;
+    const train5_real_t _t202 = _t116*_t199 + _t119*_t197;
     const train5_real_t H1hat0 = H1hat[0];
     const train5_real_t H1hat1 = H1hat[1];
     const train5_real_t gain_1 = gain[0];
-    u[0] = H1hat0 + _t219*_t48 + _t220*_t49 + gain_1*(_t219*_t54 + _t220*_t55);
-    u[1] = H1hat1 + _t220*_t48 + _t221*_t49 + gain_1*(_t220*_t54 + _t221*_t55);
-    s[0] = _t50;
-    s[1] = _t51;
-    s_norm[0] = _t52;
+    u[0] = H1hat0 + _t107*_t200 + _t108*_t201 + gain_1*(_t113*_t200 + _t114*_t201);
+    u[1] = H1hat1 + _t107*_t201 + _t108*_t202 + gain_1*(_t113*_t201 + _t114*_t202);
+    s[0] = _t109;
+    s[1] = _t110;
+    s_norm[0] = _t111;
 }
 
 /* train5_minimal_tdroc_law_mhat: documented in train5_laws.h.
@@ -1344,7 +1307,7 @@ void train5_minimal_tdroc_law_mhat(const train5_params_t *p, const train5_real_t
 }
 
 /* train5_minimal_roc_law: documented in train5_laws.h.
-   operations after CSE: 352 add, 611 mul, 8 div, 10 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 353 add, 652 mul, 8 div, 10 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void train5_minimal_roc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *e, const train5_real_t *edot,
     const train5_real_t *qddot_des, const train5_real_t *k1, const train5_real_t *k2,
@@ -1352,14 +1315,14 @@ void train5_minimal_roc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *eps, train5_real_t *u, train5_real_t *s, train5_real_t *s_norm,
     train5_real_t *gain)
 {
-    train5_real_t kept[67];
+    train5_real_t kept[66];
     train5_k_minimal_roc_law_keep(p, kept);
     train5_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u, s,
             s_norm, gain);
 }
 
 /* train5_minimal_asmc_law: documented in train5_laws.h.
-   operations after CSE: 348 add, 608 mul, 7 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 349 add, 649 mul, 7 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void train5_minimal_asmc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *e, const train5_real_t *edot,
     const train5_real_t *qddot_des, const train5_real_t *k1, const train5_real_t *k2,
@@ -1367,7 +1330,7 @@ void train5_minimal_asmc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *eps, const train5_real_t *adapt, train5_real_t *u, train5_real_t *s,
     train5_real_t *s_norm, train5_real_t *gain_next)
 {
-    train5_real_t kept[67];
+    train5_real_t kept[66];
     train5_k_minimal_roc_law_keep(p, kept);
     train5_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps, adapt,
             u, s, s_norm, gain_next);

@@ -7,7 +7,7 @@
 #include "train5_plant.h"
 
 /* train5_plant_state_derivative: documented in train5_plant.h.
-   operations after CSE: 344 add, 608 mul, 7 div, 12 sin/cos, 0 sqrt */
+   operations after CSE: 345 add, 649 mul, 7 div, 12 sin/cos, 0 sqrt */
 void train5_plant_state_derivative(const train5_plant_params_t *pp, const train5_real_t *x,
     const train5_real_t *tau, train5_real_t *xdot)
 {
@@ -144,320 +144,325 @@ void train5_plant_state_derivative(const train5_plant_params_t *pp, const train5
     const train5_real_t _t110 = _t108*_t109;
     const train5_real_t _t111 = -_t40*_t95 + _t98;
     const train5_real_t _t112 = _t108*_t111;
-    const train5_real_t _t113 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t114 = TRAIN5_LIT(0.2)*radius_cart_left;
-    const train5_real_t _t115 = -TRAIN5_LIT(0.6)*radius_cart_left;
-    const train5_real_t _t116 = -TRAIN5_LIT(0.2)*radius_cart_right;
-    const train5_real_t _t117 = -TRAIN5_LIT(0.6)*radius_cart_right;
-    const train5_real_t _t118 = _t10*(_t114*_t2 + _t115*_t3);
-    const train5_real_t _t119 = _t10*(_t116*_t2 + _t117*_t3);
-    const train5_real_t _t120 = _t15*_t62 + _t16*_t61;
-    const train5_real_t _t121 = TRAIN5_LIT(0.2)*radius_cart2_left;
-    const train5_real_t _t122 = -TRAIN5_LIT(0.6)*radius_cart2_left;
-    const train5_real_t _t123 = -TRAIN5_LIT(0.2)*radius_cart2_right;
-    const train5_real_t _t124 = -TRAIN5_LIT(0.6)*radius_cart2_right;
-    const train5_real_t _t125 = _t19*(_t120*_t122 + _t121*_t63);
-    const train5_real_t _t126 = _t19*(_t120*_t124 + _t123*_t63);
-    const train5_real_t _t127 = _t24*_t75 + _t25*_t74;
-    const train5_real_t _t128 = TRAIN5_LIT(0.2)*radius_cart3_left;
-    const train5_real_t _t129 = -TRAIN5_LIT(0.6)*radius_cart3_left;
-    const train5_real_t _t130 = -TRAIN5_LIT(0.2)*radius_cart3_right;
-    const train5_real_t _t131 = -TRAIN5_LIT(0.6)*radius_cart3_right;
-    const train5_real_t _t132 = _t28*(_t127*_t129 + _t128*_t76);
-    const train5_real_t _t133 = _t28*(_t127*_t131 + _t130*_t76);
-    const train5_real_t _t134 = _t33*_t88 + _t34*_t87;
-    const train5_real_t _t135 = TRAIN5_LIT(0.2)*radius_cart4_left;
-    const train5_real_t _t136 = -TRAIN5_LIT(0.6)*radius_cart4_left;
-    const train5_real_t _t137 = -TRAIN5_LIT(0.2)*radius_cart4_right;
-    const train5_real_t _t138 = -TRAIN5_LIT(0.6)*radius_cart4_right;
-    const train5_real_t _t139 = _t37*(_t134*_t136 + _t135*_t89);
-    const train5_real_t _t140 = _t37*(_t134*_t138 + _t137*_t89);
-    const train5_real_t _t141 = _t100*_t43 + _t101*_t42;
-    const train5_real_t _t142 = TRAIN5_LIT(0.2)*radius_cart5_left;
-    const train5_real_t _t143 = -TRAIN5_LIT(0.6)*radius_cart5_left;
-    const train5_real_t _t144 = -TRAIN5_LIT(0.2)*radius_cart5_right;
-    const train5_real_t _t145 = -TRAIN5_LIT(0.6)*radius_cart5_right;
-    const train5_real_t _t146 = _t46*(_t102*_t142 + _t141*_t143);
-    const train5_real_t _t147 = _t46*(_t102*_t144 + _t141*_t145);
-    const train5_real_t _t148 = TRAIN5_LIT(0.207)*_t6;
-    const train5_real_t _t149 = -TRAIN5_LIT(0.207)*_t7;
-    const train5_real_t _t150 = _t10*(-_t113*_t115 - _t114*_t52);
-    const train5_real_t _t151 = _t10*(-_t113*_t117 - _t116*_t52);
-    const train5_real_t _t152 = _t15*_t66 + _t16*_t65;
-    const train5_real_t _t153 = _t19*(_t121*_t67 + _t122*_t152);
-    const train5_real_t _t154 = _t19*(_t123*_t67 + _t124*_t152);
-    const train5_real_t _t155 = _t24*_t79 + _t25*_t78;
-    const train5_real_t _t156 = _t28*(_t128*_t80 + _t129*_t155);
-    const train5_real_t _t157 = _t28*(_t130*_t80 + _t131*_t155);
-    const train5_real_t _t158 = _t33*_t92 + _t34*_t91;
-    const train5_real_t _t159 = _t37*(_t135*_t93 + _t136*_t158);
-    const train5_real_t _t160 = _t37*(_t137*_t93 + _t138*_t158);
-    const train5_real_t _t161 = _t104*_t43 + _t105*_t42;
-    const train5_real_t _t162 = _t46*(_t106*_t142 + _t143*_t161);
-    const train5_real_t _t163 = _t46*(_t106*_t144 + _t145*_t161);
-    const train5_real_t _t164 = _t148*_t56 + _t50*_t6;
-    const train5_real_t _t165 = _t149*_t56 + _t50*_t7;
-    const train5_real_t _t166 = _t118*_t50 + _t150*_t56;
-    const train5_real_t _t167 = _t119*_t50 + _t151*_t56;
-    const train5_real_t _t168 = _t125*_t50 + _t153*_t56;
-    const train5_real_t _t169 = _t126*_t50 + _t154*_t56;
-    const train5_real_t _t170 = _t132*_t50 + _t156*_t56;
-    const train5_real_t _t171 = _t133*_t50 + _t157*_t56;
-    const train5_real_t _t172 = _t139*_t50 + _t159*_t56;
-    const train5_real_t _t173 = _t140*_t50 + _t160*_t56;
-    const train5_real_t _t174 = _t146*_t50 + _t162*_t56;
-    const train5_real_t _t175 = _t147*_t50 + _t163*_t56;
-    const train5_real_t _t176 = _t56*_t56;
-    const train5_real_t _t177 = _t57*_t57;
-    const train5_real_t _t178 = _t69*_t69;
-    const train5_real_t _t179 = _t82*_t82;
-    const train5_real_t _t180 = _t95*_t95;
-    const train5_real_t _t181 = _t108*_t108;
-    const train5_real_t _t182 = TRAIN5_LIT(0.3)*_t176;
-    const train5_real_t _t183 = _t13*_t177;
-    const train5_real_t _t184 = _t12*_t177;
-    const train5_real_t _t185 = _t178*_t22;
-    const train5_real_t _t186 = _t178*_t21;
-    const train5_real_t _t187 = _t179*_t31;
-    const train5_real_t _t188 = _t179*_t30;
-    const train5_real_t _t189 = _t180*_t40;
-    const train5_real_t _t190 = _t180*_t39;
-    const train5_real_t _t191 = -_t50*_t56;
-    const train5_real_t _t192 = -_t191*_t4*_t5;
-    const train5_real_t _t193 = -_t2*_t60 - _t3*_t58;
-    const train5_real_t _t194 = _t2*_t58 - _t3*_t60;
-    const train5_real_t _t195 = _t182*_t2 - _t192*_t3 - _t193;
-    const train5_real_t _t196 = _t182*_t3 + _t192*_t2 - _t194;
-    const train5_real_t _t197 = _t11*_t195;
-    const train5_real_t _t198 = _t10*(_t114*_t195 + _t115*_t196);
-    const train5_real_t _t199 = _t10*(_t116*_t195 + _t117*_t196);
-    const train5_real_t _t200 = -_t15*_t73 - _t16*_t71;
-    const train5_real_t _t201 = _t15*_t71 - _t16*_t73;
-    const train5_real_t _t202 = _t12*_t197 + _t182 + _t183;
-    const train5_real_t _t203 = -_t13*_t197 + _t184 + _t192;
-    const train5_real_t _t204 = _t15*_t202 - _t16*_t203 - _t200;
-    const train5_real_t _t205 = _t15*_t203 + _t16*_t202 - _t201;
-    const train5_real_t _t206 = _t20*_t204;
-    const train5_real_t _t207 = _t19*(_t121*_t204 + _t122*_t205);
-    const train5_real_t _t208 = _t19*(_t123*_t204 + _t124*_t205);
-    const train5_real_t _t209 = -_t24*_t86 - _t25*_t84;
-    const train5_real_t _t210 = _t24*_t84 - _t25*_t86;
-    const train5_real_t _t211 = _t185 + _t202 + _t206*_t21;
-    const train5_real_t _t212 = _t186 + _t203 - _t206*_t22;
-    const train5_real_t _t213 = -_t209 + _t211*_t24 - _t212*_t25;
-    const train5_real_t _t214 = -_t210 + _t211*_t25 + _t212*_t24;
-    const train5_real_t _t215 = _t213*_t29;
-    const train5_real_t _t216 = _t28*(_t128*_t213 + _t129*_t214);
-    const train5_real_t _t217 = _t28*(_t130*_t213 + _t131*_t214);
-    const train5_real_t _t218 = -_t33*_t99 - _t34*_t97;
-    const train5_real_t _t219 = _t33*_t97 - _t34*_t99;
-    const train5_real_t _t220 = _t187 + _t211 + _t215*_t30;
-    const train5_real_t _t221 = _t188 + _t212 - _t215*_t31;
-    const train5_real_t _t222 = -_t218 + _t220*_t33 - _t221*_t34;
-    const train5_real_t _t223 = -_t219 + _t220*_t34 + _t221*_t33;
-    const train5_real_t _t224 = _t222*_t38;
-    const train5_real_t _t225 = _t37*(_t135*_t222 + _t136*_t223);
-    const train5_real_t _t226 = _t37*(_t137*_t222 + _t138*_t223);
-    const train5_real_t _t227 = -_t110*_t43 - _t112*_t42;
-    const train5_real_t _t228 = _t110*_t42 - _t112*_t43;
-    const train5_real_t _t229 = _t189 + _t220 + _t224*_t39;
-    const train5_real_t _t230 = _t190 + _t221 - _t224*_t40;
-    const train5_real_t _t231 = -_t227 + _t229*_t42 - _t230*_t43;
-    const train5_real_t _t232 = -_t228 + _t229*_t43 + _t230*_t42;
-    const train5_real_t _t233 = _t231*_t47;
-    const train5_real_t _t234 = _t46*(_t142*_t231 + _t143*_t232);
-    const train5_real_t _t235 = _t46*(_t144*_t231 + _t145*_t232);
-    const train5_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
-    const train5_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
-    const train5_real_t _t236 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t237 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const train5_real_t K_theta_cart2_x_tractor = pp->K_theta_cart2_x_tractor;
     const train5_real_t K_theta_cart2_x_tractor_2 = pp->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t238 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
-    const train5_real_t _t239 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t113 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t114 = _t113*_t61;
+    const train5_real_t _t115 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t116 = _t115*_t62;
     const train5_real_t K_theta_cart3_x_tractor = pp->K_theta_cart3_x_tractor;
     const train5_real_t K_theta_cart3_x_tractor_2 = pp->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t240 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
-    const train5_real_t _t241 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t117 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t118 = _t117*_t74;
+    const train5_real_t _t119 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t120 = _t119*_t75;
     const train5_real_t K_theta_cart4_x_tractor = pp->K_theta_cart4_x_tractor;
     const train5_real_t K_theta_cart4_x_tractor_2 = pp->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t242 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
-    const train5_real_t _t243 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t121 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t122 = _t121*_t87;
+    const train5_real_t _t123 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t124 = _t123*_t88;
     const train5_real_t K_theta_cart5_x_tractor = pp->K_theta_cart5_x_tractor;
     const train5_real_t K_theta_cart5_x_tractor_2 = pp->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t244 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t245 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
-    const train5_real_t _t246 = _t103*_t244;
-    const train5_real_t _t247 = _t103*_t245;
-    const train5_real_t _t248 = _t242*_t90 + _t246;
-    const train5_real_t _t249 = _t243*_t90 + _t247;
-    const train5_real_t _t250 = _t240*_t77 + _t248;
-    const train5_real_t _t251 = _t241*_t77 + _t249;
-    const train5_real_t _t252 = _t238*_t64 + _t250;
-    const train5_real_t _t253 = _t239*_t64 + _t251;
-    const train5_real_t _t254 = _t236*_t51 + _t252;
-    const train5_real_t J_theta_right = pp->J_theta_right;
-    const train5_real_t _t255 = J_theta_right*_t6;
-    const train5_real_t J_theta_left = pp->J_theta_left;
-    const train5_real_t _t256 = J_theta_left*_t7;
-    const train5_real_t J_theta_cart_right = pp->J_theta_cart_right;
-    const train5_real_t _t257 = J_theta_cart_right*_t118;
-    const train5_real_t J_theta_cart_left = pp->J_theta_cart_left;
-    const train5_real_t _t258 = J_theta_cart_left*_t119;
-    const train5_real_t J_theta_cart2_right = pp->J_theta_cart2_right;
-    const train5_real_t _t259 = J_theta_cart2_right*_t125;
+    const train5_real_t _t125 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t126 = _t100*_t125;
+    const train5_real_t _t127 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t128 = _t101*_t127;
+    const train5_real_t _t129 = _t15*_t62 + _t16*_t61;
+    const train5_real_t _t130 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t131 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t132 = _t19*(_t129*_t131 + _t130*_t63);
     const train5_real_t J_theta_cart2_left = pp->J_theta_cart2_left;
-    const train5_real_t _t260 = J_theta_cart2_left*_t126;
-    const train5_real_t J_theta_cart3_right = pp->J_theta_cart3_right;
-    const train5_real_t _t261 = J_theta_cart3_right*_t132;
+    const train5_real_t _t133 = J_theta_cart2_left*_t132;
+    const train5_real_t _t134 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t135 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t136 = _t19*(_t129*_t135 + _t134*_t63);
+    const train5_real_t J_theta_cart2_right = pp->J_theta_cart2_right;
+    const train5_real_t _t137 = J_theta_cart2_right*_t136;
+    const train5_real_t _t138 = _t24*_t75 + _t25*_t74;
+    const train5_real_t _t139 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t140 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t141 = _t28*(_t138*_t140 + _t139*_t76);
     const train5_real_t J_theta_cart3_left = pp->J_theta_cart3_left;
-    const train5_real_t _t262 = J_theta_cart3_left*_t133;
-    const train5_real_t J_theta_cart4_right = pp->J_theta_cart4_right;
-    const train5_real_t _t263 = J_theta_cart4_right*_t139;
+    const train5_real_t _t142 = J_theta_cart3_left*_t141;
+    const train5_real_t _t143 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t144 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t145 = _t28*(_t138*_t144 + _t143*_t76);
+    const train5_real_t J_theta_cart3_right = pp->J_theta_cart3_right;
+    const train5_real_t _t146 = J_theta_cart3_right*_t145;
+    const train5_real_t _t147 = _t33*_t88 + _t34*_t87;
+    const train5_real_t _t148 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t149 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t150 = _t37*(_t147*_t149 + _t148*_t89);
     const train5_real_t J_theta_cart4_left = pp->J_theta_cart4_left;
-    const train5_real_t _t264 = J_theta_cart4_left*_t140;
-    const train5_real_t J_theta_cart5_right = pp->J_theta_cart5_right;
-    const train5_real_t _t265 = J_theta_cart5_right*_t146;
+    const train5_real_t _t151 = J_theta_cart4_left*_t150;
+    const train5_real_t _t152 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t153 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t154 = _t37*(_t147*_t153 + _t152*_t89);
+    const train5_real_t J_theta_cart4_right = pp->J_theta_cart4_right;
+    const train5_real_t _t155 = J_theta_cart4_right*_t154;
+    const train5_real_t _t156 = _t100*_t43 + _t101*_t42;
+    const train5_real_t _t157 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t158 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t159 = _t46*(_t102*_t157 + _t156*_t158);
     const train5_real_t J_theta_cart5_left = pp->J_theta_cart5_left;
-    const train5_real_t _t266 = J_theta_cart5_left*_t147;
-    const train5_real_t J_x_tractor = pp->J_x_tractor;
-    const train5_real_t _t267 = J_x_tractor + _t254;
+    const train5_real_t _t160 = J_theta_cart5_left*_t159;
+    const train5_real_t _t161 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t162 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t163 = _t46*(_t102*_t161 + _t156*_t162);
+    const train5_real_t J_theta_cart5_right = pp->J_theta_cart5_right;
+    const train5_real_t _t164 = J_theta_cart5_right*_t163;
+    const train5_real_t _t165 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t166 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t167 = _t10*(_t165*_t2 + _t166*_t3);
+    const train5_real_t J_theta_cart_left = pp->J_theta_cart_left;
+    const train5_real_t _t168 = J_theta_cart_left*_t167;
+    const train5_real_t _t169 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t170 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t171 = _t10*(_t169*_t2 + _t170*_t3);
+    const train5_real_t J_theta_cart_right = pp->J_theta_cart_right;
+    const train5_real_t _t172 = J_theta_cart_right*_t171;
+    const train5_real_t K_theta_cart_x_tractor = pp->K_theta_cart_x_tractor;
+    const train5_real_t K_theta_cart_x_tractor_2 = pp->K_theta_cart_x_tractor_2;
+    const train5_real_t _t173 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const train5_real_t _t174 = TRAIN5_LIT(0.3)*_t173;
     const train5_real_t J_theta_cart = pp->J_theta_cart;
-    const train5_real_t _t268 = J_theta_cart*_t51 + _t12*_t252 - _t13*_t253 + _t236;
+    const train5_real_t _t175 = J_theta_cart*_t51;
     const train5_real_t J_theta_cart2 = pp->J_theta_cart2;
-    const train5_real_t _t269 = J_theta_cart2*_t64 + _t21*_t250 - _t22*_t251 + _t238*_t61
-            + _t239*_t62;
+    const train5_real_t _t176 = J_theta_cart2*_t64;
+    const train5_real_t _t177 = _t113*_t65;
+    const train5_real_t _t178 = _t115*_t66;
+    const train5_real_t _t179 = _t177 + _t178;
     const train5_real_t J_theta_cart3 = pp->J_theta_cart3;
-    const train5_real_t _t270 = J_theta_cart3*_t77 + _t240*_t74 + _t241*_t75 + _t248*_t30
-            - _t249*_t31;
+    const train5_real_t _t180 = J_theta_cart3*_t77;
+    const train5_real_t _t181 = _t117*_t78;
+    const train5_real_t _t182 = _t119*_t79;
+    const train5_real_t _t183 = _t181 + _t182;
     const train5_real_t J_theta_cart4 = pp->J_theta_cart4;
-    const train5_real_t _t271 = J_theta_cart4*_t90 + _t242*_t87 + _t243*_t88 + _t246*_t39
-            - _t247*_t40;
+    const train5_real_t _t184 = J_theta_cart4*_t90;
+    const train5_real_t _t185 = _t121*_t91;
+    const train5_real_t _t186 = _t123*_t92;
+    const train5_real_t _t187 = _t185 + _t186;
     const train5_real_t J_theta_cart5 = pp->J_theta_cart5;
-    const train5_real_t _t272 = J_theta_cart5*_t103 + _t100*_t244 + _t101*_t245;
-    const train5_real_t _t273 = _t107*_t244;
-    const train5_real_t _t274 = _t107*_t245;
-    const train5_real_t _t275 = _t242*_t94 + _t273;
-    const train5_real_t _t276 = _t243*_t94 + _t274;
-    const train5_real_t _t277 = _t240*_t81 + _t275;
-    const train5_real_t _t278 = _t241*_t81 + _t276;
-    const train5_real_t _t279 = _t238*_t68 + _t277;
-    const train5_real_t _t280 = _t239*_t68 + _t278;
-    const train5_real_t _t281 = _t236*_t53 + _t279;
-    const train5_real_t _t282 = _t237*_t53 + _t280;
+    const train5_real_t _t188 = J_theta_cart5*_t103;
+    const train5_real_t _t189 = _t104*_t125;
+    const train5_real_t _t190 = _t105*_t127;
+    const train5_real_t _t191 = _t189 + _t190;
+    const train5_real_t _t192 = _t56*_t56;
+    const train5_real_t _t193 = TRAIN5_LIT(0.3)*_t192;
+    const train5_real_t _t194 = -_t50*_t56;
+    const train5_real_t _t195 = -_t194*_t4*_t5;
+    const train5_real_t _t196 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t197 = _t173*_t195 + _t193*_t196;
+    const train5_real_t _t198 = _t57*_t57;
+    const train5_real_t _t199 = -_t2*_t60 - _t3*_t58;
+    const train5_real_t _t200 = _t193*_t2 - _t195*_t3 - _t199;
+    const train5_real_t _t201 = _t11*_t200;
+    const train5_real_t _t202 = _t12*_t201 + _t13*_t198 + _t193;
+    const train5_real_t _t203 = _t12*_t198 - _t13*_t201 + _t195;
+    const train5_real_t _t204 = _t113*_t202 + _t115*_t203;
+    const train5_real_t _t205 = _t69*_t69;
+    const train5_real_t _t206 = -_t15*_t73 - _t16*_t71;
+    const train5_real_t _t207 = _t13*_t198;
+    const train5_real_t _t208 = _t12*_t201 + _t193 + _t207;
+    const train5_real_t _t209 = _t12*_t198;
+    const train5_real_t _t210 = -_t13*_t201 + _t195 + _t209;
+    const train5_real_t _t211 = _t15*_t208 - _t16*_t210 - _t206;
+    const train5_real_t _t212 = _t20*_t211;
+    const train5_real_t _t213 = _t113*_t205 + _t115*_t212;
+    const train5_real_t _t214 = _t113*_t212 - _t115*_t205;
+    const train5_real_t _t215 = _t202 + _t205*_t22 + _t21*_t212;
+    const train5_real_t _t216 = _t203 + _t205*_t21 - _t212*_t22;
+    const train5_real_t _t217 = _t117*_t215 + _t119*_t216;
+    const train5_real_t _t218 = _t82*_t82;
+    const train5_real_t _t219 = -_t24*_t86 - _t25*_t84;
+    const train5_real_t _t220 = _t205*_t22;
+    const train5_real_t _t221 = _t208 + _t21*_t212 + _t220;
+    const train5_real_t _t222 = _t205*_t21;
+    const train5_real_t _t223 = _t210 - _t212*_t22 + _t222;
+    const train5_real_t _t224 = -_t219 + _t221*_t24 - _t223*_t25;
+    const train5_real_t _t225 = _t224*_t29;
+    const train5_real_t _t226 = _t117*_t218 + _t119*_t225;
+    const train5_real_t _t227 = _t117*_t225 - _t119*_t218;
+    const train5_real_t _t228 = _t215 + _t218*_t31 + _t225*_t30;
+    const train5_real_t _t229 = _t216 + _t218*_t30 - _t225*_t31;
+    const train5_real_t _t230 = _t121*_t228 + _t123*_t229;
+    const train5_real_t _t231 = _t95*_t95;
+    const train5_real_t _t232 = -_t33*_t99 - _t34*_t97;
+    const train5_real_t _t233 = _t218*_t31;
+    const train5_real_t _t234 = _t221 + _t225*_t30 + _t233;
+    const train5_real_t _t235 = _t218*_t30;
+    const train5_real_t _t236 = _t223 - _t225*_t31 + _t235;
+    const train5_real_t _t237 = -_t232 + _t234*_t33 - _t236*_t34;
+    const train5_real_t _t238 = _t237*_t38;
+    const train5_real_t _t239 = _t121*_t231 + _t123*_t238;
+    const train5_real_t _t240 = _t121*_t238 - _t123*_t231;
+    const train5_real_t _t241 = _t228 + _t231*_t40 + _t238*_t39;
+    const train5_real_t _t242 = _t229 + _t231*_t39 - _t238*_t40;
+    const train5_real_t _t243 = _t125*_t241 + _t127*_t242;
+    const train5_real_t _t244 = _t108*_t108;
+    const train5_real_t _t245 = -_t110*_t43 - _t112*_t42;
+    const train5_real_t _t246 = _t231*_t40;
+    const train5_real_t _t247 = _t234 + _t238*_t39 + _t246;
+    const train5_real_t _t248 = _t231*_t39;
+    const train5_real_t _t249 = _t236 - _t238*_t40 + _t248;
+    const train5_real_t _t250 = -_t245 + _t247*_t42 - _t249*_t43;
+    const train5_real_t _t251 = _t250*_t47;
+    const train5_real_t _t252 = _t125*_t244 + _t127*_t251;
+    const train5_real_t _t253 = _t125*_t251 - _t127*_t244;
+    const train5_real_t _t254 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t255 = TRAIN5_LIT(0.207)*_t6;
+    const train5_real_t _t256 = -TRAIN5_LIT(0.207)*_t7;
+    const train5_real_t _t257 = _t10*(-_t169*_t52 - _t170*_t254);
+    const train5_real_t _t258 = _t10*(-_t165*_t52 - _t166*_t254);
+    const train5_real_t _t259 = _t15*_t66 + _t16*_t65;
+    const train5_real_t _t260 = _t19*(_t134*_t67 + _t135*_t259);
+    const train5_real_t _t261 = _t19*(_t130*_t67 + _t131*_t259);
+    const train5_real_t _t262 = _t24*_t79 + _t25*_t78;
+    const train5_real_t _t263 = _t28*(_t143*_t80 + _t144*_t262);
+    const train5_real_t _t264 = _t28*(_t139*_t80 + _t140*_t262);
+    const train5_real_t _t265 = _t33*_t92 + _t34*_t91;
+    const train5_real_t _t266 = _t37*(_t152*_t93 + _t153*_t265);
+    const train5_real_t _t267 = _t37*(_t148*_t93 + _t149*_t265);
+    const train5_real_t _t268 = _t104*_t43 + _t105*_t42;
+    const train5_real_t _t269 = _t46*(_t106*_t161 + _t162*_t268);
+    const train5_real_t _t270 = _t46*(_t106*_t157 + _t158*_t268);
+    const train5_real_t _t271 = _t255*_t56 + _t50*_t6;
+    const train5_real_t _t272 = _t256*_t56 + _t50*_t7;
+    const train5_real_t _t273 = _t171*_t50 + _t257*_t56;
+    const train5_real_t _t274 = _t167*_t50 + _t258*_t56;
+    const train5_real_t _t275 = _t136*_t50 + _t260*_t56;
+    const train5_real_t _t276 = _t132*_t50 + _t261*_t56;
+    const train5_real_t _t277 = _t145*_t50 + _t263*_t56;
+    const train5_real_t _t278 = _t141*_t50 + _t264*_t56;
+    const train5_real_t _t279 = _t154*_t50 + _t266*_t56;
+    const train5_real_t _t280 = _t150*_t50 + _t267*_t56;
+    const train5_real_t _t281 = _t163*_t50 + _t269*_t56;
+    const train5_real_t _t282 = _t159*_t50 + _t270*_t56;
+    const train5_real_t _t283 = _t2*_t58 - _t3*_t60;
+    const train5_real_t _t284 = _t193*_t3 + _t195*_t2 - _t283;
+    const train5_real_t _t285 = _t10*(_t169*_t200 + _t170*_t284);
+    const train5_real_t _t286 = _t10*(_t165*_t200 + _t166*_t284);
+    const train5_real_t _t287 = _t15*_t71 - _t16*_t73;
+    const train5_real_t _t288 = _t15*_t210 + _t16*_t208 - _t287;
+    const train5_real_t _t289 = _t19*(_t134*_t211 + _t135*_t288);
+    const train5_real_t _t290 = _t19*(_t130*_t211 + _t131*_t288);
+    const train5_real_t _t291 = _t24*_t84 - _t25*_t86;
+    const train5_real_t _t292 = _t221*_t25 + _t223*_t24 - _t291;
+    const train5_real_t _t293 = _t28*(_t143*_t224 + _t144*_t292);
+    const train5_real_t _t294 = _t28*(_t139*_t224 + _t140*_t292);
+    const train5_real_t _t295 = _t33*_t97 - _t34*_t99;
+    const train5_real_t _t296 = _t234*_t34 + _t236*_t33 - _t295;
+    const train5_real_t _t297 = _t37*(_t152*_t237 + _t153*_t296);
+    const train5_real_t _t298 = _t37*(_t148*_t237 + _t149*_t296);
+    const train5_real_t _t299 = _t110*_t42 - _t112*_t43;
+    const train5_real_t _t300 = _t247*_t43 + _t249*_t42 - _t299;
+    const train5_real_t _t301 = _t46*(_t161*_t250 + _t162*_t300);
+    const train5_real_t _t302 = _t46*(_t157*_t250 + _t158*_t300);
+    const train5_real_t J_theta_left = pp->J_theta_left;
+    const train5_real_t J_theta_right = pp->J_theta_right;
+    const train5_real_t J_x_tractor = pp->J_x_tractor;
+    const train5_real_t _t303 = J_theta_cart2_left*_t132*_t132 + J_theta_cart2_right*_t136*_t136
+            + J_theta_cart3_left*_t141*_t141 + J_theta_cart3_right*_t145*_t145
+            + J_theta_cart4_left*_t150*_t150 + J_theta_cart4_right*_t154*_t154
+            + J_theta_cart5_left*_t159*_t159 + J_theta_cart5_right*_t163*_t163
+            + J_theta_cart_left*_t167*_t167 + J_theta_cart_right*_t171*_t171 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const train5_real_t _t304 = J_theta_cart*_t51*_t51 + TRAIN5_LIT(2.0)*_t196*_t51 + _t303;
+    const train5_real_t _t305 = J_theta_cart2*_t64*_t64 + _t114*_t64 + _t116*_t64 + _t304
+            + _t64*(_t114 + _t116);
+    const train5_real_t _t306 = J_theta_cart3*_t77*_t77 + _t118*_t77 + _t120*_t77 + _t305
+            + _t77*(_t118 + _t120);
+    const train5_real_t _t307 = J_theta_cart4*_t90*_t90 + _t122*_t90 + _t124*_t90 + _t306
+            + _t90*(_t122 + _t124);
+    const train5_real_t _t308 = J_theta_cart5*_t103*_t103 + _t103*_t126 + _t103*_t128
+            + _t103*(_t126 + _t128) + _t307;
+    const train5_real_t _t309 = J_theta_left*_t256*_t7 + J_theta_right*_t255*_t6 + _t133*_t261
+            + _t137*_t260 + _t142*_t264 + _t146*_t263 + _t151*_t267 + _t155*_t266 + _t160*_t270
+            + _t164*_t269 + _t168*_t258 + _t172*_t257;
     const train5_real_t K_theta_tractor_x_tractor_2 = pp->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t283 = K_theta_tractor_x_tractor_2 + _t281;
-    const train5_real_t _t284 = J_theta_right*_t148;
-    const train5_real_t _t285 = J_theta_left*_t149;
-    const train5_real_t _t286 = J_theta_cart_right*_t150;
-    const train5_real_t _t287 = J_theta_cart_left*_t151;
-    const train5_real_t _t288 = J_theta_cart2_right*_t153;
-    const train5_real_t _t289 = J_theta_cart2_left*_t154;
-    const train5_real_t _t290 = J_theta_cart3_right*_t156;
-    const train5_real_t _t291 = J_theta_cart3_left*_t157;
-    const train5_real_t _t292 = J_theta_cart4_right*_t159;
-    const train5_real_t _t293 = J_theta_cart4_left*_t160;
-    const train5_real_t _t294 = J_theta_cart5_right*_t162;
-    const train5_real_t _t295 = J_theta_cart5_left*_t163;
+    const train5_real_t _t310 = K_theta_tractor_x_tractor_2 + _t309;
+    const train5_real_t _t311 = -_t174*_t51 + _t175*_t53 + _t196*_t53 + _t310;
+    const train5_real_t _t312 = _t114*_t68 + _t116*_t68 + _t176*_t68 + _t179*_t64 + _t311;
+    const train5_real_t _t313 = _t118*_t81 + _t120*_t81 + _t180*_t81 + _t183*_t77 + _t312;
+    const train5_real_t _t314 = _t122*_t94 + _t124*_t94 + _t184*_t94 + _t187*_t90 + _t313;
+    const train5_real_t _t315 = _t103*_t191 + _t107*_t126 + _t107*_t128 + _t107*_t188 + _t314;
+    const train5_real_t _t316 = J_theta_cart2_left*_t261*_t261 + J_theta_cart2_right*_t260*_t260
+            + J_theta_cart3_left*_t264*_t264 + J_theta_cart3_right*_t263*_t263
+            + J_theta_cart4_left*_t267*_t267 + J_theta_cart4_right*_t266*_t266
+            + J_theta_cart5_left*_t270*_t270 + J_theta_cart5_right*_t269*_t269
+            + J_theta_cart_left*_t258*_t258 + J_theta_cart_right*_t257*_t257
+            + J_theta_left*_t256*_t256 + J_theta_right*_t255*_t255;
     const train5_real_t J_theta_tractor = pp->J_theta_tractor;
-    const train5_real_t _t296 = J_theta_tractor - TRAIN5_LIT(0.3)*_t282;
-    const train5_real_t _t297 = J_theta_cart*_t53 + _t12*_t279 - _t13*_t280 - TRAIN5_LIT(0.3)*_t237;
-    const train5_real_t _t298 = J_theta_cart2*_t68 + _t21*_t277 - _t22*_t278 + _t238*_t65
-            + _t239*_t66;
-    const train5_real_t _t299 = J_theta_cart3*_t81 + _t240*_t78 + _t241*_t79 + _t275*_t30
-            - _t276*_t31;
-    const train5_real_t _t300 = J_theta_cart4*_t94 + _t242*_t91 + _t243*_t92 + _t273*_t39
-            - _t274*_t40;
-    const train5_real_t _t301 = J_theta_cart5*_t107 + _t104*_t244 + _t105*_t245;
-    const train5_real_t _t302 = _t103*_t272 + _t118*_t257 + _t119*_t258 + _t125*_t259 + _t126*_t260
-            + _t132*_t261 + _t133*_t262 + _t139*_t263 + _t140*_t264 + _t146*_t265 + _t147*_t266
-            + _t255*_t6 + _t256*_t7 + _t267 + _t268*_t51 + _t269*_t64 + _t270*_t77 + _t271*_t90;
-    const train5_real_t _t303 = _t103*_t301 + _t118*_t286 + _t119*_t287 + _t125*_t288 + _t126*_t289
-            + _t132*_t290 + _t133*_t291 + _t139*_t292 + _t140*_t293 + _t146*_t294 + _t147*_t295
-            + _t283 + _t284*_t6 + _t285*_t7 + _t297*_t51 + _t298*_t64 + _t299*_t77 + _t300*_t90;
-    const train5_real_t _t304 = _t107*_t301 + _t148*_t284 + _t149*_t285 + _t150*_t286 + _t151*_t287
-            + _t153*_t288 + _t154*_t289 + _t156*_t290 + _t157*_t291 + _t159*_t292 + _t160*_t293
-            + _t162*_t294 + _t163*_t295 + _t296 + _t297*_t53 + _t298*_t68 + _t299*_t81 + _t300*_t94;
-    const train5_real_t _t305 = _t12*_t197 + _t13*_t177 + _t182;
-    const train5_real_t _t306 = _t12*_t177 - _t13*_t197 + _t192;
-    const train5_real_t _t307 = _t178*_t22 + _t206*_t21 + _t305;
-    const train5_real_t _t308 = _t178*_t21 - _t206*_t22 + _t306;
-    const train5_real_t _t309 = _t179*_t31 + _t215*_t30 + _t307;
-    const train5_real_t _t310 = _t179*_t30 - _t215*_t31 + _t308;
-    const train5_real_t _t311 = _t180*_t40 + _t224*_t39 + _t309;
-    const train5_real_t _t312 = _t180*_t39 - _t224*_t40 + _t310;
-    const train5_real_t _t313 = -_t181*_t245 + _t233*_t244;
-    const train5_real_t _t314 = _t181*_t244 + _t233*_t245;
-    const train5_real_t _t315 = -_t180*_t243 + _t224*_t242 + _t313;
-    const train5_real_t _t316 = _t180*_t242 + _t224*_t243 + _t314;
-    const train5_real_t _t317 = -_t179*_t241 + _t215*_t240 + _t315;
-    const train5_real_t _t318 = _t179*_t240 + _t215*_t241 + _t316;
-    const train5_real_t _t319 = -_t178*_t239 + _t206*_t238 + _t317;
-    const train5_real_t _t320 = _t178*_t238 + _t206*_t239 + _t318;
-    const train5_real_t _t321 = -_t177*_t237 + _t197*_t236 + _t319;
-    const train5_real_t _t322 = _t177*_t236 + _t197*_t237 + _t320;
+    const train5_real_t _t317 = J_theta_tractor + _t316;
+    const train5_real_t _t318 = J_theta_cart*_t53*_t53 - TRAIN5_LIT(0.6)*_t173*_t53 + _t317;
+    const train5_real_t _t319 = J_theta_cart2*_t68*_t68 + _t177*_t68 + _t178*_t68 + _t179*_t68
+            + _t318;
+    const train5_real_t _t320 = J_theta_cart3*_t81*_t81 + _t181*_t81 + _t182*_t81 + _t183*_t81
+            + _t319;
+    const train5_real_t _t321 = J_theta_cart4*_t94*_t94 + _t185*_t94 + _t186*_t94 + _t187*_t94
+            + _t320;
+    const train5_real_t _t322 = J_theta_cart5*_t107*_t107 + _t107*_t189 + _t107*_t190 + _t107*_t191
+            + _t321;
+    const train5_real_t _t323 = _t133*_t290 + _t137*_t289 + _t142*_t294 + _t146*_t293 + _t151*_t298
+            + _t155*_t297 + _t160*_t302 + _t164*_t301 + _t168*_t286 + _t172*_t285;
     const train5_real_t K_theta_tractor_x_tractor = pp->K_theta_tractor_x_tractor;
-    const train5_real_t _t323 = K_theta_tractor_x_tractor*_t176 + _t321;
-    const train5_real_t _t324 = J_theta_cart_right*_t198;
-    const train5_real_t _t325 = J_theta_cart_left*_t199;
-    const train5_real_t _t326 = J_theta_cart2_right*_t207;
-    const train5_real_t _t327 = J_theta_cart2_left*_t208;
-    const train5_real_t _t328 = J_theta_cart3_right*_t216;
-    const train5_real_t _t329 = J_theta_cart3_left*_t217;
-    const train5_real_t _t330 = J_theta_cart4_right*_t225;
-    const train5_real_t _t331 = J_theta_cart4_left*_t226;
-    const train5_real_t _t332 = J_theta_cart5_right*_t234;
-    const train5_real_t _t333 = J_theta_cart5_left*_t235;
-    const train5_real_t _t334 = -K_theta_tractor_x_tractor*_t192 - TRAIN5_LIT(0.3)*_t322;
-    const train5_real_t _t335 = J_theta_cart*_t197 + _t12*_t319 - _t13*_t320 + _t182*_t236
-            + _t192*_t237;
-    const train5_real_t _t336 = J_theta_cart2*_t206 + _t21*_t317 - _t22*_t318 + _t238*_t305
-            + _t239*_t306;
-    const train5_real_t _t337 = J_theta_cart3*_t215 + _t240*_t307 + _t241*_t308 + _t30*_t315
-            - _t31*_t316;
-    const train5_real_t _t338 = J_theta_cart4*_t224 + _t242*_t309 + _t243*_t310 + _t313*_t39
-            - _t314*_t40;
-    const train5_real_t _t339 = J_theta_cart5*_t233 + _t244*_t311 + _t245*_t312;
-    const train5_real_t _t340 = _t103*_t339 + _t118*_t324 + _t119*_t325 + _t125*_t326 + _t126*_t327
-            + _t132*_t328 + _t133*_t329 + _t139*_t330 + _t140*_t331 + _t146*_t332 + _t147*_t333
-            + _t323 + _t335*_t51 + _t336*_t64 + _t337*_t77 + _t338*_t90;
-    const train5_real_t _t341 = _t107*_t339 + _t150*_t324 + _t151*_t325 + _t153*_t326 + _t154*_t327
-            + _t156*_t328 + _t157*_t329 + _t159*_t330 + _t160*_t331 + _t162*_t332 + _t163*_t333
-            + _t334 + _t335*_t53 + _t336*_t68 + _t337*_t81 + _t338*_t94;
+    const train5_real_t _t324 = K_theta_tractor_x_tractor*_t192 + _t323;
+    const train5_real_t _t325 = -_t173*_t198 + _t175*_t201 + _t196*_t201 + _t197*_t51 + _t324;
+    const train5_real_t _t326 = _t176*_t212 + _t204*_t64 + _t213*_t62 + _t214*_t61 + _t325;
+    const train5_real_t _t327 = _t180*_t225 + _t217*_t77 + _t226*_t75 + _t227*_t74 + _t326;
+    const train5_real_t _t328 = _t184*_t238 + _t230*_t90 + _t239*_t88 + _t240*_t87 + _t327;
+    const train5_real_t _t329 = _t100*_t253 + _t101*_t252 + _t103*_t243 + _t188*_t251 + _t328;
+    const train5_real_t _t330 = J_theta_cart2_left*_t261*_t290 + J_theta_cart2_right*_t260*_t289
+            + J_theta_cart3_left*_t264*_t294 + J_theta_cart3_right*_t263*_t293
+            + J_theta_cart4_left*_t267*_t298 + J_theta_cart4_right*_t266*_t297
+            + J_theta_cart5_left*_t270*_t302 + J_theta_cart5_right*_t269*_t301
+            + J_theta_cart_left*_t258*_t286 + J_theta_cart_right*_t257*_t285;
+    const train5_real_t _t331 = -K_theta_tractor_x_tractor*_t195 + _t330;
+    const train5_real_t _t332 = J_theta_cart*_t201*_t53 - _t174*_t201 - TRAIN5_LIT(0.3)*_t196*_t198
+            + _t197*_t53 + _t331;
+    const train5_real_t _t333 = J_theta_cart2*_t212*_t68 + _t204*_t68 + _t213*_t66 + _t214*_t65
+            + _t332;
+    const train5_real_t _t334 = J_theta_cart3*_t225*_t81 + _t217*_t81 + _t226*_t79 + _t227*_t78
+            + _t333;
+    const train5_real_t _t335 = J_theta_cart4*_t238*_t94 + _t230*_t94 + _t239*_t92 + _t240*_t91
+            + _t334;
+    const train5_real_t _t336 = J_theta_cart5*_t107*_t251 + _t104*_t253 + _t105*_t252 + _t107*_t243
+            + _t335;
     const train5_real_t tau_right = tau[0];
     const train5_real_t tau_left = tau[1];
-    const train5_real_t _t342 = -_t340 + _t6*tau_right + _t7*tau_left;
-    const train5_real_t _t343 = _t148*tau_right + _t149*tau_left - _t341;
-    const train5_real_t _t344 = _t302*_t304 - _t303*_t303;
-    const train5_real_t _t345 = TRAIN5_LIT(1.0)/_t344;
-    const train5_real_t _t346 = _t345*(-_t303*_t343 + _t304*_t342);
-    const train5_real_t _t347 = _t345*(_t302*_t343 - _t303*_t342);
-    const train5_real_t _t348 = _t148*_t347 + _t346*_t6;
-    const train5_real_t _t349 = _t149*_t347 + _t346*_t7;
-    const train5_real_t _t350 = _t50*TRAIN5_COS(theta_tractor);
-    const train5_real_t _t351 = _t50*TRAIN5_SIN(theta_tractor);
-    xdot[0] = _t350;
-    xdot[1] = _t351;
+    const train5_real_t _t337 = -_t329 + _t6*tau_right + _t7*tau_left;
+    const train5_real_t _t338 = _t255*tau_right + _t256*tau_left - _t336;
+    const train5_real_t _t339 = _t308*_t322 - _t315*_t315;
+    const train5_real_t _t340 = TRAIN5_LIT(1.0)/_t339;
+    const train5_real_t _t341 = _t340*(-_t315*_t338 + _t322*_t337);
+    const train5_real_t _t342 = _t340*(_t308*_t338 - _t315*_t337);
+    const train5_real_t _t343 = _t255*_t342 + _t341*_t6;
+    const train5_real_t _t344 = _t256*_t342 + _t341*_t7;
+    const train5_real_t _t345 = _t50*TRAIN5_COS(theta_tractor);
+    const train5_real_t _t346 = _t50*TRAIN5_SIN(theta_tractor);
+    xdot[0] = _t345;
+    xdot[1] = _t346;
     xdot[2] = _t56;
     xdot[3] = _t57;
     xdot[4] = _t69;
     xdot[5] = _t82;
     xdot[6] = _t95;
     xdot[7] = _t108;
-    xdot[8] = _t164;
-    xdot[9] = _t165;
-    xdot[10] = _t166;
-    xdot[11] = _t167;
-    xdot[12] = _t168;
-    xdot[13] = _t169;
-    xdot[14] = _t170;
-    xdot[15] = _t171;
-    xdot[16] = _t172;
-    xdot[17] = _t173;
-    xdot[18] = _t174;
-    xdot[19] = _t175;
-    xdot[20] = _t348;
-    xdot[21] = _t349;
+    xdot[8] = _t271;
+    xdot[9] = _t272;
+    xdot[10] = _t273;
+    xdot[11] = _t274;
+    xdot[12] = _t275;
+    xdot[13] = _t276;
+    xdot[14] = _t277;
+    xdot[15] = _t278;
+    xdot[16] = _t279;
+    xdot[17] = _t280;
+    xdot[18] = _t281;
+    xdot[19] = _t282;
+    xdot[20] = _t343;
+    xdot[21] = _t344;
 }
 
 /* train5_plant_params_with_payload: documented in train5_plant.h.
