@@ -140,9 +140,11 @@ def root_frame_contact_forms(model: RobotModel, sm: StagedMinimal) -> ContactFor
     model's own root-frame stage ``sm`` (``staged_minimal(root_frame=True)``, the model
     functions' of a staged robot with a planar frame): q̈ = S η̇ + Ṡ η of its forward
     dynamics in the root body's frame, M, H and A_d evaluated there
-    (``root_frame_point``), where the multipliers are the same functions of q. S(q), M̄,
-    H̄ and the solve are then the model functions' quantities, not a second derivation of
-    them (issue 51: one helper evaluates them for all, ``codegen.shared``)."""
+    (``root_frame_point``; M q̈ + H in chain order along a hitch chain,
+    ``ConstrainedSystem.chain_inertia``), where the multipliers are the same functions
+    of q. S(q), M̄, H̄ and the solve are then the model functions' quantities, not a
+    second derivation of them (issue 51: one helper evaluates them for all,
+    ``codegen.shared``)."""
     s = model.system
     if not s.planar_frame or sm.plane is None:
         raise ValueError(f"robot '{model.name}': no root frame to write its contact forces in")
@@ -153,9 +155,14 @@ def root_frame_contact_forms(model: RobotModel, sm: StagedMinimal) -> ContactFor
     dep = list(s.dependent)
     on_manifold = {s.qdot[i]: sm.velocities[i] for i in range(len(s.q))
                    if sm.velocities[i] != s.qdot[i]}
-    m = stage.matrix(s.mass_matrix.xreplace(at_root))
-    h = stage.matrix(s.bias.xreplace(at_root).xreplace(on_manifold))
-    rhs = stage.matrix(s.input_matrix * model.tau - h - m * qdd)
+    chain = s.chain_at(root_frame=True)
+    if chain is None:
+        m = stage.matrix(s.mass_matrix.xreplace(at_root))
+        h = stage.matrix(s.bias.xreplace(at_root).xreplace(on_manifold))
+        inertial = m * qdd + h
+    else:  # a hitch chain: M q̈ + H in chain order, O(n) (modeling.chain_inertia)
+        inertial = chain.product(stage, qdd, sm.velocities)
+    rhs = stage.matrix(s.input_matrix * model.tau - inertial)
     a = s.constraint_matrix.xreplace(at_root)
     a_d = a.extract(list(range(a.rows)), dep)
     lam = block_triangular_solve(stage, a_d.T, rhs.extract(dep, [0]), s.simplify)

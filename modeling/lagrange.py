@@ -26,6 +26,8 @@ from itertools import combinations
 
 import sympy as sp
 
+from modeling.chain_inertia import ChainInertia, chain_inertia
+from modeling.chain_kinematics import ChainKinematics, chain_kinematics
 from modeling.staged import Stage
 from modeling.symbolic_linalg import (
     Simplifier,
@@ -125,9 +127,13 @@ class StagedMinimal:
         return out
 
 
-def _congruence(stage: Stage, s: sp.Matrix, m: sp.Matrix) -> sp.Matrix:
+def _congruence(stage: Stage, s: sp.Matrix, m: sp.Matrix,
+                chain: ChainInertia | None = None) -> sp.Matrix:
     """Sᵀ M S for a symmetric M through the stage: M S once, then each entry on and above
-    the diagonal once (the result is symmetric)."""
+    the diagonal once (the result is symmetric); along a hitch ``chain``, its running
+    sums in O(n) (``ChainInertia.congruence``)."""
+    if chain is not None:
+        return chain.congruence(stage, s)
     k = s.cols
     ms = stage.matrix(m * s)
     return sp.Matrix(k, k, lambda i, j: stage.define((s[:, min(i, j)].T * ms[:, max(i, j)])[0]))
@@ -267,6 +273,32 @@ class ConstrainedSystem:
         rate = self.ddt(s_eta)  # ∂(Sη)/∂q · q̇ with η held fixed
         return rate.subs(self.on_manifold).applyfunc(self.simplify)
 
+    @cached_property
+    def chain_inertia(self) -> ChainInertia | None:
+        """M and H as the composite-body sums of a planar hitch chain
+        (``modeling.chain_inertia``, checked exactly), or None: not such a chain."""
+        if not self.planar_frame:
+            return None
+        return chain_inertia(self.mass_matrix, self.bias, self.q, self.qdot,
+                             self.planar_frame, self.simplify)
+
+    @cached_property
+    def chain_kinematics(self) -> ChainKinematics | None:
+        """A's rows along the hitch chain of ``chain_inertia`` (``modeling.chain_kinematics``,
+        checked exactly), or None."""
+        chain = self.chain_inertia
+        if chain is None:
+            return None
+        return chain_kinematics(chain, self.constraint_matrix, self.q, self.qdot,
+                                self.simplify)
+
+    def chain_at(self, root_frame: bool) -> ChainInertia | None:
+        """``chain_inertia`` in the root body's frame (``root_frame_point``) or not."""
+        chain = self.chain_inertia
+        if chain is None or not root_frame:
+            return chain
+        return chain.at(self.root_frame_point())
+
     # --- minimal form -----------------------------------------------------------------
     @cached_property
     def minimal_mass_matrix(self) -> sp.Matrix:
@@ -287,7 +319,8 @@ class ConstrainedSystem:
         return (self.null_space.T * self.input_matrix).applyfunc(self.simplify)
 
     def staged_minimal(self, stage: Stage, root_frame: bool = False,
-                       positive: Collection[sp.Symbol] = ()) -> StagedMinimal:
+                       positive: Collection[sp.Symbol] = (),
+                       chain_ordered: bool = True) -> StagedMinimal:
         """The minimal form through ``stage``'s quantities (see :class:`StagedMinimal`):
         the cost of S, M and H, which are small, plus one product per entry, where
         ``minimal_mass_matrix`` and ``minimal_bias`` multiply out (tens of thousands of
@@ -304,13 +337,17 @@ class ConstrainedSystem:
         rate for a differential drive) are a constant map u = W η of the wheel rates with
         det W a product of ``positive`` parameters (the caller's guards keep them
         positive), the solve runs in u (``_staged_in_twist``): S_u carries no wheel
-        radius, so M̄_u and H̄_u are the short forms a hand derivation in (v, ω) writes."""
+        radius, so M̄_u and H̄_u are the short forms a hand derivation in (v, ω) writes.
+
+        ``chain_ordered`` (a hitch chain's ``chain_inertia``): M S and M Ṡ η + H in chain
+        order, O(n) (issue 51); False: the dense products, O(n²), the same values."""
+        chain = self.chain_at(root_frame and bool(self.planar_frame)) if chain_ordered else None
         s = self.staged_null_space(stage)
         eta = sp.Matrix(self.eta)
         if root_frame and self.planar_frame:
             twist = self._root_twist(stage, self.in_root_frame(stage, [s])[0], positive)
             if twist is not None:
-                return self._staged_in_twist(stage, *twist)
+                return self._staged_in_twist(stage, *twist, chain)
         slopes = self._slopes(stage, s, self.dependent)
         mass, bias = self.mass_matrix, self.bias
         plane: tuple[int, int, sp.Symbol] | None = None
@@ -323,7 +360,7 @@ class ConstrainedSystem:
         v = stage.matrix(s * eta)  # q̇ on the manifold (independent rows: η itself)
         m, h = self._on_manifold(stage, v, mass, bias)
         rate = self._gathered_rate(stage, slopes, eta, v, self.dependent)
-        return self._staged_products(stage, s, v, rate, m, h, plane)
+        return self._staged_products(stage, s, v, rate, m, h, plane, chain)
 
     def _on_manifold(self, stage: Stage, v: sp.Matrix, mass: sp.Matrix, bias: sp.Matrix
                      ) -> tuple[sp.Matrix, sp.Matrix]:
@@ -354,11 +391,14 @@ class ConstrainedSystem:
 
     def _staged_products(self, stage: Stage, s: sp.Matrix, v: sp.Matrix, rate: sp.Matrix,
                          m: sp.Matrix, h: sp.Matrix,
-                         plane: tuple[int, int, sp.Symbol] | None) -> StagedMinimal:
+                         plane: tuple[int, int, sp.Symbol] | None,
+                         chain: ChainInertia | None = None) -> StagedMinimal:
         """M̄ = Sᵀ M S, H̄ = Sᵀ(M Ṡ η + H) and Sᵀ B through the stage (M, H staged at
-        the velocities ``v``, ``_on_manifold``)."""
-        mbar = _congruence(stage, s, m)
-        hbar = stage.matrix(s.T * (m * rate + h))
+        the velocities ``v``, ``_on_manifold``; along a hitch ``chain``, in the same
+        frame, M S and M Ṡ η + H in chain order instead)."""
+        mbar = _congruence(stage, s, m, chain)
+        hbar = (stage.matrix(s.T * (m * rate + h)) if chain is None
+                else chain.projected(stage, s, list(rate), list(v)))
         return StagedMinimal(stage, s, v, rate, mbar, hbar,
                              stage.matrix(s.T * self.input_matrix.xreplace(
                                  self.root_frame_point() if plane else {})),
@@ -382,8 +422,8 @@ class ConstrainedSystem:
                 return rows, w.applyfunc(lambda e: stage.define(sp.factor(e)))
         return None
 
-    def _staged_in_twist(self, stage: Stage, rows: tuple[int, ...], w: sp.Matrix
-                         ) -> StagedMinimal:
+    def _staged_in_twist(self, stage: Stage, rows: tuple[int, ...], w: sp.Matrix,
+                         chain: ChainInertia | None = None) -> StagedMinimal:
         """The minimal form solved in the root's twist u = W η (the velocities of ``rows``
         in the root frame): S_u from A evaluated in the root frame with those velocities
         independent (``_staged_solve``), its slopes along the relative yaws, and the root
@@ -393,17 +433,31 @@ class ConstrainedSystem:
         n = len(self.q)
         at_root = self.root_frame_point()
         dependent = tuple(i for i in range(n) if i not in rows)
-        s = self._solved_null_space(stage, self.constraint_matrix.xreplace(at_root), rows)
-        u = stage.matrix(w * sp.Matrix(self.eta))
-        v = stage.matrix(s * u)
-        m, h = self._on_manifold(stage, v, self.mass_matrix.xreplace(at_root),
-                                 self.bias.xreplace(at_root))
-        rate = self._gathered_rate(stage, self._slopes(stage, s, dependent), u, v, dependent)
         x, y, yaw = self.planar_frame[:3]
-        turn = v[yaw]
-        rate[x] = stage.define(rate[x] - turn * v[y])
-        rate[y] = stage.define(rate[y] + turn * v[x])
-        in_u = self._staged_products(stage, s, v, rate, m, h, (x, y, self.q[yaw]))
+        kinematics = self.chain_kinematics if chain is not None else None
+        if kinematics is not None and kinematics.solves(rows):
+            # Along a hitch chain: S_u and Ṡ_u u body by body (O(n)), A (Ṡ_u u) = −Ȧ v
+            # with the frame's turning term as the x row's known part.
+            kinematics = kinematics.at(at_root)
+            s = kinematics.null_space(stage, rows)
+            u = stage.matrix(w * sp.Matrix(self.eta))
+            v = stage.matrix(s * u)
+            m, h = self.mass_matrix, self.bias  # read through ``chain`` only
+            known = {i: sp.S.Zero for i in rows}
+            known[x] = -v[yaw] * v[y]
+            rate = kinematics.velocity_product(stage, v, known)
+        else:
+            s = self._solved_null_space(stage, self.constraint_matrix.xreplace(at_root), rows)
+            u = stage.matrix(w * sp.Matrix(self.eta))
+            v = stage.matrix(s * u)
+            m, h = self._on_manifold(stage, v, self.mass_matrix.xreplace(at_root),
+                                     self.bias.xreplace(at_root))
+            rate = self._gathered_rate(stage, self._slopes(stage, s, dependent), u, v,
+                                       dependent)
+            turn = v[yaw]
+            rate[x] = stage.define(rate[x] - turn * v[y])
+            rate[y] = stage.define(rate[y] + turn * v[x])
+        in_u = self._staged_products(stage, s, v, rate, m, h, (x, y, self.q[yaw]), chain)
         return StagedMinimal(stage, s, v, rate, _congruence(stage, w, in_u.mass_matrix),
                              stage.matrix(w.T * in_u.bias),
                              stage.matrix(w.T * in_u.input_matrix), in_u.plane,

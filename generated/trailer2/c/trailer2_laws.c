@@ -31,142 +31,138 @@ void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const traile
 }
 
 /* trailer2_minimal_tde: documented in trailer2_laws.h.
-   operations after CSE: 75 add, 119 mul, 7 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 72 add, 163 mul, 4 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_prev,
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
     const trailer2_real_t *qdot_then, const trailer2_real_t *span, trailer2_real_t *H1hat)
 {
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t0 = radius_left*radius_right;
+    const trailer2_real_t _t1 = TRAILER2_LIT(1.0)/_t0;
+    const trailer2_real_t _t2 = _t1*radius_left;
+    const trailer2_real_t _t3 = _t1*radius_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t4 = radius_cart_left*radius_cart_right;
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t5 = radius_cart2_left*radius_cart2_right;
     const trailer2_real_t qp2 = q_prev[2];
     const trailer2_real_t qp3 = q_prev[3];
-    const trailer2_real_t _t0 = qp2 - qp3;
-    const trailer2_real_t _t1 = TRAILER2_SIN_BOUNDED(_t0);
-    const trailer2_real_t _t2 = TRAILER2_COS_BOUNDED(_t0);
-    const trailer2_real_t _t3 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t6 = qp2 - qp3;
+    const trailer2_real_t _t7 = TRAILER2_SIN_BOUNDED(_t6);
+    const trailer2_real_t _t8 = TRAILER2_COS_BOUNDED(_t6);
+    const trailer2_real_t _t9 = -TRAILER2_LIT(0.6)*_t4;
+    const trailer2_real_t _t10 = TRAILER2_LIT(1.0)/_t9;
+    const trailer2_real_t _t11 = _t10*_t4;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.85)*_t7;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.85)*_t8;
     const trailer2_real_t qp4 = q_prev[4];
-    const trailer2_real_t _t4 = qp2 - qp4;
-    const trailer2_real_t _t5 = TRAILER2_SIN_BOUNDED(_t4);
-    const trailer2_real_t _t6 = TRAILER2_COS_BOUNDED(_t4);
-    const trailer2_real_t _t7 = TRAILER2_LIT(0.3)*_t6;
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.85)*_t1;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t2;
-    const trailer2_real_t _t10 = _t6*_t9;
-    const trailer2_real_t _t11 = TRAILER2_LIT(0.3)*_t1;
-    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t5;
-    const trailer2_real_t _t13 = _t5*_t9;
-    const trailer2_real_t _t14 = TRAILER2_LIT(1.6666666666666667)*_t1;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.2)*_t14;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t3;
-    const trailer2_real_t _t17 = TRAILER2_LIT(0.2)*_t16;
-    const trailer2_real_t _t18 = -_t10 - _t5*_t8;
-    const trailer2_real_t _t19 = -_t14*_t18 - _t5;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(1.6666666666666667)*_t19;
-    const trailer2_real_t _t21 = TRAILER2_LIT(0.2)*_t20;
-    const trailer2_real_t _t22 = -_t13 + _t6*_t8;
-    const trailer2_real_t _t23 = _t14*_t22;
-    const trailer2_real_t _t24 = -_t16*_t18 + _t7;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
-    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
-    const trailer2_real_t _t27 = -_t12 + _t16*_t22;
+    const trailer2_real_t _t14 = qp2 - qp4;
+    const trailer2_real_t _t15 = TRAILER2_SIN_BOUNDED(_t14);
+    const trailer2_real_t _t16 = TRAILER2_COS_BOUNDED(_t14);
+    const trailer2_real_t _t17 = -TRAILER2_LIT(0.6)*_t5;
+    const trailer2_real_t _t18 = TRAILER2_LIT(1.0)/_t17;
+    const trailer2_real_t _t19 = _t18*_t5;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t28 = K_theta_cart2_x_tractor*_t5;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t20 = -K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t21 = -_t11*_t7;
+    const trailer2_real_t _t22 = -_t12*_t21 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t23 = _t20*_t22;
+    const trailer2_real_t _t24 = -K_theta_cart2_x_tractor*_t16 - K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t25 = -_t13*_t21;
+    const trailer2_real_t _t26 = _t24*_t25;
+    const trailer2_real_t _t27 = -TRAILER2_LIT(0.3)*_t8;
+    const trailer2_real_t _t28 = -_t11*_t27;
+    const trailer2_real_t _t29 = -_t12*_t28;
+    const trailer2_real_t _t30 = _t20*_t29;
+    const trailer2_real_t _t31 = -_t13*_t28 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t32 = _t24*_t31;
+    const trailer2_real_t _t33 = _t30 + _t32;
     const trailer2_real_t span_1 = span[0];
-    const trailer2_real_t _t29 = TRAILER2_LIT(1.0)/span_1;
+    const trailer2_real_t _t34 = TRAILER2_LIT(1.0)/span_1;
     const trailer2_real_t qd_now0 = qdot_now[0];
     const trailer2_real_t qd_then0 = qdot_then[0];
-    const trailer2_real_t _t30 = _t29*(qd_now0 - qd_then0);
+    const trailer2_real_t _t35 = _t34*(qd_now0 - qd_then0);
     const trailer2_real_t qd_now1 = qdot_now[1];
     const trailer2_real_t qd_then1 = qdot_then[1];
-    const trailer2_real_t _t31 = _t29*(qd_now1 - qd_then1);
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t32 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t34 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t35 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t37 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t38 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t39 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t41 = TRAILER2_LIT(0.207)*_t40;
-    const trailer2_real_t _t42 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t43 = -TRAILER2_LIT(0.207)*_t42;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t44 = J_theta_right*_t40;
-    const trailer2_real_t _t45 = J_theta_right*_t41;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t46 = J_theta_left*_t42;
-    const trailer2_real_t _t47 = J_theta_left*_t43;
-    const trailer2_real_t _t48 = _t15 + _t2;
-    const trailer2_real_t _t49 = _t11 + _t17;
-    const trailer2_real_t _t50 = _t34*_t48;
-    const trailer2_real_t _t51 = _t34*_t49;
-    const trailer2_real_t _t52 = -_t15 + _t2;
-    const trailer2_real_t _t53 = _t11 - _t17;
-    const trailer2_real_t _t54 = _t35*_t52;
-    const trailer2_real_t _t55 = _t35*_t53;
-    const trailer2_real_t _t56 = _t21 - _t23 + _t6;
-    const trailer2_real_t _t57 = _t26 - _t27;
-    const trailer2_real_t _t58 = _t36*_t56;
-    const trailer2_real_t _t59 = _t36*_t57;
-    const trailer2_real_t _t60 = -_t21 - _t23 + _t6;
-    const trailer2_real_t _t61 = -_t26 - _t27;
-    const trailer2_real_t _t62 = _t37*_t60;
-    const trailer2_real_t _t63 = _t37*_t61;
+    const trailer2_real_t _t36 = _t34*(qd_now1 - qd_then1);
+    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t40 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t42 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t44 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t45 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t46 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t47 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t48 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t49 = TRAILER2_LIT(0.207)*_t2;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(0.207)*_t3;
+    const trailer2_real_t _t51 = -TRAILER2_LIT(0.3)*_t7;
+    const trailer2_real_t _t52 = _t10*(-_t41*_t7 + _t42*_t8);
+    const trailer2_real_t _t53 = _t10*(-_t43*_t7 + _t44*_t8);
+    const trailer2_real_t _t54 = -_t15*_t22 - _t16*_t25;
+    const trailer2_real_t _t55 = -_t15*_t25 + _t16*_t22;
+    const trailer2_real_t _t56 = _t19*_t54;
+    const trailer2_real_t _t57 = _t18*(_t45*_t54 + _t46*_t55);
+    const trailer2_real_t _t58 = _t18*(_t47*_t54 + _t48*_t55);
+    const trailer2_real_t _t59 = _t10*(-_t27*_t41 - _t42*_t51);
+    const trailer2_real_t _t60 = _t10*(-_t27*_t43 - _t44*_t51);
+    const trailer2_real_t _t61 = -_t15*_t29 - _t16*_t31;
+    const trailer2_real_t _t62 = -_t15*_t31 + _t16*_t29;
+    const trailer2_real_t _t63 = _t19*_t61;
+    const trailer2_real_t _t64 = _t18*(_t45*_t61 + _t46*_t62);
+    const trailer2_real_t _t65 = _t18*(_t47*_t61 + _t48*_t62);
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t64 = -K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t65 = K_theta_cart2_x_tractor_2*_t6 - _t28;
-    const trailer2_real_t _t66 = K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t11;
-    const trailer2_real_t _t67 = K_theta_cart2_x_tractor*_t7 + K_theta_cart2_x_tractor_2*_t12;
-    const trailer2_real_t _t68 = K_theta_cart2_x_tractor*_t10 + K_theta_cart2_x_tractor_2*_t13
-            - K_theta_cart2_x_tractor_2*_t6*_t8 + _t28*_t8;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t69 = J_x_tractor + _t14*_t64 + _t20*_t65;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t70 = K_theta_tractor_x_tractor_2 + _t16*_t64 + _t25*_t65;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t71 = J_theta_tractor + _t16*_t66 + _t25*_t67;
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t72 = J_theta_cart*_t14 + _t20*_t68 + _t64;
-    const trailer2_real_t _t73 = J_theta_cart*_t16 + _t25*_t68 + _t66;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t74 = J_theta_cart2*_t20 + _t14*_t68 + _t65;
-    const trailer2_real_t _t75 = J_theta_cart2*_t25 + _t16*_t68 + _t67;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t76 = J_theta_cart_right*_t50;
-    const trailer2_real_t _t77 = J_theta_cart_right*_t51;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t78 = J_theta_cart_left*_t54;
-    const trailer2_real_t _t79 = J_theta_cart_left*_t55;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t80 = J_theta_cart2_right*_t58;
-    const trailer2_real_t _t81 = J_theta_cart2_right*_t59;
+    const trailer2_real_t _t66 = -K_theta_cart_x_tractor*_t7 + K_theta_cart_x_tractor_2*_t8;
+    const trailer2_real_t _t67 = -K_theta_cart_x_tractor*_t8 - K_theta_cart_x_tractor_2*_t7;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t82 = J_theta_cart2_left*_t62;
-    const trailer2_real_t _t83 = J_theta_cart2_left*_t63;
-    const trailer2_real_t _t84 = _t14*_t72 + _t20*_t74 + _t40*_t44 + _t42*_t46 + _t50*_t76
-            + _t54*_t78 + _t58*_t80 + _t62*_t82 + _t69;
-    const trailer2_real_t _t85 = _t14*_t73 + _t20*_t75 + _t40*_t45 + _t42*_t47 + _t50*_t77
-            + _t54*_t79 + _t58*_t81 + _t62*_t83 + _t70;
-    const trailer2_real_t _t86 = _t16*_t73 + _t25*_t75 + _t41*_t45 + _t43*_t47 + _t51*_t77
-            + _t55*_t79 + _t59*_t81 + _t63*_t83 + _t71;
-    const trailer2_real_t _t87 = _t32*_t85 + _t38*_t84;
-    const trailer2_real_t _t88 = _t33*_t85 + _t39*_t84;
-    const trailer2_real_t _t89 = _t32*_t86 + _t38*_t85;
-    const trailer2_real_t _t90 = _t33*_t86 + _t39*_t85;
-    const trailer2_real_t _t91 = _t32*_t89 + _t38*_t87;
-    const trailer2_real_t _t92 = _t32*_t90 + _t38*_t88;
-    const trailer2_real_t _t93 = _t33*_t90 + _t39*_t88;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t68 = J_theta_cart2_left*_t58*_t58 + J_theta_cart2_right*_t57*_t57
+            + J_theta_cart_left*_t53*_t53 + J_theta_cart_right*_t52*_t52 + J_theta_left*_t3*_t3
+            + J_theta_right*_t2*_t2 + J_x_tractor;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t69 = J_theta_cart*_t21*_t21 + TRAILER2_LIT(2.0)*_t21*_t66 + _t68;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t70 = J_theta_cart2*_t56*_t56 + _t23*_t56 + _t26*_t56
+            + _t56*(_t23 + _t26) + _t69;
+    const trailer2_real_t _t71 = J_theta_cart2_left*_t58*_t65 + J_theta_cart2_right*_t57*_t64
+            + J_theta_cart_left*_t53*_t60 + J_theta_cart_right*_t52*_t59 + J_theta_left*_t3*_t50
+            + J_theta_right*_t2*_t49;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t72 = K_theta_tractor_x_tractor_2 + _t71;
+    const trailer2_real_t _t73 = J_theta_cart*_t21*_t28 - TRAILER2_LIT(0.3)*_t21*_t67 + _t28*_t66
+            + _t72;
+    const trailer2_real_t _t74 = J_theta_cart2*_t56*_t63 + _t23*_t63 + _t26*_t63 + _t33*_t56 + _t73;
+    const trailer2_real_t _t75 = J_theta_cart2_left*_t65*_t65 + J_theta_cart2_right*_t64*_t64
+            + J_theta_cart_left*_t60*_t60 + J_theta_cart_right*_t59*_t59 + J_theta_left*_t50*_t50
+            + J_theta_right*_t49*_t49;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t76 = J_theta_tractor + _t75;
+    const trailer2_real_t _t77 = J_theta_cart*_t28*_t28 - TRAILER2_LIT(0.6)*_t28*_t67 + _t76;
+    const trailer2_real_t _t78 = J_theta_cart2*_t63*_t63 + _t30*_t63 + _t32*_t63 + _t33*_t63 + _t77;
+    const trailer2_real_t _t79 = _t37*_t74 + _t39*_t70;
+    const trailer2_real_t _t80 = _t38*_t74 + _t40*_t70;
+    const trailer2_real_t _t81 = _t37*_t78 + _t39*_t74;
+    const trailer2_real_t _t82 = _t38*_t78 + _t40*_t74;
+    const trailer2_real_t _t83 = _t37*_t81 + _t39*_t79;
+    const trailer2_real_t _t84 = _t37*_t82 + _t39*_t80;
+    const trailer2_real_t _t85 = _t38*_t82 + _t40*_t80;
     const trailer2_real_t up0 = u_prev[0];
     const trailer2_real_t up1 = u_prev[1];
-    H1hat[0] = -_t30*_t91 - _t31*_t92 + up0;
-    H1hat[1] = -_t30*_t92 - _t31*_t93 + up1;
+    H1hat[0] = -_t35*_t83 - _t36*_t84 + up0;
+    H1hat[1] = -_t35*_t84 - _t36*_t85 + up1;
 }
 
 /* trailer2_minimal_tde_mhat: documented in trailer2_laws.h.
@@ -181,7 +177,7 @@ void trailer2_minimal_tde_mhat(const trailer2_params_t *p, const trailer2_real_t
 }
 
 /* trailer2_minimal_minv_norm: documented in trailer2_laws.h.
-   operations after CSE: 72 add, 121 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 69 add, 163 mul, 4 div, 4 sin/cos, 1 sqrt, 1 fabs */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm)
 {
@@ -191,124 +187,119 @@ void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_
     const trailer2_real_t _t1 = _t0 + theta_cart;
     const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(_t1);
     const trailer2_real_t _t3 = TRAILER2_COS_BOUNDED(_t1);
-    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
-    const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t5 = _t0 + theta_cart2;
-    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(_t5);
-    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(_t5);
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t6;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t7;
-    const trailer2_real_t _t11 = _t10*_t3;
-    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t6;
-    const trailer2_real_t _t14 = -TRAILER2_LIT(1.6666666666666667)*_t2;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.2)*_t14;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
-    const trailer2_real_t _t17 = TRAILER2_LIT(0.2)*_t16;
-    const trailer2_real_t _t18 = -_t11 - _t2*_t9;
-    const trailer2_real_t _t19 = -_t14*_t18 + _t6;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(1.6666666666666667)*_t19;
-    const trailer2_real_t _t21 = TRAILER2_LIT(0.2)*_t20;
-    const trailer2_real_t _t22 = -_t10*_t2 + TRAILER2_LIT(0.85)*_t3*_t6;
-    const trailer2_real_t _t23 = _t14*_t22;
-    const trailer2_real_t _t24 = -_t16*_t18 + _t8;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
-    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
-    const trailer2_real_t _t27 = _t13 + _t16*_t22;
-    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t28 = K_theta_cart2_x_tractor*_t6;
-    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t29 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t30 = TRAILER2_LIT(0.85)*_t2;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t31 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t _t32 = TRAILER2_LIT(0.5)*radius_right;
     const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t33 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t _t34 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t35 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t37 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t _t38 = _t15 + _t3;
-    const trailer2_real_t _t39 = _t37*_t38;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t4 = radius_left*radius_right;
+    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/_t4;
+    const trailer2_real_t _t6 = _t5*radius_left;
+    const trailer2_real_t _t7 = _t5*radius_right;
     const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t _t41 = -_t15 + _t3;
-    const trailer2_real_t _t42 = _t40*_t41;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t43 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t _t44 = _t21 - _t23 + _t7;
-    const trailer2_real_t _t45 = _t43*_t44;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t8 = radius_cart_left*radius_cart_right;
+    const trailer2_real_t _t9 = -TRAILER2_LIT(0.6)*_t8;
+    const trailer2_real_t _t10 = TRAILER2_LIT(1.0)/_t9;
+    const trailer2_real_t _t11 = _t10*_t8;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.85)*_t3;
+    const trailer2_real_t theta_cart2 = q[4];
+    const trailer2_real_t _t14 = _t0 + theta_cart2;
+    const trailer2_real_t _t15 = TRAILER2_SIN_BOUNDED(_t14);
+    const trailer2_real_t _t16 = TRAILER2_COS_BOUNDED(_t14);
     const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t46 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t47 = -_t21 - _t23 + _t7;
-    const trailer2_real_t _t48 = _t46*_t47;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.6)*_t17;
+    const trailer2_real_t _t19 = TRAILER2_LIT(1.0)/_t18;
+    const trailer2_real_t _t20 = _t17*_t19;
+    const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer2_real_t _t21 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t22 = _t11*_t2;
+    const trailer2_real_t _t23 = _t12*_t22 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t24 = _t21*_t23;
+    const trailer2_real_t _t25 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t26 = -_t13*_t22;
+    const trailer2_real_t _t27 = _t25*_t26;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t _t29 = -_t11*_t28;
+    const trailer2_real_t _t30 = _t12*_t29;
+    const trailer2_real_t _t31 = _t21*_t30;
+    const trailer2_real_t _t32 = -_t13*_t29 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t33 = _t25*_t32;
+    const trailer2_real_t _t34 = _t31 + _t33;
+    const trailer2_real_t _t35 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t36 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t37 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t38 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t39 = _t15*_t23 - _t16*_t26;
+    const trailer2_real_t _t40 = _t20*_t39;
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t49 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t50 = _t28 + _t29;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t51 = J_x_tractor + _t14*_t49 + _t20*_t50;
-    const trailer2_real_t _t52 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
-            + _t28*_t30 + _t29*_t30;
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t53 = J_theta_cart*_t14 + _t20*_t52 + _t49;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t54 = J_theta_cart2*_t20 + _t14*_t52 + _t50;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t55 = J_theta_right*_t35;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t56 = J_theta_left*_t36;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t57 = J_theta_cart_right*_t39;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t58 = J_theta_cart_left*_t42;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t59 = J_theta_cart2_right*_t45;
+    const trailer2_real_t _t41 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t42 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t44 = _t10*(_t2*_t42 + _t3*_t43);
+    const trailer2_real_t _t45 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t46 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t47 = _t10*(_t2*_t45 + _t3*_t46);
+    const trailer2_real_t _t48 = _t15*_t26 + _t16*_t23;
+    const trailer2_real_t _t49 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t51 = _t19*(_t39*_t49 + _t48*_t50);
+    const trailer2_real_t _t52 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t53 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t54 = _t19*(_t39*_t52 + _t48*_t53);
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t60 = J_theta_cart2_left*_t48;
-    const trailer2_real_t _t61 = _t14*_t53 + _t20*_t54 + _t35*_t55 + _t36*_t56 + _t39*_t57
-            + _t42*_t58 + _t45*_t59 + _t48*_t60 + _t51;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t55 = J_theta_cart2_left*_t54*_t54 + J_theta_cart2_right*_t51*_t51
+            + J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t44*_t44 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t56 = J_theta_cart*_t22*_t22 + TRAILER2_LIT(2.0)*_t22*_t41 + _t55;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t57 = J_theta_cart2*_t40*_t40 + _t24*_t40 + _t27*_t40
+            + _t40*(_t24 + _t27) + _t56;
+    const trailer2_real_t _t58 = _t15*_t30 - _t16*_t32;
+    const trailer2_real_t _t59 = _t20*_t58;
+    const trailer2_real_t _t60 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const trailer2_real_t _t61 = TRAILER2_LIT(0.207)*_t6;
+    const trailer2_real_t _t62 = -TRAILER2_LIT(0.207)*_t7;
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t64 = _t10*(-_t28*_t42 - _t43*_t63);
+    const trailer2_real_t _t65 = _t10*(-_t28*_t45 - _t46*_t63);
+    const trailer2_real_t _t66 = _t15*_t32 + _t16*_t30;
+    const trailer2_real_t _t67 = _t19*(_t49*_t58 + _t50*_t66);
+    const trailer2_real_t _t68 = _t19*(_t52*_t58 + _t53*_t66);
+    const trailer2_real_t _t69 = J_theta_cart2_left*_t54*_t68 + J_theta_cart2_right*_t51*_t67
+            + J_theta_cart_left*_t47*_t65 + J_theta_cart_right*_t44*_t64 + J_theta_left*_t62*_t7
+            + J_theta_right*_t6*_t61;
     const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t62 = K_theta_tractor_x_tractor_2 + _t16*_t49 + _t25*_t50;
-    const trailer2_real_t _t63 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
-    const trailer2_real_t _t64 = J_theta_cart*_t16 + _t25*_t52 + _t63;
-    const trailer2_real_t _t65 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
-    const trailer2_real_t _t66 = J_theta_cart2*_t25 + _t16*_t52 + _t65;
-    const trailer2_real_t _t67 = TRAILER2_LIT(0.207)*_t35;
-    const trailer2_real_t _t68 = J_theta_right*_t67;
-    const trailer2_real_t _t69 = -TRAILER2_LIT(0.207)*_t36;
-    const trailer2_real_t _t70 = J_theta_left*_t69;
-    const trailer2_real_t _t71 = -_t12 + _t17;
-    const trailer2_real_t _t72 = _t37*_t71;
-    const trailer2_real_t _t73 = J_theta_cart_right*_t72;
-    const trailer2_real_t _t74 = -_t12 - _t17;
-    const trailer2_real_t _t75 = _t40*_t74;
-    const trailer2_real_t _t76 = J_theta_cart_left*_t75;
-    const trailer2_real_t _t77 = _t26 - _t27;
-    const trailer2_real_t _t78 = _t43*_t77;
-    const trailer2_real_t _t79 = J_theta_cart2_right*_t78;
-    const trailer2_real_t _t80 = -_t26 - _t27;
-    const trailer2_real_t _t81 = _t46*_t80;
-    const trailer2_real_t _t82 = J_theta_cart2_left*_t81;
-    const trailer2_real_t _t83 = _t14*_t64 + _t20*_t66 + _t35*_t68 + _t36*_t70 + _t39*_t73
-            + _t42*_t76 + _t45*_t79 + _t48*_t82 + _t62;
-    const trailer2_real_t _t84 = _t33*_t83 + _t34*_t61;
+    const trailer2_real_t _t70 = K_theta_tractor_x_tractor_2 + _t69;
+    const trailer2_real_t _t71 = J_theta_cart*_t22*_t29 - TRAILER2_LIT(0.3)*_t22*_t60 + _t29*_t41
+            + _t70;
+    const trailer2_real_t _t72 = J_theta_cart2*_t40*_t59 + _t24*_t59 + _t27*_t59 + _t34*_t40 + _t71;
+    const trailer2_real_t _t73 = _t37*_t72 + _t38*_t57;
+    const trailer2_real_t _t74 = J_theta_cart2_left*_t68*_t68 + J_theta_cart2_right*_t67*_t67
+            + J_theta_cart_left*_t65*_t65 + J_theta_cart_right*_t64*_t64 + J_theta_left*_t62*_t62
+            + J_theta_right*_t61*_t61;
     const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t85 = J_theta_tractor + _t16*_t63 + _t25*_t65;
-    const trailer2_real_t _t86 = _t16*_t64 + _t25*_t66 + _t67*_t68 + _t69*_t70 + _t72*_t73
-            + _t75*_t76 + _t78*_t79 + _t81*_t82 + _t85;
-    const trailer2_real_t _t87 = _t33*_t86 + _t34*_t83;
-    const trailer2_real_t _t88 = _t31*_t87 + _t32*_t84;
-    const trailer2_real_t _t89 = _t88*_t88;
-    const trailer2_real_t _t90 = _t31*_t83 + _t32*_t61;
-    const trailer2_real_t _t91 = _t31*_t86 + _t32*_t83;
-    const trailer2_real_t _t92 = _t31*_t91 + _t32*_t90;
-    const trailer2_real_t _t93 = _t33*_t87 + _t34*_t84;
-    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t89 + _t92*_t92
-            + _t93*_t93)*(TRAILER2_LIT(1.0)/TRAILER2_FABS(_t89 - _t92*_t93));
+    const trailer2_real_t _t75 = J_theta_tractor + _t74;
+    const trailer2_real_t _t76 = J_theta_cart*_t29*_t29 - TRAILER2_LIT(0.6)*_t29*_t60 + _t75;
+    const trailer2_real_t _t77 = J_theta_cart2*_t59*_t59 + _t31*_t59 + _t33*_t59 + _t34*_t59 + _t76;
+    const trailer2_real_t _t78 = _t37*_t77 + _t38*_t72;
+    const trailer2_real_t _t79 = _t35*_t78 + _t36*_t73;
+    const trailer2_real_t _t80 = _t79*_t79;
+    const trailer2_real_t _t81 = _t35*_t72 + _t36*_t57;
+    const trailer2_real_t _t82 = _t35*_t77 + _t36*_t72;
+    const trailer2_real_t _t83 = _t35*_t82 + _t36*_t81;
+    const trailer2_real_t _t84 = _t37*_t78 + _t38*_t73;
+    norm[0] = TRAILER2_SQRT(TRAILER2_LIT(2.0)*_t80 + _t83*_t83
+            + _t84*_t84)*(TRAILER2_LIT(1.0)/TRAILER2_FABS(_t80 - _t83*_t84));
 }
 
 /* trailer2_minimal_minv_norm_mhat: documented in trailer2_laws.h.
@@ -320,10 +311,10 @@ void trailer2_minimal_minv_norm_mhat(const trailer2_params_t *p, const trailer2_
 }
 
 /* trailer2_minimal_mhat: documented in trailer2_laws.h.
-   operations after CSE: 69 add, 115 mul, 6 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 66 add, 157 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_mhat(const trailer2_params_t *p, const trailer2_real_t *q, trailer2_real_t *M)
 {
-    trailer2_real_t kept[24];
+    trailer2_real_t kept[31];
     trailer2_k_minimal_mhat_keep(p, kept);
     trailer2_k_minimal_mhat(kept, q, M);
 }
@@ -391,7 +382,7 @@ void trailer2_minimal_omega_difference(const trailer2_real_t *newer, const trail
 }
 
 /* trailer2_minimal_tdc_law: documented in trailer2_laws.h.
-   operations after CSE: 77 add, 123 mul, 6 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 74 add, 165 mul, 3 div, 4 sin/cos, 0 sqrt */
 void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -405,137 +396,132 @@ void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t 
     const trailer2_real_t _t1 = _t0 + theta_cart;
     const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(_t1);
     const trailer2_real_t _t3 = TRAILER2_COS_BOUNDED(_t1);
-    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t4 = radius_left*radius_right;
+    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/_t4;
+    const trailer2_real_t _t6 = _t5*radius_left;
+    const trailer2_real_t _t7 = _t5*radius_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t8 = radius_cart_left*radius_cart_right;
+    const trailer2_real_t _t9 = -TRAILER2_LIT(0.6)*_t8;
+    const trailer2_real_t _t10 = TRAILER2_LIT(1.0)/_t9;
+    const trailer2_real_t _t11 = _t10*_t8;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.85)*_t3;
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t5 = _t0 + theta_cart2;
-    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(_t5);
-    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(_t5);
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t6;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t7;
-    const trailer2_real_t _t11 = _t10*_t3;
-    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t6;
-    const trailer2_real_t _t14 = -TRAILER2_LIT(1.6666666666666667)*_t2;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.2)*_t14;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
-    const trailer2_real_t _t17 = TRAILER2_LIT(0.2)*_t16;
-    const trailer2_real_t _t18 = -_t11 - _t2*_t9;
-    const trailer2_real_t _t19 = -_t14*_t18 + _t6;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(1.6666666666666667)*_t19;
-    const trailer2_real_t _t21 = TRAILER2_LIT(0.2)*_t20;
-    const trailer2_real_t _t22 = -_t10*_t2 + TRAILER2_LIT(0.85)*_t3*_t6;
-    const trailer2_real_t _t23 = _t14*_t22;
-    const trailer2_real_t _t24 = -_t16*_t18 + _t8;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
-    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
-    const trailer2_real_t _t27 = _t13 + _t16*_t22;
+    const trailer2_real_t _t14 = _t0 + theta_cart2;
+    const trailer2_real_t _t15 = TRAILER2_SIN_BOUNDED(_t14);
+    const trailer2_real_t _t16 = TRAILER2_COS_BOUNDED(_t14);
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.6)*_t17;
+    const trailer2_real_t _t19 = TRAILER2_LIT(1.0)/_t18;
+    const trailer2_real_t _t20 = _t17*_t19;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t28 = K_theta_cart2_x_tractor*_t6;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t29 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t30 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t21 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t22 = _t11*_t2;
+    const trailer2_real_t _t23 = _t12*_t22 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t24 = _t21*_t23;
+    const trailer2_real_t _t25 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t26 = -_t13*_t22;
+    const trailer2_real_t _t27 = _t25*_t26;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t _t29 = -_t11*_t28;
+    const trailer2_real_t _t30 = _t12*_t29;
+    const trailer2_real_t _t31 = _t21*_t30;
+    const trailer2_real_t _t32 = -_t13*_t29 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t33 = _t25*_t32;
+    const trailer2_real_t _t34 = _t31 + _t33;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t31 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t35 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer2_real_t e1 = e[1];
     const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t32 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t33 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t34 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t35 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t37 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t38 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t39 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t40 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t41 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t42 = TRAILER2_LIT(0.207)*_t41;
-    const trailer2_real_t _t43 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t44 = -TRAILER2_LIT(0.207)*_t43;
-    const trailer2_real_t _t45 = _t15 + _t3;
-    const trailer2_real_t _t46 = -_t12 + _t17;
-    const trailer2_real_t _t47 = _t35*_t45;
-    const trailer2_real_t _t48 = _t35*_t46;
-    const trailer2_real_t _t49 = -_t15 + _t3;
-    const trailer2_real_t _t50 = -_t12 - _t17;
-    const trailer2_real_t _t51 = _t36*_t49;
-    const trailer2_real_t _t52 = _t36*_t50;
-    const trailer2_real_t _t53 = _t21 - _t23 + _t7;
-    const trailer2_real_t _t54 = _t26 - _t27;
-    const trailer2_real_t _t55 = _t37*_t53;
-    const trailer2_real_t _t56 = _t37*_t54;
-    const trailer2_real_t _t57 = -_t21 - _t23 + _t7;
-    const trailer2_real_t _t58 = -_t26 - _t27;
-    const trailer2_real_t _t59 = _t38*_t57;
-    const trailer2_real_t _t60 = _t38*_t58;
+    const trailer2_real_t _t36 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t _t37 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t38 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t39 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t40 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t41 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t42 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t43 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t44 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t45 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t46 = _t10*(_t2*_t42 + _t3*_t43);
+    const trailer2_real_t _t47 = _t10*(_t2*_t44 + _t3*_t45);
+    const trailer2_real_t _t48 = _t15*_t23 - _t16*_t26;
+    const trailer2_real_t _t49 = _t15*_t26 + _t16*_t23;
+    const trailer2_real_t _t50 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t51 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t52 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t53 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t54 = _t20*_t48;
+    const trailer2_real_t _t55 = _t19*(_t48*_t50 + _t49*_t51);
+    const trailer2_real_t _t56 = _t19*(_t48*_t52 + _t49*_t53);
+    const trailer2_real_t _t57 = TRAILER2_LIT(0.207)*_t6;
+    const trailer2_real_t _t58 = -TRAILER2_LIT(0.207)*_t7;
+    const trailer2_real_t _t59 = _t10*(-_t28*_t42 - _t39*_t43);
+    const trailer2_real_t _t60 = _t10*(-_t28*_t44 - _t39*_t45);
+    const trailer2_real_t _t61 = _t15*_t30 - _t16*_t32;
+    const trailer2_real_t _t62 = _t15*_t32 + _t16*_t30;
+    const trailer2_real_t _t63 = _t20*_t61;
+    const trailer2_real_t _t64 = _t19*(_t50*_t61 + _t51*_t62);
+    const trailer2_real_t _t65 = _t19*(_t52*_t61 + _t53*_t62);
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t61 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t62 = _t28 + _t29;
-    const trailer2_real_t _t63 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
-    const trailer2_real_t _t64 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
-    const trailer2_real_t _t65 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
-            + _t28*_t30 + _t29*_t30;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t66 = J_x_tractor + _t14*_t61 + _t20*_t62;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t67 = K_theta_tractor_x_tractor_2 + _t16*_t61 + _t25*_t62;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t68 = J_theta_tractor + _t16*_t63 + _t25*_t64;
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t69 = J_theta_cart*_t14 + _t20*_t65 + _t61;
-    const trailer2_real_t _t70 = J_theta_cart*_t16 + _t25*_t65 + _t63;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t71 = J_theta_cart2*_t20 + _t14*_t65 + _t62;
-    const trailer2_real_t _t72 = J_theta_cart2*_t25 + _t16*_t65 + _t64;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t73 = J_theta_right*_t41;
-    const trailer2_real_t _t74 = J_theta_right*_t42;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t75 = J_theta_left*_t43;
-    const trailer2_real_t _t76 = J_theta_left*_t44;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t77 = J_theta_cart_right*_t47;
-    const trailer2_real_t _t78 = J_theta_cart_right*_t48;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t79 = J_theta_cart_left*_t51;
-    const trailer2_real_t _t80 = J_theta_cart_left*_t52;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t81 = J_theta_cart2_right*_t55;
-    const trailer2_real_t _t82 = J_theta_cart2_right*_t56;
+    const trailer2_real_t _t66 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t67 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t83 = J_theta_cart2_left*_t59;
-    const trailer2_real_t _t84 = J_theta_cart2_left*_t60;
-    const trailer2_real_t _t85 = _t14*_t69 + _t20*_t71 + _t41*_t73 + _t43*_t75 + _t47*_t77
-            + _t51*_t79 + _t55*_t81 + _t59*_t83 + _t66;
-    const trailer2_real_t _t86 = _t14*_t70 + _t20*_t72 + _t41*_t74 + _t43*_t76 + _t47*_t78
-            + _t51*_t80 + _t55*_t82 + _t59*_t84 + _t67;
-    const trailer2_real_t _t87 = _t16*_t70 + _t25*_t72 + _t42*_t74 + _t44*_t76 + _t48*_t78
-            + _t52*_t80 + _t56*_t82 + _t60*_t84 + _t68;
-    const trailer2_real_t _t88 = _t33*_t86 + _t39*_t85;
-    const trailer2_real_t _t89 = _t34*_t86 + _t40*_t85;
-    const trailer2_real_t _t90 = _t33*_t87 + _t39*_t86;
-    const trailer2_real_t _t91 = _t34*_t87 + _t40*_t86;
-    const trailer2_real_t _t92 = _t33*_t90 + _t39*_t88;
-    const trailer2_real_t _t93 = _t33*_t91 + _t39*_t89;
-    const trailer2_real_t _t94 = _t34*_t91 + _t40*_t89;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t68 = J_theta_cart2_left*_t56*_t56 + J_theta_cart2_right*_t55*_t55
+            + J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t46*_t46 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t69 = J_theta_cart*_t22*_t22 + TRAILER2_LIT(2.0)*_t22*_t66 + _t68;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t70 = J_theta_cart2*_t54*_t54 + _t24*_t54 + _t27*_t54
+            + _t54*(_t24 + _t27) + _t69;
+    const trailer2_real_t _t71 = J_theta_cart2_left*_t56*_t65 + J_theta_cart2_right*_t55*_t64
+            + J_theta_cart_left*_t47*_t60 + J_theta_cart_right*_t46*_t59 + J_theta_left*_t58*_t7
+            + J_theta_right*_t57*_t6;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t72 = K_theta_tractor_x_tractor_2 + _t71;
+    const trailer2_real_t _t73 = J_theta_cart*_t22*_t29 - TRAILER2_LIT(0.3)*_t22*_t67 + _t29*_t66
+            + _t72;
+    const trailer2_real_t _t74 = J_theta_cart2*_t54*_t63 + _t24*_t63 + _t27*_t63 + _t34*_t54 + _t73;
+    const trailer2_real_t _t75 = J_theta_cart2_left*_t65*_t65 + J_theta_cart2_right*_t64*_t64
+            + J_theta_cart_left*_t60*_t60 + J_theta_cart_right*_t59*_t59 + J_theta_left*_t58*_t58
+            + J_theta_right*_t57*_t57;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t76 = J_theta_tractor + _t75;
+    const trailer2_real_t _t77 = J_theta_cart*_t29*_t29 - TRAILER2_LIT(0.6)*_t29*_t67 + _t76;
+    const trailer2_real_t _t78 = J_theta_cart2*_t63*_t63 + _t31*_t63 + _t33*_t63 + _t34*_t63 + _t77;
+    const trailer2_real_t _t79 = _t37*_t74 + _t40*_t70;
+    const trailer2_real_t _t80 = _t38*_t74 + _t41*_t70;
+    const trailer2_real_t _t81 = _t37*_t78 + _t40*_t74;
+    const trailer2_real_t _t82 = _t38*_t78 + _t41*_t74;
+    const trailer2_real_t _t83 = _t37*_t81 + _t40*_t79;
+    const trailer2_real_t _t84 = _t37*_t82 + _t40*_t80;
+    const trailer2_real_t _t85 = _t38*_t82 + _t41*_t80;
     const trailer2_real_t H1hat0 = H1hat[0];
     const trailer2_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t31*_t92 + _t32*_t93;
-    u[1] = H1hat1 + _t31*_t93 + _t32*_t94;
+    u[0] = H1hat0 + _t35*_t83 + _t36*_t84;
+    u[1] = H1hat1 + _t35*_t84 + _t36*_t85;
 }
 
 /* trailer2_minimal_tdc_law_mhat: documented in trailer2_laws.h.
@@ -549,7 +535,7 @@ void trailer2_minimal_tdc_law_mhat(const trailer2_params_t *p, const trailer2_re
 }
 
 /* trailer2_minimal_tdroc_law: documented in trailer2_laws.h.
-   operations after CSE: 84 add, 137 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 81 add, 179 mul, 4 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
     const trailer2_real_t *k1, const trailer2_real_t *k2, const trailer2_real_t *p12,
@@ -562,152 +548,147 @@ void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_
     const trailer2_real_t _t1 = _t0 + theta_cart;
     const trailer2_real_t _t2 = TRAILER2_SIN_BOUNDED(_t1);
     const trailer2_real_t _t3 = TRAILER2_COS_BOUNDED(_t1);
-    const trailer2_real_t _t4 = TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t radius_left = p->radius_left;
+    const trailer2_real_t radius_right = p->radius_right;
+    const trailer2_real_t _t4 = radius_left*radius_right;
+    const trailer2_real_t _t5 = TRAILER2_LIT(1.0)/_t4;
+    const trailer2_real_t _t6 = _t5*radius_left;
+    const trailer2_real_t _t7 = _t5*radius_right;
+    const trailer2_real_t radius_cart_left = p->radius_cart_left;
+    const trailer2_real_t radius_cart_right = p->radius_cart_right;
+    const trailer2_real_t _t8 = radius_cart_left*radius_cart_right;
+    const trailer2_real_t _t9 = -TRAILER2_LIT(0.6)*_t8;
+    const trailer2_real_t _t10 = TRAILER2_LIT(1.0)/_t9;
+    const trailer2_real_t _t11 = _t10*_t8;
+    const trailer2_real_t _t12 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t13 = TRAILER2_LIT(0.85)*_t3;
     const trailer2_real_t theta_cart2 = q[4];
-    const trailer2_real_t _t5 = _t0 + theta_cart2;
-    const trailer2_real_t _t6 = TRAILER2_SIN_BOUNDED(_t5);
-    const trailer2_real_t _t7 = TRAILER2_COS_BOUNDED(_t5);
-    const trailer2_real_t _t8 = TRAILER2_LIT(0.3)*_t7;
-    const trailer2_real_t _t9 = TRAILER2_LIT(0.85)*_t6;
-    const trailer2_real_t _t10 = TRAILER2_LIT(0.85)*_t7;
-    const trailer2_real_t _t11 = _t10*_t3;
-    const trailer2_real_t _t12 = TRAILER2_LIT(0.3)*_t2;
-    const trailer2_real_t _t13 = TRAILER2_LIT(0.3)*_t6;
-    const trailer2_real_t _t14 = -TRAILER2_LIT(1.6666666666666667)*_t2;
-    const trailer2_real_t _t15 = TRAILER2_LIT(0.2)*_t14;
-    const trailer2_real_t _t16 = -TRAILER2_LIT(1.6666666666666667)*_t4;
-    const trailer2_real_t _t17 = TRAILER2_LIT(0.2)*_t16;
-    const trailer2_real_t _t18 = -_t11 - _t2*_t9;
-    const trailer2_real_t _t19 = -_t14*_t18 + _t6;
-    const trailer2_real_t _t20 = -TRAILER2_LIT(1.6666666666666667)*_t19;
-    const trailer2_real_t _t21 = TRAILER2_LIT(0.2)*_t20;
-    const trailer2_real_t _t22 = -_t10*_t2 + TRAILER2_LIT(0.85)*_t3*_t6;
-    const trailer2_real_t _t23 = _t14*_t22;
-    const trailer2_real_t _t24 = -_t16*_t18 + _t8;
-    const trailer2_real_t _t25 = -TRAILER2_LIT(1.6666666666666667)*_t24;
-    const trailer2_real_t _t26 = TRAILER2_LIT(0.2)*_t25;
-    const trailer2_real_t _t27 = _t13 + _t16*_t22;
+    const trailer2_real_t _t14 = _t0 + theta_cart2;
+    const trailer2_real_t _t15 = TRAILER2_SIN_BOUNDED(_t14);
+    const trailer2_real_t _t16 = TRAILER2_COS_BOUNDED(_t14);
+    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer2_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const trailer2_real_t _t18 = -TRAILER2_LIT(0.6)*_t17;
+    const trailer2_real_t _t19 = TRAILER2_LIT(1.0)/_t18;
+    const trailer2_real_t _t20 = _t17*_t19;
     const trailer2_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer2_real_t _t28 = K_theta_cart2_x_tractor*_t6;
     const trailer2_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer2_real_t _t29 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer2_real_t _t30 = TRAILER2_LIT(0.85)*_t2;
+    const trailer2_real_t _t21 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer2_real_t _t22 = _t11*_t2;
+    const trailer2_real_t _t23 = _t12*_t22 + TRAILER2_LIT(1.0);
+    const trailer2_real_t _t24 = _t21*_t23;
+    const trailer2_real_t _t25 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer2_real_t _t26 = -_t13*_t22;
+    const trailer2_real_t _t27 = _t25*_t26;
+    const trailer2_real_t _t28 = -TRAILER2_LIT(0.3)*_t3;
+    const trailer2_real_t _t29 = -_t11*_t28;
+    const trailer2_real_t _t30 = _t12*_t29;
+    const trailer2_real_t _t31 = _t21*_t30;
+    const trailer2_real_t _t32 = -_t13*_t29 - TRAILER2_LIT(3.0)/TRAILER2_LIT(10.0);
+    const trailer2_real_t _t33 = _t25*_t32;
+    const trailer2_real_t _t34 = _t31 + _t33;
     const trailer2_real_t e0 = e[0];
     const trailer2_real_t edot0 = edot[0];
     const trailer2_real_t qdd_des0 = qddot_des[0];
     const trailer2_real_t k1_0 = k1[0];
     const trailer2_real_t k2_0 = k2[0];
-    const trailer2_real_t _t31 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer2_real_t _t35 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer2_real_t e1 = e[1];
     const trailer2_real_t edot1 = edot[1];
     const trailer2_real_t qdd_des1 = qddot_des[1];
     const trailer2_real_t k1_1 = k1[1];
     const trailer2_real_t k2_1 = k2[1];
-    const trailer2_real_t _t32 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer2_real_t _t36 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer2_real_t p12_0 = p12[0];
     const trailer2_real_t p22_0 = p22[0];
-    const trailer2_real_t _t33 = e0*p12_0 + edot0*p22_0;
+    const trailer2_real_t _t37 = e0*p12_0 + edot0*p22_0;
     const trailer2_real_t p12_1 = p12[1];
     const trailer2_real_t p22_1 = p22[1];
-    const trailer2_real_t _t34 = e1*p12_1 + edot1*p22_1;
-    const trailer2_real_t _t35 = trailer2_norm2(_t33, _t34);
+    const trailer2_real_t _t38 = e1*p12_1 + edot1*p22_1;
+    const trailer2_real_t _t39 = trailer2_norm2(_t37, _t38);
     const trailer2_real_t eps_1 = eps[0];
-    const trailer2_real_t _t36 = TRAILER2_LIT(1.0)/(TRAILER2_FMAX(_t35, eps_1));
-    const trailer2_real_t _t37 = _t33*_t36;
-    const trailer2_real_t _t38 = _t34*_t36;
-    const trailer2_real_t radius_right = p->radius_right;
-    const trailer2_real_t _t39 = TRAILER2_LIT(2.4154589371980677)*radius_right;
-    const trailer2_real_t radius_left = p->radius_left;
-    const trailer2_real_t _t40 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
-    const trailer2_real_t radius_cart_right = p->radius_cart_right;
-    const trailer2_real_t _t41 = TRAILER2_LIT(1.0)/radius_cart_right;
-    const trailer2_real_t radius_cart_left = p->radius_cart_left;
-    const trailer2_real_t _t42 = TRAILER2_LIT(1.0)/radius_cart_left;
-    const trailer2_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer2_real_t _t43 = TRAILER2_LIT(1.0)/radius_cart2_right;
-    const trailer2_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer2_real_t _t44 = TRAILER2_LIT(1.0)/radius_cart2_left;
-    const trailer2_real_t _t45 = TRAILER2_LIT(0.5)*radius_right;
-    const trailer2_real_t _t46 = TRAILER2_LIT(0.5)*radius_left;
-    const trailer2_real_t _t47 = TRAILER2_LIT(1.0)/radius_right;
-    const trailer2_real_t _t48 = TRAILER2_LIT(0.207)*_t47;
-    const trailer2_real_t _t49 = TRAILER2_LIT(1.0)/radius_left;
-    const trailer2_real_t _t50 = -TRAILER2_LIT(0.207)*_t49;
-    const trailer2_real_t _t51 = _t15 + _t3;
-    const trailer2_real_t _t52 = -_t12 + _t17;
-    const trailer2_real_t _t53 = _t41*_t51;
-    const trailer2_real_t _t54 = _t41*_t52;
-    const trailer2_real_t _t55 = -_t15 + _t3;
-    const trailer2_real_t _t56 = -_t12 - _t17;
-    const trailer2_real_t _t57 = _t42*_t55;
-    const trailer2_real_t _t58 = _t42*_t56;
-    const trailer2_real_t _t59 = _t21 - _t23 + _t7;
-    const trailer2_real_t _t60 = _t26 - _t27;
-    const trailer2_real_t _t61 = _t43*_t59;
-    const trailer2_real_t _t62 = _t43*_t60;
-    const trailer2_real_t _t63 = -_t21 - _t23 + _t7;
-    const trailer2_real_t _t64 = -_t26 - _t27;
-    const trailer2_real_t _t65 = _t44*_t63;
-    const trailer2_real_t _t66 = _t44*_t64;
+    const trailer2_real_t _t40 = TRAILER2_LIT(1.0)/(TRAILER2_FMAX(_t39, eps_1));
+    const trailer2_real_t _t41 = _t37*_t40;
+    const trailer2_real_t _t42 = _t38*_t40;
+    const trailer2_real_t _t43 = TRAILER2_LIT(2.4154589371980677)*radius_right;
+    const trailer2_real_t _t44 = -TRAILER2_LIT(2.4154589371980677)*radius_left;
+    const trailer2_real_t _t45 = TRAILER2_LIT(0.3)*_t2;
+    const trailer2_real_t _t46 = TRAILER2_LIT(0.5)*radius_right;
+    const trailer2_real_t _t47 = TRAILER2_LIT(0.5)*radius_left;
+    const trailer2_real_t _t48 = TRAILER2_LIT(0.2)*radius_cart_left;
+    const trailer2_real_t _t49 = -TRAILER2_LIT(0.6)*radius_cart_left;
+    const trailer2_real_t _t50 = -TRAILER2_LIT(0.2)*radius_cart_right;
+    const trailer2_real_t _t51 = -TRAILER2_LIT(0.6)*radius_cart_right;
+    const trailer2_real_t _t52 = _t10*(_t2*_t48 + _t3*_t49);
+    const trailer2_real_t _t53 = _t10*(_t2*_t50 + _t3*_t51);
+    const trailer2_real_t _t54 = _t15*_t23 - _t16*_t26;
+    const trailer2_real_t _t55 = _t15*_t26 + _t16*_t23;
+    const trailer2_real_t _t56 = TRAILER2_LIT(0.2)*radius_cart2_left;
+    const trailer2_real_t _t57 = -TRAILER2_LIT(0.6)*radius_cart2_left;
+    const trailer2_real_t _t58 = -TRAILER2_LIT(0.2)*radius_cart2_right;
+    const trailer2_real_t _t59 = -TRAILER2_LIT(0.6)*radius_cart2_right;
+    const trailer2_real_t _t60 = _t20*_t54;
+    const trailer2_real_t _t61 = _t19*(_t54*_t56 + _t55*_t57);
+    const trailer2_real_t _t62 = _t19*(_t54*_t58 + _t55*_t59);
+    const trailer2_real_t _t63 = TRAILER2_LIT(0.207)*_t6;
+    const trailer2_real_t _t64 = -TRAILER2_LIT(0.207)*_t7;
+    const trailer2_real_t _t65 = _t10*(-_t28*_t48 - _t45*_t49);
+    const trailer2_real_t _t66 = _t10*(-_t28*_t50 - _t45*_t51);
+    const trailer2_real_t _t67 = _t15*_t30 - _t16*_t32;
+    const trailer2_real_t _t68 = _t15*_t32 + _t16*_t30;
+    const trailer2_real_t _t69 = _t20*_t67;
+    const trailer2_real_t _t70 = _t19*(_t56*_t67 + _t57*_t68);
+    const trailer2_real_t _t71 = _t19*(_t58*_t67 + _t59*_t68);
     const trailer2_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer2_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer2_real_t _t67 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer2_real_t _t68 = _t28 + _t29;
-    const trailer2_real_t _t69 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t12;
-    const trailer2_real_t _t70 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t13;
-    const trailer2_real_t _t71 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t3*_t9
-            + _t28*_t30 + _t29*_t30;
-    const trailer2_real_t J_x_tractor = p->J_x_tractor;
-    const trailer2_real_t _t72 = J_x_tractor + _t14*_t67 + _t20*_t68;
-    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer2_real_t _t73 = K_theta_tractor_x_tractor_2 + _t16*_t67 + _t25*_t68;
-    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer2_real_t _t74 = J_theta_tractor + _t16*_t69 + _t25*_t70;
-    const trailer2_real_t J_theta_cart = p->J_theta_cart;
-    const trailer2_real_t _t75 = J_theta_cart*_t14 + _t20*_t71 + _t67;
-    const trailer2_real_t _t76 = J_theta_cart*_t16 + _t25*_t71 + _t69;
-    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer2_real_t _t77 = J_theta_cart2*_t20 + _t14*_t71 + _t68;
-    const trailer2_real_t _t78 = J_theta_cart2*_t25 + _t16*_t71 + _t70;
-    const trailer2_real_t J_theta_right = p->J_theta_right;
-    const trailer2_real_t _t79 = J_theta_right*_t47;
-    const trailer2_real_t _t80 = J_theta_right*_t48;
-    const trailer2_real_t J_theta_left = p->J_theta_left;
-    const trailer2_real_t _t81 = J_theta_left*_t49;
-    const trailer2_real_t _t82 = J_theta_left*_t50;
-    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer2_real_t _t83 = J_theta_cart_right*_t53;
-    const trailer2_real_t _t84 = J_theta_cart_right*_t54;
-    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer2_real_t _t85 = J_theta_cart_left*_t57;
-    const trailer2_real_t _t86 = J_theta_cart_left*_t58;
-    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer2_real_t _t87 = J_theta_cart2_right*_t61;
-    const trailer2_real_t _t88 = J_theta_cart2_right*_t62;
+    const trailer2_real_t _t72 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer2_real_t _t73 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer2_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer2_real_t _t89 = J_theta_cart2_left*_t65;
-    const trailer2_real_t _t90 = J_theta_cart2_left*_t66;
-    const trailer2_real_t _t91 = _t14*_t75 + _t20*_t77 + _t47*_t79 + _t49*_t81 + _t53*_t83
-            + _t57*_t85 + _t61*_t87 + _t65*_t89 + _t72;
-    const trailer2_real_t _t92 = _t14*_t76 + _t20*_t78 + _t47*_t80 + _t49*_t82 + _t53*_t84
-            + _t57*_t86 + _t61*_t88 + _t65*_t90 + _t73;
-    const trailer2_real_t _t93 = _t16*_t76 + _t25*_t78 + _t48*_t80 + _t50*_t82 + _t54*_t84
-            + _t58*_t86 + _t62*_t88 + _t66*_t90 + _t74;
-    const trailer2_real_t _t94 = _t39*_t92 + _t45*_t91;
-    const trailer2_real_t _t95 = _t40*_t92 + _t46*_t91;
-    const trailer2_real_t _t96 = _t39*_t93 + _t45*_t92;
-    const trailer2_real_t _t97 = _t40*_t93 + _t46*_t92;
-    const trailer2_real_t _t98 = _t39*_t96 + _t45*_t94;
-    const trailer2_real_t _t99 = _t39*_t97 + _t45*_t95;
-    const trailer2_real_t _t100 = _t40*_t97 + _t46*_t95;
+    const trailer2_real_t J_theta_cart2_right = p->J_theta_cart2_right;
+    const trailer2_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer2_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer2_real_t J_theta_left = p->J_theta_left;
+    const trailer2_real_t J_theta_right = p->J_theta_right;
+    const trailer2_real_t J_x_tractor = p->J_x_tractor;
+    const trailer2_real_t _t74 = J_theta_cart2_left*_t62*_t62 + J_theta_cart2_right*_t61*_t61
+            + J_theta_cart_left*_t53*_t53 + J_theta_cart_right*_t52*_t52 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const trailer2_real_t J_theta_cart = p->J_theta_cart;
+    const trailer2_real_t _t75 = J_theta_cart*_t22*_t22 + TRAILER2_LIT(2.0)*_t22*_t72 + _t74;
+    const trailer2_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer2_real_t _t76 = J_theta_cart2*_t60*_t60 + _t24*_t60 + _t27*_t60
+            + _t60*(_t24 + _t27) + _t75;
+    const trailer2_real_t _t77 = J_theta_cart2_left*_t62*_t71 + J_theta_cart2_right*_t61*_t70
+            + J_theta_cart_left*_t53*_t66 + J_theta_cart_right*_t52*_t65 + J_theta_left*_t64*_t7
+            + J_theta_right*_t6*_t63;
+    const trailer2_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer2_real_t _t78 = K_theta_tractor_x_tractor_2 + _t77;
+    const trailer2_real_t _t79 = J_theta_cart*_t22*_t29 - TRAILER2_LIT(0.3)*_t22*_t73 + _t29*_t72
+            + _t78;
+    const trailer2_real_t _t80 = J_theta_cart2*_t60*_t69 + _t24*_t69 + _t27*_t69 + _t34*_t60 + _t79;
+    const trailer2_real_t _t81 = J_theta_cart2_left*_t71*_t71 + J_theta_cart2_right*_t70*_t70
+            + J_theta_cart_left*_t66*_t66 + J_theta_cart_right*_t65*_t65 + J_theta_left*_t64*_t64
+            + J_theta_right*_t63*_t63;
+    const trailer2_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer2_real_t _t82 = J_theta_tractor + _t81;
+    const trailer2_real_t _t83 = J_theta_cart*_t29*_t29 - TRAILER2_LIT(0.6)*_t29*_t73 + _t82;
+    const trailer2_real_t _t84 = J_theta_cart2*_t69*_t69 + _t31*_t69 + _t33*_t69 + _t34*_t69 + _t83;
+    const trailer2_real_t _t85 = _t43*_t80 + _t46*_t76;
+    const trailer2_real_t _t86 = _t44*_t80 + _t47*_t76;
+    const trailer2_real_t _t87 = _t43*_t84 + _t46*_t80;
+    const trailer2_real_t _t88 = _t44*_t84 + _t47*_t80;
+    const trailer2_real_t _t89 = _t43*_t87 + _t46*_t85;
+    const trailer2_real_t _t90 = _t43*_t88 + _t46*_t86;
+    const trailer2_real_t _t91 = _t44*_t88 + _t47*_t86;
     const trailer2_real_t H1hat0 = H1hat[0];
     const trailer2_real_t H1hat1 = H1hat[1];
     const trailer2_real_t gain_1 = gain[0];
-    u[0] = H1hat0 + _t31*_t98 + _t32*_t99 + gain_1*(_t37*_t98 + _t38*_t99);
-    u[1] = H1hat1 + _t100*_t32 + _t31*_t99 + gain_1*(_t100*_t38 + _t37*_t99);
-    s[0] = _t33;
-    s[1] = _t34;
-    s_norm[0] = _t35;
+    u[0] = H1hat0 + _t35*_t89 + _t36*_t90 + gain_1*(_t41*_t89 + _t42*_t90);
+    u[1] = H1hat1 + _t35*_t90 + _t36*_t91 + gain_1*(_t41*_t90 + _t42*_t91);
+    s[0] = _t37;
+    s[1] = _t38;
+    s_norm[0] = _t39;
 }
 
 /* trailer2_minimal_tdroc_law_mhat: documented in trailer2_laws.h.
@@ -723,7 +704,7 @@ void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_
 }
 
 /* trailer2_minimal_roc_law: documented in trailer2_laws.h.
-   operations after CSE: 183 add, 279 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 146 add, 289 mul, 5 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -731,14 +712,14 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
     const trailer2_real_t *eps, trailer2_real_t *u, trailer2_real_t *s, trailer2_real_t *s_norm,
     trailer2_real_t *gain)
 {
-    trailer2_real_t kept[25];
+    trailer2_real_t kept[33];
     trailer2_k_minimal_roc_law_keep(p, kept);
     trailer2_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u,
             s, s_norm, gain);
 }
 
 /* trailer2_minimal_asmc_law: documented in trailer2_laws.h.
-   operations after CSE: 179 add, 276 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 142 add, 286 mul, 4 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
@@ -746,7 +727,7 @@ void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t
     const trailer2_real_t *eps, const trailer2_real_t *adapt, trailer2_real_t *u,
     trailer2_real_t *s, trailer2_real_t *s_norm, trailer2_real_t *gain_next)
 {
-    trailer2_real_t kept[25];
+    trailer2_real_t kept[33];
     trailer2_k_minimal_roc_law_keep(p, kept);
     trailer2_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps,
             adapt, u, s, s_norm, gain_next);

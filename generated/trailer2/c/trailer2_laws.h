@@ -83,7 +83,7 @@ void trailer2_tdroc_weighted_gain(const trailer2_real_t *minv_norm, const traile
  * @param[in]  span [1] row-major (TRAILER2_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (TRAILER2_MINIMAL_TDE_H1HAT_SIZE)
  *
- * operations after CSE: 75 add, 119 mul, 7 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 72 add, 163 mul, 4 div, 4 sin/cos, 0 sqrt
  */
 void trailer2_minimal_tde(const trailer2_params_t *p, const trailer2_real_t *q_prev,
     const trailer2_real_t *u_prev, const trailer2_real_t *qdot_now,
@@ -137,7 +137,7 @@ void trailer2_minimal_tde_mhat(const trailer2_params_t *p, const trailer2_real_t
  *     theta_cart_left, theta_cart2_right, theta_cart2_left -- measured q
  * @param[out] norm [1] row-major (TRAILER2_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 72 add, 121 mul, 7 div, 4 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 69 add, 163 mul, 4 div, 4 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer2_minimal_minv_norm(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *norm);
@@ -179,7 +179,7 @@ void trailer2_minimal_minv_norm_mhat(const trailer2_params_t *p, const trailer2_
  *     theta_cart2_right, theta_cart2_left -- measured q
  * @param[out] M [4] row-major (TRAILER2_MINIMAL_MHAT_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 69 add, 115 mul, 6 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 66 add, 157 mul, 3 div, 4 sin/cos, 0 sqrt
  */
 void trailer2_minimal_mhat(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *M);
@@ -266,7 +266,7 @@ void trailer2_minimal_omega_difference(const trailer2_real_t *newer, const trail
  * @param[in]  H1hat [2] row-major (TRAILER2_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (TRAILER2_MINIMAL_TDC_LAW_U_SIZE)
  *
- * operations after CSE: 77 add, 123 mul, 6 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 74 add, 165 mul, 3 div, 4 sin/cos, 0 sqrt
  */
 void trailer2_minimal_tdc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
@@ -360,7 +360,7 @@ void trailer2_minimal_tdc_law_mhat(const trailer2_params_t *p, const trailer2_re
  * @param[out] s [2] row-major (TRAILER2_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 84 add, 137 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 81 add, 179 mul, 4 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer2_minimal_tdroc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *e, const trailer2_real_t *edot, const trailer2_real_t *qddot_des,
@@ -471,7 +471,7 @@ void trailer2_minimal_tdroc_law_mhat(const trailer2_params_t *p, const trailer2_
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER2_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 183 add, 279 mul, 8 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 146 add, 289 mul, 5 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,
@@ -530,7 +530,7 @@ void trailer2_minimal_roc_law(const trailer2_params_t *p, const trailer2_real_t 
  * @param[out] s_norm [1] row-major (TRAILER2_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER2_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 179 add, 276 mul, 7 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 142 add, 286 mul, 4 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer2_minimal_asmc_law(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *e, const trailer2_real_t *edot,

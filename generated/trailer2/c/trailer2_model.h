@@ -21,13 +21,13 @@ extern "C" {
    only. */
 typedef struct {
     long magic; /* TRAILER2_MODEL_PREPARED_MAGIC once prepared */
-    trailer2_real_t forward_dynamics[29]; /* J_theta_cart, J_theta_cart2, J_theta_cart2_left,
+    trailer2_real_t forward_dynamics[37]; /* J_theta_cart, J_theta_cart2, J_theta_cart2_left,
                                              J_theta_cart2_right, J_theta_cart_left,
-                                             J_theta_cart_right, J_theta_tractor, J_x_tractor,
+                                             J_theta_cart_right, J_theta_tractor,
                                              K_theta_cart_x_tractor, K_theta_cart_x_tractor_2,
                                              K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2,
                                              K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2,
-                                             15 parameter-only subexpressions, for
+                                             24 parameter-only subexpressions, for
                                              trailer2_forward_dynamics_prepared */
 } trailer2_model_prepared_t;
 
@@ -85,7 +85,7 @@ typedef struct {
  * With fixed parameters, trailer2_model_prepare once and trailer2_forward_dynamics_prepared
  * per call give the same results, bit for bit.
  *
- * operations after CSE: 177 add, 255 mul, 7 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 138 add, 268 mul, 4 div, 6 sin/cos, 0 sqrt
  */
 trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *qdot, const trailer2_real_t *tau, trailer2_real_t *qddot);
@@ -117,7 +117,7 @@ trailer2_status_t trailer2_forward_dynamics(const trailer2_params_t *p, const tr
  *         TRAILER2_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
  *         TRAILER2_ERR_BAD_PARAMS if not (J_x_tractor > 0).
  *
- * operations after CSE: 3 add, 16 mul, 6 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 4 add, 36 mul, 3 div, 0 sin/cos, 0 sqrt
  */
 trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
     trailer2_model_prepared_t *prepared);
@@ -154,7 +154,7 @@ trailer2_status_t trailer2_model_prepare(const trailer2_params_t *p,
  *         TRAILER2_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER2_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 174 add, 239 mul, 1 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 134 add, 232 mul, 1 div, 6 sin/cos, 0 sqrt
  */
 trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepared_t *prepared,
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *tau,
@@ -180,7 +180,7 @@ trailer2_status_t trailer2_forward_dynamics_prepared(const trailer2_model_prepar
  *     thetadot_left -- theta_right rate, theta_left rate
  * @param[out] pose_rates [9] row-major (TRAILER2_KINEMATICS_POSE_RATES_SIZE)
  *
- * operations after CSE: 25 add, 53 mul, 4 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 24 add, 80 mul, 2 div, 6 sin/cos, 0 sqrt
  */
 void trailer2_kinematics(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *pose_rates);
@@ -203,7 +203,7 @@ void trailer2_kinematics(const trailer2_params_t *p, const trailer2_real_t *q,
  *     theta_cart2_right, theta_cart2_left
  * @param[out] M [2x2] row-major (TRAILER2_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 69 add, 115 mul, 6 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 66 add, 157 mul, 3 div, 4 sin/cos, 0 sqrt
  */
 void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_real_t *q,
     trailer2_real_t *M);
@@ -227,7 +227,7 @@ void trailer2_minimal_mass_matrix(const trailer2_params_t *p, const trailer2_rea
  *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
  * @param[out] H [2] row-major (TRAILER2_MINIMAL_BIAS_FORCES_H_SIZE)
  *
- * operations after CSE: 118 add, 190 mul, 4 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 80 add, 177 mul, 3 div, 4 sin/cos, 0 sqrt
  */
 void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, trailer2_real_t *H);
@@ -276,7 +276,7 @@ void trailer2_minimal_bias_forces(const trailer2_params_t *p, const trailer2_rea
  *         TRAILER2_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER2_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 163 add, 254 mul, 7 div, 4 sin/cos, 0 sqrt
+ * operations after CSE: 126 add, 261 mul, 4 div, 4 sin/cos, 0 sqrt
  */
 trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,
@@ -312,7 +312,7 @@ trailer2_status_t trailer2_minimal_forward_dynamics(const trailer2_params_t *p,
  * @param[out] A [13x13] row-major (TRAILER2_LINEARIZATION_A_SIZE) -- 13x13 row-major
  * @param[out] B [13x2] row-major (TRAILER2_LINEARIZATION_B_SIZE) -- 13x2 row-major
  *
- * operations after CSE: 731 add, 975 mul, 7 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 612 add, 964 mul, 4 div, 10 sin/cos, 0 sqrt
  */
 void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q,
     const trailer2_real_t *wheel_rates, const trailer2_real_t *tau, trailer2_real_t *A,
@@ -375,7 +375,7 @@ void trailer2_linearization(const trailer2_params_t *p, const trailer2_real_t *q
  *         TRAILER2_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER2_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 231 add, 343 mul, 7 div, 8 sin/cos, 0 sqrt
+ * operations after CSE: 194 add, 347 mul, 8 div, 8 sin/cos, 0 sqrt
  */
 trailer2_status_t trailer2_wheel_contact_forces(const trailer2_params_t *p,
     const trailer2_real_t *q, const trailer2_real_t *wheel_rates, const trailer2_real_t *tau,

@@ -32,7 +32,7 @@ extern "C" {
  *     wheel torques after friction
  * @param[out] xdot [13] row-major (TRAILER2_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
- * operations after CSE: 169 add, 264 mul, 7 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 132 add, 274 mul, 4 div, 6 sin/cos, 0 sqrt
  */
 void trailer2_plant_state_derivative(const trailer2_plant_params_t *pp, const trailer2_real_t *x,
     const trailer2_real_t *tau, trailer2_real_t *xdot);

@@ -53,7 +53,7 @@ typedef struct {
     trailer2_real_t qdot_prev2[2]; /* qdot(t-2h) */
     trailer2_real_t u_prev[2];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     trailer2_real_t u_prev2[2];  /* u(t-2h) applied */
-    trailer2_real_t k_minimal_roc_law[25]; /* minimal_roc_law's parameter-only values (at _init) */
+    trailer2_real_t k_minimal_roc_law[33]; /* minimal_roc_law's parameter-only values (at _init) */
     trailer2_real_t H1hat[11];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer2_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                     GAIN_MAX */

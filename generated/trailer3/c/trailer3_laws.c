@@ -31,202 +31,191 @@ void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const traile
 }
 
 /* trailer3_minimal_tde: documented in trailer3_laws.h.
-   operations after CSE: 124 add, 186 mul, 9 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 107 add, 233 mul, 5 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_prev,
     const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
     const trailer3_real_t *qdot_then, const trailer3_real_t *span, trailer3_real_t *H1hat)
 {
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t0 = radius_left*radius_right;
+    const trailer3_real_t _t1 = TRAILER3_LIT(1.0)/_t0;
+    const trailer3_real_t _t2 = _t1*radius_left;
+    const trailer3_real_t _t3 = _t1*radius_right;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t _t4 = radius_cart_left*radius_cart_right;
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t _t5 = radius_cart2_left*radius_cart2_right;
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t _t6 = radius_cart3_left*radius_cart3_right;
     const trailer3_real_t qp2 = q_prev[2];
     const trailer3_real_t qp3 = q_prev[3];
-    const trailer3_real_t _t0 = qp2 - qp3;
-    const trailer3_real_t _t1 = TRAILER3_SIN_BOUNDED(_t0);
-    const trailer3_real_t _t2 = TRAILER3_COS_BOUNDED(_t0);
-    const trailer3_real_t _t3 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t7 = qp2 - qp3;
+    const trailer3_real_t _t8 = TRAILER3_SIN_BOUNDED(_t7);
+    const trailer3_real_t _t9 = TRAILER3_COS_BOUNDED(_t7);
+    const trailer3_real_t _t10 = -TRAILER3_LIT(0.6)*_t4;
+    const trailer3_real_t _t11 = TRAILER3_LIT(1.0)/_t10;
+    const trailer3_real_t _t12 = _t11*_t4;
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.85)*_t8;
+    const trailer3_real_t _t14 = TRAILER3_LIT(0.85)*_t9;
     const trailer3_real_t qp4 = q_prev[4];
-    const trailer3_real_t _t4 = qp2 - qp4;
-    const trailer3_real_t _t5 = TRAILER3_SIN_BOUNDED(_t4);
-    const trailer3_real_t _t6 = TRAILER3_COS_BOUNDED(_t4);
-    const trailer3_real_t _t7 = TRAILER3_LIT(0.3)*_t6;
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.85)*_t1;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
-    const trailer3_real_t _t10 = _t6*_t9;
+    const trailer3_real_t _t15 = qp2 - qp4;
+    const trailer3_real_t _t16 = TRAILER3_SIN_BOUNDED(_t15);
+    const trailer3_real_t _t17 = TRAILER3_COS_BOUNDED(_t15);
+    const trailer3_real_t _t18 = -TRAILER3_LIT(0.6)*_t5;
+    const trailer3_real_t _t19 = TRAILER3_LIT(1.0)/_t18;
+    const trailer3_real_t _t20 = _t19*_t5;
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t17;
     const trailer3_real_t qp5 = q_prev[5];
-    const trailer3_real_t _t11 = qp2 - qp5;
-    const trailer3_real_t _t12 = TRAILER3_SIN_BOUNDED(_t11);
-    const trailer3_real_t _t13 = TRAILER3_COS_BOUNDED(_t11);
-    const trailer3_real_t _t14 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t15 = _t13*_t9;
-    const trailer3_real_t _t16 = TRAILER3_LIT(0.85)*_t5;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t _t18 = _t13*_t17;
-    const trailer3_real_t _t19 = TRAILER3_LIT(0.3)*_t1;
-    const trailer3_real_t _t20 = TRAILER3_LIT(0.3)*_t5;
-    const trailer3_real_t _t21 = _t5*_t9;
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t12;
-    const trailer3_real_t _t23 = _t12*_t9;
-    const trailer3_real_t _t24 = _t12*_t17;
-    const trailer3_real_t _t25 = TRAILER3_LIT(1.6666666666666667)*_t1;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.2)*_t25;
-    const trailer3_real_t _t27 = -TRAILER3_LIT(1.6666666666666667)*_t3;
-    const trailer3_real_t _t28 = TRAILER3_LIT(0.2)*_t27;
-    const trailer3_real_t _t29 = -_t10 - _t5*_t8;
-    const trailer3_real_t _t30 = -_t25*_t29 - _t5;
-    const trailer3_real_t _t31 = -TRAILER3_LIT(1.6666666666666667)*_t30;
-    const trailer3_real_t _t32 = TRAILER3_LIT(0.2)*_t31;
-    const trailer3_real_t _t33 = -_t21 + _t6*_t8;
-    const trailer3_real_t _t34 = _t25*_t33;
-    const trailer3_real_t _t35 = -_t27*_t29 + _t7;
-    const trailer3_real_t _t36 = -TRAILER3_LIT(1.6666666666666667)*_t35;
-    const trailer3_real_t _t37 = TRAILER3_LIT(0.2)*_t36;
-    const trailer3_real_t _t38 = -_t20 + _t27*_t33;
-    const trailer3_real_t _t39 = -_t12*_t8 - _t15;
-    const trailer3_real_t _t40 = -_t12*_t16 - _t18;
-    const trailer3_real_t _t41 = -_t12 - _t25*_t39 - _t31*_t40;
-    const trailer3_real_t _t42 = -TRAILER3_LIT(1.6666666666666667)*_t41;
-    const trailer3_real_t _t43 = TRAILER3_LIT(0.2)*_t42;
-    const trailer3_real_t _t44 = _t13*_t8 - _t23;
-    const trailer3_real_t _t45 = _t25*_t44;
-    const trailer3_real_t _t46 = _t13*_t16 - _t24;
-    const trailer3_real_t _t47 = _t31*_t46;
-    const trailer3_real_t _t48 = _t14 - _t27*_t39 - _t36*_t40;
-    const trailer3_real_t _t49 = -TRAILER3_LIT(1.6666666666666667)*_t48;
-    const trailer3_real_t _t50 = TRAILER3_LIT(0.2)*_t49;
-    const trailer3_real_t _t51 = -_t22 + _t27*_t44 + _t36*_t46;
+    const trailer3_real_t _t23 = qp2 - qp5;
+    const trailer3_real_t _t24 = TRAILER3_SIN_BOUNDED(_t23);
+    const trailer3_real_t _t25 = TRAILER3_COS_BOUNDED(_t23);
+    const trailer3_real_t _t26 = -TRAILER3_LIT(0.6)*_t6;
+    const trailer3_real_t _t27 = TRAILER3_LIT(1.0)/_t26;
+    const trailer3_real_t _t28 = _t27*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t52 = K_theta_cart2_x_tractor*_t5;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t _t29 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t17;
+    const trailer3_real_t _t30 = -_t12*_t8;
+    const trailer3_real_t _t31 = -_t13*_t30 + TRAILER3_LIT(1.0);
+    const trailer3_real_t _t32 = _t29*_t31;
+    const trailer3_real_t _t33 = -K_theta_cart2_x_tractor*_t17 - K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t34 = -_t14*_t30;
+    const trailer3_real_t _t35 = _t33*_t34;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t53 = K_theta_cart3_x_tractor*_t12;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t54 = K_theta_cart3_x_tractor_2*_t13;
+    const trailer3_real_t _t36 = -K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t37 = -_t16*_t31 - _t17*_t34;
+    const trailer3_real_t _t38 = _t20*_t37;
+    const trailer3_real_t _t39 = -_t21*_t38 + _t31;
+    const trailer3_real_t _t40 = _t36*_t39;
+    const trailer3_real_t _t41 = -K_theta_cart3_x_tractor*_t25 - K_theta_cart3_x_tractor_2*_t24;
+    const trailer3_real_t _t42 = -_t22*_t38 + _t34;
+    const trailer3_real_t _t43 = _t41*_t42;
+    const trailer3_real_t _t44 = -TRAILER3_LIT(0.3)*_t9;
+    const trailer3_real_t _t45 = -_t12*_t44;
+    const trailer3_real_t _t46 = -_t13*_t45;
+    const trailer3_real_t _t47 = _t29*_t46;
+    const trailer3_real_t _t48 = -_t14*_t45 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t49 = _t33*_t48;
+    const trailer3_real_t _t50 = _t47 + _t49;
+    const trailer3_real_t _t51 = -_t16*_t46 - _t17*_t48;
+    const trailer3_real_t _t52 = _t20*_t51;
+    const trailer3_real_t _t53 = -_t21*_t52 + _t46;
+    const trailer3_real_t _t54 = _t36*_t53;
+    const trailer3_real_t _t55 = -_t22*_t52 + _t48;
+    const trailer3_real_t _t56 = _t41*_t55;
+    const trailer3_real_t _t57 = _t54 + _t56;
     const trailer3_real_t span_1 = span[0];
-    const trailer3_real_t _t55 = TRAILER3_LIT(1.0)/span_1;
+    const trailer3_real_t _t58 = TRAILER3_LIT(1.0)/span_1;
     const trailer3_real_t qd_now0 = qdot_now[0];
     const trailer3_real_t qd_then0 = qdot_then[0];
-    const trailer3_real_t _t56 = _t55*(qd_now0 - qd_then0);
+    const trailer3_real_t _t59 = _t58*(qd_now0 - qd_then0);
     const trailer3_real_t qd_now1 = qdot_now[1];
     const trailer3_real_t qd_then1 = qdot_then[1];
-    const trailer3_real_t _t57 = _t55*(qd_now1 - qd_then1);
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t58 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t59 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t60 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t61 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t62 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t63 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t65 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t66 = TRAILER3_LIT(0.5)*radius_right;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t68 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t69 = TRAILER3_LIT(0.207)*_t68;
-    const trailer3_real_t _t70 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t71 = -TRAILER3_LIT(0.207)*_t70;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t72 = J_theta_right*_t68;
-    const trailer3_real_t _t73 = J_theta_right*_t69;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t74 = J_theta_left*_t70;
-    const trailer3_real_t _t75 = J_theta_left*_t71;
-    const trailer3_real_t _t76 = _t2 + _t26;
-    const trailer3_real_t _t77 = _t19 + _t28;
-    const trailer3_real_t _t78 = _t60*_t76;
-    const trailer3_real_t _t79 = _t60*_t77;
-    const trailer3_real_t _t80 = _t2 - _t26;
-    const trailer3_real_t _t81 = _t19 - _t28;
-    const trailer3_real_t _t82 = _t61*_t80;
-    const trailer3_real_t _t83 = _t61*_t81;
-    const trailer3_real_t _t84 = _t32 - _t34 + _t6;
-    const trailer3_real_t _t85 = _t37 - _t38;
-    const trailer3_real_t _t86 = _t62*_t84;
-    const trailer3_real_t _t87 = _t62*_t85;
-    const trailer3_real_t _t88 = -_t32 - _t34 + _t6;
-    const trailer3_real_t _t89 = -_t37 - _t38;
-    const trailer3_real_t _t90 = _t63*_t88;
-    const trailer3_real_t _t91 = _t63*_t89;
-    const trailer3_real_t _t92 = _t13 + _t43 - _t45 - _t47;
-    const trailer3_real_t _t93 = _t50 - _t51;
-    const trailer3_real_t _t94 = _t64*_t92;
-    const trailer3_real_t _t95 = _t64*_t93;
-    const trailer3_real_t _t96 = _t13 - _t43 - _t45 - _t47;
-    const trailer3_real_t _t97 = -_t50 - _t51;
-    const trailer3_real_t _t98 = _t65*_t96;
-    const trailer3_real_t _t99 = _t65*_t97;
+    const trailer3_real_t _t60 = _t58*(qd_now1 - qd_then1);
+    const trailer3_real_t _t61 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t62 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t64 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t65 = TRAILER3_LIT(0.2)*radius_cart_left;
+    const trailer3_real_t _t66 = -TRAILER3_LIT(0.6)*radius_cart_left;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(0.2)*radius_cart_right;
+    const trailer3_real_t _t68 = -TRAILER3_LIT(0.6)*radius_cart_right;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.2)*radius_cart2_left;
+    const trailer3_real_t _t70 = -TRAILER3_LIT(0.6)*radius_cart2_left;
+    const trailer3_real_t _t71 = -TRAILER3_LIT(0.2)*radius_cart2_right;
+    const trailer3_real_t _t72 = -TRAILER3_LIT(0.6)*radius_cart2_right;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*radius_cart3_left;
+    const trailer3_real_t _t74 = -TRAILER3_LIT(0.6)*radius_cart3_left;
+    const trailer3_real_t _t75 = -TRAILER3_LIT(0.2)*radius_cart3_right;
+    const trailer3_real_t _t76 = -TRAILER3_LIT(0.6)*radius_cart3_right;
+    const trailer3_real_t _t77 = TRAILER3_LIT(0.207)*_t2;
+    const trailer3_real_t _t78 = -TRAILER3_LIT(0.207)*_t3;
+    const trailer3_real_t _t79 = -TRAILER3_LIT(0.3)*_t8;
+    const trailer3_real_t _t80 = _t11*(-_t65*_t8 + _t66*_t9);
+    const trailer3_real_t _t81 = _t11*(-_t67*_t8 + _t68*_t9);
+    const trailer3_real_t _t82 = -_t16*_t34 + _t17*_t31;
+    const trailer3_real_t _t83 = _t19*(_t37*_t69 + _t70*_t82);
+    const trailer3_real_t _t84 = _t19*(_t37*_t71 + _t72*_t82);
+    const trailer3_real_t _t85 = -_t24*_t39 - _t25*_t42;
+    const trailer3_real_t _t86 = -_t24*_t42 + _t25*_t39;
+    const trailer3_real_t _t87 = _t28*_t85;
+    const trailer3_real_t _t88 = _t27*(_t73*_t85 + _t74*_t86);
+    const trailer3_real_t _t89 = _t27*(_t75*_t85 + _t76*_t86);
+    const trailer3_real_t _t90 = _t11*(-_t44*_t65 - _t66*_t79);
+    const trailer3_real_t _t91 = _t11*(-_t44*_t67 - _t68*_t79);
+    const trailer3_real_t _t92 = -_t16*_t48 + _t17*_t46;
+    const trailer3_real_t _t93 = _t19*(_t51*_t69 + _t70*_t92);
+    const trailer3_real_t _t94 = _t19*(_t51*_t71 + _t72*_t92);
+    const trailer3_real_t _t95 = -_t24*_t53 - _t25*_t55;
+    const trailer3_real_t _t96 = -_t24*_t55 + _t25*_t53;
+    const trailer3_real_t _t97 = _t28*_t95;
+    const trailer3_real_t _t98 = _t27*(_t73*_t95 + _t74*_t96);
+    const trailer3_real_t _t99 = _t27*(_t75*_t95 + _t76*_t96);
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t100 = -K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t101 = K_theta_cart2_x_tractor_2*_t6 - _t52;
-    const trailer3_real_t _t102 = K_theta_cart3_x_tractor_2*_t13 - _t53;
-    const trailer3_real_t _t103 = K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t19;
-    const trailer3_real_t _t104 = K_theta_cart2_x_tractor*_t7 + K_theta_cart2_x_tractor_2*_t20;
-    const trailer3_real_t _t105 = K_theta_cart3_x_tractor*_t14 + K_theta_cart3_x_tractor_2*_t22;
-    const trailer3_real_t _t106 = K_theta_cart2_x_tractor*_t10 + K_theta_cart2_x_tractor_2*_t21
-            - K_theta_cart2_x_tractor_2*_t6*_t8 + _t52*_t8;
-    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t15 + K_theta_cart3_x_tractor_2*_t23
-            + _t53*_t8 - _t54*_t8;
-    const trailer3_real_t _t108 = K_theta_cart3_x_tractor*_t18 + K_theta_cart3_x_tractor_2*_t24
-            + _t16*_t53 - _t16*_t54;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t109 = J_x_tractor + _t100*_t25 + _t101*_t31 + _t102*_t42;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t110 = K_theta_tractor_x_tractor_2 + _t100*_t27 + _t101*_t36
-            + _t102*_t49;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t111 = J_theta_tractor + _t103*_t27 + _t104*_t36 + _t105*_t49;
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t112 = J_theta_cart*_t25 + _t100 + _t106*_t31 + _t107*_t42;
-    const trailer3_real_t _t113 = J_theta_cart*_t27 + _t103 + _t106*_t36 + _t107*_t49;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t114 = J_theta_cart2*_t31 + _t101 + _t106*_t25 + _t108*_t42;
-    const trailer3_real_t _t115 = J_theta_cart2*_t36 + _t104 + _t106*_t27 + _t108*_t49;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t116 = J_theta_cart3*_t42 + _t102 + _t107*_t25 + _t108*_t31;
-    const trailer3_real_t _t117 = J_theta_cart3*_t49 + _t105 + _t107*_t27 + _t108*_t36;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t118 = J_theta_cart_right*_t78;
-    const trailer3_real_t _t119 = J_theta_cart_right*_t79;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t120 = J_theta_cart_left*_t82;
-    const trailer3_real_t _t121 = J_theta_cart_left*_t83;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t122 = J_theta_cart2_right*_t86;
-    const trailer3_real_t _t123 = J_theta_cart2_right*_t87;
+    const trailer3_real_t _t100 = -K_theta_cart_x_tractor*_t8 + K_theta_cart_x_tractor_2*_t9;
+    const trailer3_real_t _t101 = -K_theta_cart_x_tractor*_t9 - K_theta_cart_x_tractor_2*_t8;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t124 = J_theta_cart2_left*_t90;
-    const trailer3_real_t _t125 = J_theta_cart2_left*_t91;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t126 = J_theta_cart3_right*_t94;
-    const trailer3_real_t _t127 = J_theta_cart3_right*_t95;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t128 = J_theta_cart3_left*_t98;
-    const trailer3_real_t _t129 = J_theta_cart3_left*_t99;
-    const trailer3_real_t _t130 = _t109 + _t112*_t25 + _t114*_t31 + _t116*_t42 + _t118*_t78
-            + _t120*_t82 + _t122*_t86 + _t124*_t90 + _t126*_t94 + _t128*_t98 + _t68*_t72
-            + _t70*_t74;
-    const trailer3_real_t _t131 = _t110 + _t113*_t25 + _t115*_t31 + _t117*_t42 + _t119*_t78
-            + _t121*_t82 + _t123*_t86 + _t125*_t90 + _t127*_t94 + _t129*_t98 + _t68*_t73
-            + _t70*_t75;
-    const trailer3_real_t _t132 = _t111 + _t113*_t27 + _t115*_t36 + _t117*_t49 + _t119*_t79
-            + _t121*_t83 + _t123*_t87 + _t125*_t91 + _t127*_t95 + _t129*_t99 + _t69*_t73
-            + _t71*_t75;
-    const trailer3_real_t _t133 = _t130*_t66 + _t131*_t58;
-    const trailer3_real_t _t134 = _t130*_t67 + _t131*_t59;
-    const trailer3_real_t _t135 = _t131*_t66 + _t132*_t58;
-    const trailer3_real_t _t136 = _t131*_t67 + _t132*_t59;
-    const trailer3_real_t _t137 = _t133*_t66 + _t135*_t58;
-    const trailer3_real_t _t138 = _t134*_t66 + _t136*_t58;
-    const trailer3_real_t _t139 = _t134*_t67 + _t136*_t59;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t _t102 = J_theta_cart2_left*_t84*_t84 + J_theta_cart2_right*_t83*_t83
+            + J_theta_cart3_left*_t89*_t89 + J_theta_cart3_right*_t88*_t88
+            + J_theta_cart_left*_t81*_t81 + J_theta_cart_right*_t80*_t80 + J_theta_left*_t3*_t3
+            + J_theta_right*_t2*_t2 + J_x_tractor;
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t _t103 = J_theta_cart*_t30*_t30 + TRAILER3_LIT(2.0)*_t100*_t30 + _t102;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t _t104 = J_theta_cart2*_t38*_t38 + _t103 + _t32*_t38 + _t35*_t38
+            + _t38*(_t32 + _t35);
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t _t105 = J_theta_cart3*_t87*_t87 + _t104 + _t40*_t87 + _t43*_t87
+            + _t87*(_t40 + _t43);
+    const trailer3_real_t _t106 = J_theta_cart2_left*_t84*_t94 + J_theta_cart2_right*_t83*_t93
+            + J_theta_cart3_left*_t89*_t99 + J_theta_cart3_right*_t88*_t98
+            + J_theta_cart_left*_t81*_t91 + J_theta_cart_right*_t80*_t90 + J_theta_left*_t3*_t78
+            + J_theta_right*_t2*_t77;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t _t107 = K_theta_tractor_x_tractor_2 + _t106;
+    const trailer3_real_t _t108 = J_theta_cart*_t30*_t45 + _t100*_t45 - TRAILER3_LIT(0.3)*_t101*_t30
+            + _t107;
+    const trailer3_real_t _t109 = J_theta_cart2*_t38*_t52 + _t108 + _t32*_t52 + _t35*_t52
+            + _t38*_t50;
+    const trailer3_real_t _t110 = J_theta_cart3*_t87*_t97 + _t109 + _t40*_t97 + _t43*_t97
+            + _t57*_t87;
+    const trailer3_real_t _t111 = J_theta_cart2_left*_t94*_t94 + J_theta_cart2_right*_t93*_t93
+            + J_theta_cart3_left*_t99*_t99 + J_theta_cart3_right*_t98*_t98
+            + J_theta_cart_left*_t91*_t91 + J_theta_cart_right*_t90*_t90 + J_theta_left*_t78*_t78
+            + J_theta_right*_t77*_t77;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t _t112 = J_theta_tractor + _t111;
+    const trailer3_real_t _t113 = J_theta_cart*_t45*_t45 - TRAILER3_LIT(0.6)*_t101*_t45 + _t112;
+    const trailer3_real_t _t114 = J_theta_cart2*_t52*_t52 + _t113 + _t47*_t52 + _t49*_t52
+            + _t50*_t52;
+    const trailer3_real_t _t115 = J_theta_cart3*_t97*_t97 + _t114 + _t54*_t97 + _t56*_t97
+            + _t57*_t97;
+    const trailer3_real_t _t116 = _t105*_t63 + _t110*_t61;
+    const trailer3_real_t _t117 = _t105*_t64 + _t110*_t62;
+    const trailer3_real_t _t118 = _t110*_t63 + _t115*_t61;
+    const trailer3_real_t _t119 = _t110*_t64 + _t115*_t62;
+    const trailer3_real_t _t120 = _t116*_t63 + _t118*_t61;
+    const trailer3_real_t _t121 = _t117*_t63 + _t119*_t61;
+    const trailer3_real_t _t122 = _t117*_t64 + _t119*_t62;
     const trailer3_real_t up0 = u_prev[0];
     const trailer3_real_t up1 = u_prev[1];
-    H1hat[0] = -_t137*_t56 - _t138*_t57 + up0;
-    H1hat[1] = -_t138*_t56 - _t139*_t57 + up1;
+    H1hat[0] = -_t120*_t59 - _t121*_t60 + up0;
+    H1hat[1] = -_t121*_t59 - _t122*_t60 + up1;
 }
 
 /* trailer3_minimal_tde_mhat: documented in trailer3_laws.h.
@@ -241,7 +230,7 @@ void trailer3_minimal_tde_mhat(const trailer3_params_t *p, const trailer3_real_t
 }
 
 /* trailer3_minimal_minv_norm: documented in trailer3_laws.h.
-   operations after CSE: 119 add, 191 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 104 add, 233 mul, 5 div, 6 sin/cos, 1 sqrt, 1 fabs */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm)
 {
@@ -251,178 +240,172 @@ void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_
     const trailer3_real_t _t1 = _t0 + theta_cart;
     const trailer3_real_t _t2 = TRAILER3_SIN_BOUNDED(_t1);
     const trailer3_real_t _t3 = TRAILER3_COS_BOUNDED(_t1);
-    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
-    const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t5 = _t0 + theta_cart2;
-    const trailer3_real_t _t6 = TRAILER3_SIN_BOUNDED(_t5);
-    const trailer3_real_t _t7 = TRAILER3_COS_BOUNDED(_t5);
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
-    const trailer3_real_t _t11 = _t10*_t7;
-    const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t12 = _t0 + theta_cart3;
-    const trailer3_real_t _t13 = TRAILER3_SIN_BOUNDED(_t12);
-    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(_t12);
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
-    const trailer3_real_t _t16 = _t10*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t13;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t14;
-    const trailer3_real_t _t19 = _t18*_t7;
-    const trailer3_real_t _t20 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t6;
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t2;
-    const trailer3_real_t _t24 = TRAILER3_LIT(0.2)*_t23;
-    const trailer3_real_t _t25 = -TRAILER3_LIT(1.6666666666666667)*_t4;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.2)*_t25;
-    const trailer3_real_t _t27 = -_t11 - _t6*_t9;
-    const trailer3_real_t _t28 = -_t23*_t27 + _t6;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t32 = _t23*_t31;
-    const trailer3_real_t _t33 = -_t25*_t27 + _t8;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(1.6666666666666667)*_t33;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*_t34;
-    const trailer3_real_t _t36 = _t21 + _t25*_t31;
-    const trailer3_real_t _t37 = -_t13*_t9 - _t16;
-    const trailer3_real_t _t38 = -_t17*_t6 - _t19;
-    const trailer3_real_t _t39 = _t13 - _t23*_t37 - _t29*_t38;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.85)*_t13*_t3 - _t14*_t9;
-    const trailer3_real_t _t43 = TRAILER3_LIT(0.85)*_t13*_t7 - _t18*_t6;
-    const trailer3_real_t _t44 = -_t14 + _t23*_t42 + _t29*_t43;
-    const trailer3_real_t _t45 = _t15 - _t25*_t37 - _t34*_t38;
-    const trailer3_real_t _t46 = -TRAILER3_LIT(1.6666666666666667)*_t45;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.2)*_t46;
-    const trailer3_real_t _t48 = _t22 + _t25*_t42 + _t34*_t43;
-    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t49 = K_theta_cart2_x_tractor*_t6;
-    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t50 = K_theta_cart2_x_tractor_2*_t7;
-    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t51 = K_theta_cart3_x_tractor*_t13;
-    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t52 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.85)*_t6;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t54 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t _t55 = TRAILER3_LIT(0.5)*radius_right;
     const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t56 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t _t57 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t58 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t59 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t60 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t _t61 = _t24 + _t3;
-    const trailer3_real_t _t62 = _t60*_t61;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t4 = radius_left*radius_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/_t4;
+    const trailer3_real_t _t6 = _t5*radius_left;
+    const trailer3_real_t _t7 = _t5*radius_right;
     const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t63 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t _t64 = -_t24 + _t3;
-    const trailer3_real_t _t65 = _t63*_t64;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t66 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t _t67 = _t30 - _t32 + _t7;
-    const trailer3_real_t _t68 = _t66*_t67;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t _t8 = radius_cart_left*radius_cart_right;
+    const trailer3_real_t _t9 = -TRAILER3_LIT(0.6)*_t8;
+    const trailer3_real_t _t10 = TRAILER3_LIT(1.0)/_t9;
+    const trailer3_real_t _t11 = _t10*_t8;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.85)*_t3;
+    const trailer3_real_t theta_cart2 = q[4];
+    const trailer3_real_t _t14 = _t0 + theta_cart2;
+    const trailer3_real_t _t15 = TRAILER3_SIN_BOUNDED(_t14);
+    const trailer3_real_t _t16 = TRAILER3_COS_BOUNDED(_t14);
     const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t69 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t _t70 = -_t30 - _t32 + _t7;
-    const trailer3_real_t _t71 = _t69*_t70;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t72 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t _t73 = _t41 - _t44;
-    const trailer3_real_t _t74 = _t72*_t73;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const trailer3_real_t _t18 = -TRAILER3_LIT(0.6)*_t17;
+    const trailer3_real_t _t19 = TRAILER3_LIT(1.0)/_t18;
+    const trailer3_real_t _t20 = _t17*_t19;
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.85)*_t15;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t16;
+    const trailer3_real_t theta_cart3 = q[5];
+    const trailer3_real_t _t23 = _t0 + theta_cart3;
+    const trailer3_real_t _t24 = TRAILER3_SIN_BOUNDED(_t23);
+    const trailer3_real_t _t25 = TRAILER3_COS_BOUNDED(_t23);
     const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t75 = TRAILER3_LIT(1.0)/radius_cart3_left;
-    const trailer3_real_t _t76 = -_t41 - _t44;
-    const trailer3_real_t _t77 = _t75*_t76;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t _t26 = radius_cart3_left*radius_cart3_right;
+    const trailer3_real_t _t27 = -TRAILER3_LIT(0.6)*_t26;
+    const trailer3_real_t _t28 = TRAILER3_LIT(1.0)/_t27;
+    const trailer3_real_t _t29 = _t26*_t28;
+    const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const trailer3_real_t _t30 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t31 = _t11*_t2;
+    const trailer3_real_t _t32 = _t12*_t31 + TRAILER3_LIT(1.0);
+    const trailer3_real_t _t33 = _t30*_t32;
+    const trailer3_real_t _t34 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer3_real_t _t35 = -_t13*_t31;
+    const trailer3_real_t _t36 = _t34*_t35;
+    const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const trailer3_real_t _t37 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t38 = _t15*_t32 - _t16*_t35;
+    const trailer3_real_t _t39 = _t20*_t38;
+    const trailer3_real_t _t40 = _t21*_t39 + _t32;
+    const trailer3_real_t _t41 = _t37*_t40;
+    const trailer3_real_t _t42 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const trailer3_real_t _t43 = -_t22*_t39 + _t35;
+    const trailer3_real_t _t44 = _t42*_t43;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t46 = -_t11*_t45;
+    const trailer3_real_t _t47 = _t12*_t46;
+    const trailer3_real_t _t48 = _t30*_t47;
+    const trailer3_real_t _t49 = -_t13*_t46 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t50 = _t34*_t49;
+    const trailer3_real_t _t51 = _t48 + _t50;
+    const trailer3_real_t _t52 = _t15*_t47 - _t16*_t49;
+    const trailer3_real_t _t53 = _t20*_t52;
+    const trailer3_real_t _t54 = _t21*_t53 + _t47;
+    const trailer3_real_t _t55 = _t37*_t54;
+    const trailer3_real_t _t56 = -_t22*_t53 + _t49;
+    const trailer3_real_t _t57 = _t42*_t56;
+    const trailer3_real_t _t58 = _t55 + _t57;
+    const trailer3_real_t _t59 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t60 = TRAILER3_LIT(0.5)*radius_right;
+    const trailer3_real_t _t61 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t62 = TRAILER3_LIT(0.5)*radius_left;
+    const trailer3_real_t _t63 = _t24*_t40 - _t25*_t43;
+    const trailer3_real_t _t64 = _t29*_t63;
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t78 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t79 = _t49 + _t50;
-    const trailer3_real_t _t80 = _t51 + _t52;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t81 = J_x_tractor + _t23*_t78 + _t29*_t79 + _t40*_t80;
-    const trailer3_real_t _t82 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
-            + _t49*_t9 + _t50*_t9;
-    const trailer3_real_t _t83 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
-            + _t51*_t9 + _t52*_t9;
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t84 = J_theta_cart*_t23 + _t29*_t82 + _t40*_t83 + _t78;
-    const trailer3_real_t _t85 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7
-            + _t51*_t53 + _t52*_t53;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t86 = J_theta_cart2*_t29 + _t23*_t82 + _t40*_t85 + _t79;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t87 = J_theta_cart3*_t40 + _t23*_t83 + _t29*_t85 + _t80;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t88 = J_theta_right*_t58;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t89 = J_theta_left*_t59;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t90 = J_theta_cart_right*_t62;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t91 = J_theta_cart_left*_t65;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t92 = J_theta_cart2_right*_t68;
+    const trailer3_real_t _t65 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.2)*radius_cart_left;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(0.6)*radius_cart_left;
+    const trailer3_real_t _t68 = _t10*(_t2*_t66 + _t3*_t67);
+    const trailer3_real_t _t69 = -TRAILER3_LIT(0.2)*radius_cart_right;
+    const trailer3_real_t _t70 = -TRAILER3_LIT(0.6)*radius_cart_right;
+    const trailer3_real_t _t71 = _t10*(_t2*_t69 + _t3*_t70);
+    const trailer3_real_t _t72 = _t15*_t35 + _t16*_t32;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*radius_cart2_left;
+    const trailer3_real_t _t74 = -TRAILER3_LIT(0.6)*radius_cart2_left;
+    const trailer3_real_t _t75 = _t19*(_t38*_t73 + _t72*_t74);
+    const trailer3_real_t _t76 = -TRAILER3_LIT(0.2)*radius_cart2_right;
+    const trailer3_real_t _t77 = -TRAILER3_LIT(0.6)*radius_cart2_right;
+    const trailer3_real_t _t78 = _t19*(_t38*_t76 + _t72*_t77);
+    const trailer3_real_t _t79 = _t24*_t43 + _t25*_t40;
+    const trailer3_real_t _t80 = TRAILER3_LIT(0.2)*radius_cart3_left;
+    const trailer3_real_t _t81 = -TRAILER3_LIT(0.6)*radius_cart3_left;
+    const trailer3_real_t _t82 = _t28*(_t63*_t80 + _t79*_t81);
+    const trailer3_real_t _t83 = -TRAILER3_LIT(0.2)*radius_cart3_right;
+    const trailer3_real_t _t84 = -TRAILER3_LIT(0.6)*radius_cart3_right;
+    const trailer3_real_t _t85 = _t28*(_t63*_t83 + _t79*_t84);
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t93 = J_theta_cart2_left*_t71;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t94 = J_theta_cart3_right*_t74;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t95 = J_theta_cart3_left*_t77;
-    const trailer3_real_t _t96 = _t23*_t84 + _t29*_t86 + _t40*_t87 + _t58*_t88 + _t59*_t89
-            + _t62*_t90 + _t65*_t91 + _t68*_t92 + _t71*_t93 + _t74*_t94 + _t77*_t95 + _t81;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t _t86 = J_theta_cart2_left*_t78*_t78 + J_theta_cart2_right*_t75*_t75
+            + J_theta_cart3_left*_t85*_t85 + J_theta_cart3_right*_t82*_t82
+            + J_theta_cart_left*_t71*_t71 + J_theta_cart_right*_t68*_t68 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t _t87 = J_theta_cart*_t31*_t31 + TRAILER3_LIT(2.0)*_t31*_t65 + _t86;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t _t88 = J_theta_cart2*_t39*_t39 + _t33*_t39 + _t36*_t39
+            + _t39*(_t33 + _t36) + _t87;
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t _t89 = J_theta_cart3*_t64*_t64 + _t41*_t64 + _t44*_t64
+            + _t64*(_t41 + _t44) + _t88;
+    const trailer3_real_t _t90 = _t24*_t54 - _t25*_t56;
+    const trailer3_real_t _t91 = _t29*_t90;
+    const trailer3_real_t _t92 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const trailer3_real_t _t93 = TRAILER3_LIT(0.207)*_t6;
+    const trailer3_real_t _t94 = -TRAILER3_LIT(0.207)*_t7;
+    const trailer3_real_t _t95 = TRAILER3_LIT(0.3)*_t2;
+    const trailer3_real_t _t96 = _t10*(-_t45*_t66 - _t67*_t95);
+    const trailer3_real_t _t97 = _t10*(-_t45*_t69 - _t70*_t95);
+    const trailer3_real_t _t98 = _t15*_t49 + _t16*_t47;
+    const trailer3_real_t _t99 = _t19*(_t52*_t73 + _t74*_t98);
+    const trailer3_real_t _t100 = _t19*(_t52*_t76 + _t77*_t98);
+    const trailer3_real_t _t101 = _t24*_t56 + _t25*_t54;
+    const trailer3_real_t _t102 = _t28*(_t101*_t81 + _t80*_t90);
+    const trailer3_real_t _t103 = _t28*(_t101*_t84 + _t83*_t90);
+    const trailer3_real_t _t104 = J_theta_cart2_left*_t100*_t78 + J_theta_cart2_right*_t75*_t99
+            + J_theta_cart3_left*_t103*_t85 + J_theta_cart3_right*_t102*_t82
+            + J_theta_cart_left*_t71*_t97 + J_theta_cart_right*_t68*_t96 + J_theta_left*_t7*_t94
+            + J_theta_right*_t6*_t93;
     const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t97 = K_theta_tractor_x_tractor_2 + _t25*_t78 + _t34*_t79 + _t46*_t80;
-    const trailer3_real_t _t98 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20;
-    const trailer3_real_t _t99 = J_theta_cart*_t25 + _t34*_t82 + _t46*_t83 + _t98;
-    const trailer3_real_t _t100 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21;
-    const trailer3_real_t _t101 = J_theta_cart2*_t34 + _t100 + _t25*_t82 + _t46*_t85;
-    const trailer3_real_t _t102 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22;
-    const trailer3_real_t _t103 = J_theta_cart3*_t46 + _t102 + _t25*_t83 + _t34*_t85;
-    const trailer3_real_t _t104 = TRAILER3_LIT(0.207)*_t58;
-    const trailer3_real_t _t105 = J_theta_right*_t104;
-    const trailer3_real_t _t106 = -TRAILER3_LIT(0.207)*_t59;
-    const trailer3_real_t _t107 = J_theta_left*_t106;
-    const trailer3_real_t _t108 = -_t20 + _t26;
-    const trailer3_real_t _t109 = _t108*_t60;
-    const trailer3_real_t _t110 = J_theta_cart_right*_t109;
-    const trailer3_real_t _t111 = -_t20 - _t26;
-    const trailer3_real_t _t112 = _t111*_t63;
-    const trailer3_real_t _t113 = J_theta_cart_left*_t112;
-    const trailer3_real_t _t114 = _t35 - _t36;
-    const trailer3_real_t _t115 = _t114*_t66;
-    const trailer3_real_t _t116 = J_theta_cart2_right*_t115;
-    const trailer3_real_t _t117 = -_t35 - _t36;
-    const trailer3_real_t _t118 = _t117*_t69;
-    const trailer3_real_t _t119 = J_theta_cart2_left*_t118;
-    const trailer3_real_t _t120 = _t47 - _t48;
-    const trailer3_real_t _t121 = _t120*_t72;
-    const trailer3_real_t _t122 = J_theta_cart3_right*_t121;
-    const trailer3_real_t _t123 = -_t47 - _t48;
-    const trailer3_real_t _t124 = _t123*_t75;
-    const trailer3_real_t _t125 = J_theta_cart3_left*_t124;
-    const trailer3_real_t _t126 = _t101*_t29 + _t103*_t40 + _t105*_t58 + _t107*_t59 + _t110*_t62
-            + _t113*_t65 + _t116*_t68 + _t119*_t71 + _t122*_t74 + _t125*_t77 + _t23*_t99 + _t97;
-    const trailer3_real_t _t127 = _t126*_t56 + _t57*_t96;
+    const trailer3_real_t _t105 = K_theta_tractor_x_tractor_2 + _t104;
+    const trailer3_real_t _t106 = J_theta_cart*_t31*_t46 + _t105 - TRAILER3_LIT(0.3)*_t31*_t92
+            + _t46*_t65;
+    const trailer3_real_t _t107 = J_theta_cart2*_t39*_t53 + _t106 + _t33*_t53 + _t36*_t53
+            + _t39*_t51;
+    const trailer3_real_t _t108 = J_theta_cart3*_t64*_t91 + _t107 + _t41*_t91 + _t44*_t91
+            + _t58*_t64;
+    const trailer3_real_t _t109 = _t108*_t61 + _t62*_t89;
+    const trailer3_real_t _t110 = J_theta_cart2_left*_t100*_t100 + J_theta_cart2_right*_t99*_t99
+            + J_theta_cart3_left*_t103*_t103 + J_theta_cart3_right*_t102*_t102
+            + J_theta_cart_left*_t97*_t97 + J_theta_cart_right*_t96*_t96 + J_theta_left*_t94*_t94
+            + J_theta_right*_t93*_t93;
     const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t128 = J_theta_tractor + _t100*_t34 + _t102*_t46 + _t25*_t98;
-    const trailer3_real_t _t129 = _t101*_t34 + _t103*_t46 + _t104*_t105 + _t106*_t107 + _t109*_t110
-            + _t112*_t113 + _t115*_t116 + _t118*_t119 + _t121*_t122 + _t124*_t125 + _t128
-            + _t25*_t99;
-    const trailer3_real_t _t130 = _t126*_t57 + _t129*_t56;
-    const trailer3_real_t _t131 = _t127*_t55 + _t130*_t54;
-    const trailer3_real_t _t132 = _t131*_t131;
-    const trailer3_real_t _t133 = _t126*_t54 + _t55*_t96;
-    const trailer3_real_t _t134 = _t126*_t55 + _t129*_t54;
-    const trailer3_real_t _t135 = _t133*_t55 + _t134*_t54;
-    const trailer3_real_t _t136 = _t127*_t57 + _t130*_t56;
-    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t132 + _t135*_t135
-            + _t136*_t136)*(TRAILER3_LIT(1.0)/TRAILER3_FABS(_t132 - _t135*_t136));
+    const trailer3_real_t _t111 = J_theta_tractor + _t110;
+    const trailer3_real_t _t112 = J_theta_cart*_t46*_t46 + _t111 - TRAILER3_LIT(0.6)*_t46*_t92;
+    const trailer3_real_t _t113 = J_theta_cart2*_t53*_t53 + _t112 + _t48*_t53 + _t50*_t53
+            + _t51*_t53;
+    const trailer3_real_t _t114 = J_theta_cart3*_t91*_t91 + _t113 + _t55*_t91 + _t57*_t91
+            + _t58*_t91;
+    const trailer3_real_t _t115 = _t108*_t62 + _t114*_t61;
+    const trailer3_real_t _t116 = _t109*_t60 + _t115*_t59;
+    const trailer3_real_t _t117 = _t116*_t116;
+    const trailer3_real_t _t118 = _t108*_t59 + _t60*_t89;
+    const trailer3_real_t _t119 = _t108*_t60 + _t114*_t59;
+    const trailer3_real_t _t120 = _t118*_t60 + _t119*_t59;
+    const trailer3_real_t _t121 = _t109*_t62 + _t115*_t61;
+    norm[0] = TRAILER3_SQRT(TRAILER3_LIT(2.0)*_t117 + _t120*_t120
+            + _t121*_t121)*(TRAILER3_LIT(1.0)/TRAILER3_FABS(_t117 - _t120*_t121));
 }
 
 /* trailer3_minimal_minv_norm_mhat: documented in trailer3_laws.h.
@@ -434,10 +417,10 @@ void trailer3_minimal_minv_norm_mhat(const trailer3_params_t *p, const trailer3_
 }
 
 /* trailer3_minimal_mhat: documented in trailer3_laws.h.
-   operations after CSE: 116 add, 185 mul, 8 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 101 add, 227 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_mhat(const trailer3_params_t *p, const trailer3_real_t *q, trailer3_real_t *M)
 {
-    trailer3_real_t kept[31];
+    trailer3_real_t kept[42];
     trailer3_k_minimal_mhat_keep(p, kept);
     trailer3_k_minimal_mhat(kept, q, M);
 }
@@ -505,7 +488,7 @@ void trailer3_minimal_omega_difference(const trailer3_real_t *newer, const trail
 }
 
 /* trailer3_minimal_tdc_law: documented in trailer3_laws.h.
-   operations after CSE: 124 add, 193 mul, 8 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 109 add, 235 mul, 4 div, 6 sin/cos, 0 sqrt */
 void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -519,193 +502,185 @@ void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t 
     const trailer3_real_t _t1 = _t0 + theta_cart;
     const trailer3_real_t _t2 = TRAILER3_SIN_BOUNDED(_t1);
     const trailer3_real_t _t3 = TRAILER3_COS_BOUNDED(_t1);
-    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t4 = radius_left*radius_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/_t4;
+    const trailer3_real_t _t6 = _t5*radius_left;
+    const trailer3_real_t _t7 = _t5*radius_right;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t _t8 = radius_cart_left*radius_cart_right;
+    const trailer3_real_t _t9 = -TRAILER3_LIT(0.6)*_t8;
+    const trailer3_real_t _t10 = TRAILER3_LIT(1.0)/_t9;
+    const trailer3_real_t _t11 = _t10*_t8;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.85)*_t3;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t5 = _t0 + theta_cart2;
-    const trailer3_real_t _t6 = TRAILER3_SIN_BOUNDED(_t5);
-    const trailer3_real_t _t7 = TRAILER3_COS_BOUNDED(_t5);
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
-    const trailer3_real_t _t11 = _t10*_t7;
+    const trailer3_real_t _t14 = _t0 + theta_cart2;
+    const trailer3_real_t _t15 = TRAILER3_SIN_BOUNDED(_t14);
+    const trailer3_real_t _t16 = TRAILER3_COS_BOUNDED(_t14);
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const trailer3_real_t _t18 = -TRAILER3_LIT(0.6)*_t17;
+    const trailer3_real_t _t19 = TRAILER3_LIT(1.0)/_t18;
+    const trailer3_real_t _t20 = _t17*_t19;
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.85)*_t15;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t16;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t12 = _t0 + theta_cart3;
-    const trailer3_real_t _t13 = TRAILER3_SIN_BOUNDED(_t12);
-    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(_t12);
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
-    const trailer3_real_t _t16 = _t10*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t13;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t14;
-    const trailer3_real_t _t19 = _t18*_t7;
-    const trailer3_real_t _t20 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t6;
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t2;
-    const trailer3_real_t _t24 = TRAILER3_LIT(0.2)*_t23;
-    const trailer3_real_t _t25 = -TRAILER3_LIT(1.6666666666666667)*_t4;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.2)*_t25;
-    const trailer3_real_t _t27 = -_t11 - _t6*_t9;
-    const trailer3_real_t _t28 = -_t23*_t27 + _t6;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t32 = _t23*_t31;
-    const trailer3_real_t _t33 = -_t25*_t27 + _t8;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(1.6666666666666667)*_t33;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*_t34;
-    const trailer3_real_t _t36 = _t21 + _t25*_t31;
-    const trailer3_real_t _t37 = -_t13*_t9 - _t16;
-    const trailer3_real_t _t38 = -_t17*_t6 - _t19;
-    const trailer3_real_t _t39 = _t13 - _t23*_t37 - _t29*_t38;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.85)*_t13*_t3 - _t14*_t9;
-    const trailer3_real_t _t43 = TRAILER3_LIT(0.85)*_t13*_t7 - _t18*_t6;
-    const trailer3_real_t _t44 = -_t14 + _t23*_t42 + _t29*_t43;
-    const trailer3_real_t _t45 = _t15 - _t25*_t37 - _t34*_t38;
-    const trailer3_real_t _t46 = -TRAILER3_LIT(1.6666666666666667)*_t45;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.2)*_t46;
-    const trailer3_real_t _t48 = _t22 + _t25*_t42 + _t34*_t43;
+    const trailer3_real_t _t23 = _t0 + theta_cart3;
+    const trailer3_real_t _t24 = TRAILER3_SIN_BOUNDED(_t23);
+    const trailer3_real_t _t25 = TRAILER3_COS_BOUNDED(_t23);
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t _t26 = radius_cart3_left*radius_cart3_right;
+    const trailer3_real_t _t27 = -TRAILER3_LIT(0.6)*_t26;
+    const trailer3_real_t _t28 = TRAILER3_LIT(1.0)/_t27;
+    const trailer3_real_t _t29 = _t26*_t28;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t49 = K_theta_cart2_x_tractor*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t50 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t _t30 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t31 = _t11*_t2;
+    const trailer3_real_t _t32 = _t12*_t31 + TRAILER3_LIT(1.0);
+    const trailer3_real_t _t33 = _t30*_t32;
+    const trailer3_real_t _t34 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer3_real_t _t35 = -_t13*_t31;
+    const trailer3_real_t _t36 = _t34*_t35;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t51 = K_theta_cart3_x_tractor*_t13;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t52 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t37 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t38 = _t15*_t32 - _t16*_t35;
+    const trailer3_real_t _t39 = _t20*_t38;
+    const trailer3_real_t _t40 = _t21*_t39 + _t32;
+    const trailer3_real_t _t41 = _t37*_t40;
+    const trailer3_real_t _t42 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const trailer3_real_t _t43 = -_t22*_t39 + _t35;
+    const trailer3_real_t _t44 = _t42*_t43;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t46 = -_t11*_t45;
+    const trailer3_real_t _t47 = _t12*_t46;
+    const trailer3_real_t _t48 = _t30*_t47;
+    const trailer3_real_t _t49 = -_t13*_t46 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t50 = _t34*_t49;
+    const trailer3_real_t _t51 = _t48 + _t50;
+    const trailer3_real_t _t52 = _t15*_t47 - _t16*_t49;
+    const trailer3_real_t _t53 = _t20*_t52;
+    const trailer3_real_t _t54 = _t21*_t53 + _t47;
+    const trailer3_real_t _t55 = _t37*_t54;
+    const trailer3_real_t _t56 = -_t22*_t53 + _t49;
+    const trailer3_real_t _t57 = _t42*_t56;
+    const trailer3_real_t _t58 = _t55 + _t57;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t54 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t59 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t55 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t56 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t57 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t58 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t59 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t60 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t61 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t62 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t63 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t60 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t61 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t62 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t63 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t64 = TRAILER3_LIT(0.5)*radius_right;
     const trailer3_real_t _t65 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t66 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t67 = TRAILER3_LIT(0.207)*_t66;
-    const trailer3_real_t _t68 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t69 = -TRAILER3_LIT(0.207)*_t68;
-    const trailer3_real_t _t70 = _t24 + _t3;
-    const trailer3_real_t _t71 = -_t20 + _t26;
-    const trailer3_real_t _t72 = _t58*_t70;
-    const trailer3_real_t _t73 = _t58*_t71;
-    const trailer3_real_t _t74 = -_t24 + _t3;
-    const trailer3_real_t _t75 = -_t20 - _t26;
-    const trailer3_real_t _t76 = _t59*_t74;
-    const trailer3_real_t _t77 = _t59*_t75;
-    const trailer3_real_t _t78 = _t30 - _t32 + _t7;
-    const trailer3_real_t _t79 = _t35 - _t36;
-    const trailer3_real_t _t80 = _t60*_t78;
-    const trailer3_real_t _t81 = _t60*_t79;
-    const trailer3_real_t _t82 = -_t30 - _t32 + _t7;
-    const trailer3_real_t _t83 = -_t35 - _t36;
-    const trailer3_real_t _t84 = _t61*_t82;
-    const trailer3_real_t _t85 = _t61*_t83;
-    const trailer3_real_t _t86 = _t41 - _t44;
-    const trailer3_real_t _t87 = _t47 - _t48;
-    const trailer3_real_t _t88 = _t62*_t86;
-    const trailer3_real_t _t89 = _t62*_t87;
-    const trailer3_real_t _t90 = -_t41 - _t44;
-    const trailer3_real_t _t91 = -_t47 - _t48;
-    const trailer3_real_t _t92 = _t63*_t90;
-    const trailer3_real_t _t93 = _t63*_t91;
+    const trailer3_real_t _t66 = TRAILER3_LIT(0.2)*radius_cart_left;
+    const trailer3_real_t _t67 = -TRAILER3_LIT(0.6)*radius_cart_left;
+    const trailer3_real_t _t68 = -TRAILER3_LIT(0.2)*radius_cart_right;
+    const trailer3_real_t _t69 = -TRAILER3_LIT(0.6)*radius_cart_right;
+    const trailer3_real_t _t70 = _t10*(_t2*_t66 + _t3*_t67);
+    const trailer3_real_t _t71 = _t10*(_t2*_t68 + _t3*_t69);
+    const trailer3_real_t _t72 = _t15*_t35 + _t16*_t32;
+    const trailer3_real_t _t73 = TRAILER3_LIT(0.2)*radius_cart2_left;
+    const trailer3_real_t _t74 = -TRAILER3_LIT(0.6)*radius_cart2_left;
+    const trailer3_real_t _t75 = -TRAILER3_LIT(0.2)*radius_cart2_right;
+    const trailer3_real_t _t76 = -TRAILER3_LIT(0.6)*radius_cart2_right;
+    const trailer3_real_t _t77 = _t19*(_t38*_t73 + _t72*_t74);
+    const trailer3_real_t _t78 = _t19*(_t38*_t75 + _t72*_t76);
+    const trailer3_real_t _t79 = _t24*_t40 - _t25*_t43;
+    const trailer3_real_t _t80 = _t24*_t43 + _t25*_t40;
+    const trailer3_real_t _t81 = TRAILER3_LIT(0.2)*radius_cart3_left;
+    const trailer3_real_t _t82 = -TRAILER3_LIT(0.6)*radius_cart3_left;
+    const trailer3_real_t _t83 = -TRAILER3_LIT(0.2)*radius_cart3_right;
+    const trailer3_real_t _t84 = -TRAILER3_LIT(0.6)*radius_cart3_right;
+    const trailer3_real_t _t85 = _t29*_t79;
+    const trailer3_real_t _t86 = _t28*(_t79*_t81 + _t80*_t82);
+    const trailer3_real_t _t87 = _t28*(_t79*_t83 + _t80*_t84);
+    const trailer3_real_t _t88 = TRAILER3_LIT(0.207)*_t6;
+    const trailer3_real_t _t89 = -TRAILER3_LIT(0.207)*_t7;
+    const trailer3_real_t _t90 = _t10*(-_t45*_t66 - _t63*_t67);
+    const trailer3_real_t _t91 = _t10*(-_t45*_t68 - _t63*_t69);
+    const trailer3_real_t _t92 = _t15*_t49 + _t16*_t47;
+    const trailer3_real_t _t93 = _t19*(_t52*_t73 + _t74*_t92);
+    const trailer3_real_t _t94 = _t19*(_t52*_t75 + _t76*_t92);
+    const trailer3_real_t _t95 = _t24*_t54 - _t25*_t56;
+    const trailer3_real_t _t96 = _t24*_t56 + _t25*_t54;
+    const trailer3_real_t _t97 = _t29*_t95;
+    const trailer3_real_t _t98 = _t28*(_t81*_t95 + _t82*_t96);
+    const trailer3_real_t _t99 = _t28*(_t83*_t95 + _t84*_t96);
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t94 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t95 = _t49 + _t50;
-    const trailer3_real_t _t96 = _t51 + _t52;
-    const trailer3_real_t _t97 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20;
-    const trailer3_real_t _t98 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21;
-    const trailer3_real_t _t99 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22;
-    const trailer3_real_t _t100 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
-            + _t49*_t9 + _t50*_t9;
-    const trailer3_real_t _t101 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
-            + _t51*_t9 + _t52*_t9;
-    const trailer3_real_t _t102 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7
-            + _t51*_t53 + _t52*_t53;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t103 = J_x_tractor + _t23*_t94 + _t29*_t95 + _t40*_t96;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t104 = K_theta_tractor_x_tractor_2 + _t25*_t94 + _t34*_t95 + _t46*_t96;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t105 = J_theta_tractor + _t25*_t97 + _t34*_t98 + _t46*_t99;
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t106 = J_theta_cart*_t23 + _t100*_t29 + _t101*_t40 + _t94;
-    const trailer3_real_t _t107 = J_theta_cart*_t25 + _t100*_t34 + _t101*_t46 + _t97;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t108 = J_theta_cart2*_t29 + _t100*_t23 + _t102*_t40 + _t95;
-    const trailer3_real_t _t109 = J_theta_cart2*_t34 + _t100*_t25 + _t102*_t46 + _t98;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t110 = J_theta_cart3*_t40 + _t101*_t23 + _t102*_t29 + _t96;
-    const trailer3_real_t _t111 = J_theta_cart3*_t46 + _t101*_t25 + _t102*_t34 + _t99;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t112 = J_theta_right*_t66;
-    const trailer3_real_t _t113 = J_theta_right*_t67;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t114 = J_theta_left*_t68;
-    const trailer3_real_t _t115 = J_theta_left*_t69;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t116 = J_theta_cart_right*_t72;
-    const trailer3_real_t _t117 = J_theta_cart_right*_t73;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t118 = J_theta_cart_left*_t76;
-    const trailer3_real_t _t119 = J_theta_cart_left*_t77;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t120 = J_theta_cart2_right*_t80;
-    const trailer3_real_t _t121 = J_theta_cart2_right*_t81;
+    const trailer3_real_t _t100 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t101 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t122 = J_theta_cart2_left*_t84;
-    const trailer3_real_t _t123 = J_theta_cart2_left*_t85;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t124 = J_theta_cart3_right*_t88;
-    const trailer3_real_t _t125 = J_theta_cart3_right*_t89;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t126 = J_theta_cart3_left*_t92;
-    const trailer3_real_t _t127 = J_theta_cart3_left*_t93;
-    const trailer3_real_t _t128 = _t103 + _t106*_t23 + _t108*_t29 + _t110*_t40 + _t112*_t66
-            + _t114*_t68 + _t116*_t72 + _t118*_t76 + _t120*_t80 + _t122*_t84 + _t124*_t88
-            + _t126*_t92;
-    const trailer3_real_t _t129 = _t104 + _t107*_t23 + _t109*_t29 + _t111*_t40 + _t113*_t66
-            + _t115*_t68 + _t117*_t72 + _t119*_t76 + _t121*_t80 + _t123*_t84 + _t125*_t88
-            + _t127*_t92;
-    const trailer3_real_t _t130 = _t105 + _t107*_t25 + _t109*_t34 + _t111*_t46 + _t113*_t67
-            + _t115*_t69 + _t117*_t73 + _t119*_t77 + _t121*_t81 + _t123*_t85 + _t125*_t89
-            + _t127*_t93;
-    const trailer3_real_t _t131 = _t128*_t64 + _t129*_t56;
-    const trailer3_real_t _t132 = _t128*_t65 + _t129*_t57;
-    const trailer3_real_t _t133 = _t129*_t64 + _t130*_t56;
-    const trailer3_real_t _t134 = _t129*_t65 + _t130*_t57;
-    const trailer3_real_t _t135 = _t131*_t64 + _t133*_t56;
-    const trailer3_real_t _t136 = _t132*_t64 + _t134*_t56;
-    const trailer3_real_t _t137 = _t132*_t65 + _t134*_t57;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t _t102 = J_theta_cart2_left*_t78*_t78 + J_theta_cart2_right*_t77*_t77
+            + J_theta_cart3_left*_t87*_t87 + J_theta_cart3_right*_t86*_t86
+            + J_theta_cart_left*_t71*_t71 + J_theta_cart_right*_t70*_t70 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t _t103 = J_theta_cart*_t31*_t31 + TRAILER3_LIT(2.0)*_t100*_t31 + _t102;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t _t104 = J_theta_cart2*_t39*_t39 + _t103 + _t33*_t39 + _t36*_t39
+            + _t39*(_t33 + _t36);
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t _t105 = J_theta_cart3*_t85*_t85 + _t104 + _t41*_t85 + _t44*_t85
+            + _t85*(_t41 + _t44);
+    const trailer3_real_t _t106 = J_theta_cart2_left*_t78*_t94 + J_theta_cart2_right*_t77*_t93
+            + J_theta_cart3_left*_t87*_t99 + J_theta_cart3_right*_t86*_t98
+            + J_theta_cart_left*_t71*_t91 + J_theta_cart_right*_t70*_t90 + J_theta_left*_t7*_t89
+            + J_theta_right*_t6*_t88;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t _t107 = K_theta_tractor_x_tractor_2 + _t106;
+    const trailer3_real_t _t108 = J_theta_cart*_t31*_t46 + _t100*_t46 - TRAILER3_LIT(0.3)*_t101*_t31
+            + _t107;
+    const trailer3_real_t _t109 = J_theta_cart2*_t39*_t53 + _t108 + _t33*_t53 + _t36*_t53
+            + _t39*_t51;
+    const trailer3_real_t _t110 = J_theta_cart3*_t85*_t97 + _t109 + _t41*_t97 + _t44*_t97
+            + _t58*_t85;
+    const trailer3_real_t _t111 = J_theta_cart2_left*_t94*_t94 + J_theta_cart2_right*_t93*_t93
+            + J_theta_cart3_left*_t99*_t99 + J_theta_cart3_right*_t98*_t98
+            + J_theta_cart_left*_t91*_t91 + J_theta_cart_right*_t90*_t90 + J_theta_left*_t89*_t89
+            + J_theta_right*_t88*_t88;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t _t112 = J_theta_tractor + _t111;
+    const trailer3_real_t _t113 = J_theta_cart*_t46*_t46 - TRAILER3_LIT(0.6)*_t101*_t46 + _t112;
+    const trailer3_real_t _t114 = J_theta_cart2*_t53*_t53 + _t113 + _t48*_t53 + _t50*_t53
+            + _t51*_t53;
+    const trailer3_real_t _t115 = J_theta_cart3*_t97*_t97 + _t114 + _t55*_t97 + _t57*_t97
+            + _t58*_t97;
+    const trailer3_real_t _t116 = _t105*_t64 + _t110*_t61;
+    const trailer3_real_t _t117 = _t105*_t65 + _t110*_t62;
+    const trailer3_real_t _t118 = _t110*_t64 + _t115*_t61;
+    const trailer3_real_t _t119 = _t110*_t65 + _t115*_t62;
+    const trailer3_real_t _t120 = _t116*_t64 + _t118*_t61;
+    const trailer3_real_t _t121 = _t117*_t64 + _t119*_t61;
+    const trailer3_real_t _t122 = _t117*_t65 + _t119*_t62;
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t135*_t54 + _t136*_t55;
-    u[1] = H1hat1 + _t136*_t54 + _t137*_t55;
+    u[0] = H1hat0 + _t120*_t59 + _t121*_t60;
+    u[1] = H1hat1 + _t121*_t59 + _t122*_t60;
 }
 
 /* trailer3_minimal_tdc_law_mhat: documented in trailer3_laws.h.
@@ -719,7 +694,7 @@ void trailer3_minimal_tdc_law_mhat(const trailer3_params_t *p, const trailer3_re
 }
 
 /* trailer3_minimal_tdroc_law: documented in trailer3_laws.h.
-   operations after CSE: 131 add, 207 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 116 add, 249 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
     const trailer3_real_t *k1, const trailer3_real_t *k2, const trailer3_real_t *p12,
@@ -732,209 +707,200 @@ void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_
     const trailer3_real_t _t1 = _t0 + theta_cart;
     const trailer3_real_t _t2 = TRAILER3_SIN_BOUNDED(_t1);
     const trailer3_real_t _t3 = TRAILER3_COS_BOUNDED(_t1);
-    const trailer3_real_t _t4 = TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t radius_left = p->radius_left;
+    const trailer3_real_t radius_right = p->radius_right;
+    const trailer3_real_t _t4 = radius_left*radius_right;
+    const trailer3_real_t _t5 = TRAILER3_LIT(1.0)/_t4;
+    const trailer3_real_t _t6 = _t5*radius_left;
+    const trailer3_real_t _t7 = _t5*radius_right;
+    const trailer3_real_t radius_cart_left = p->radius_cart_left;
+    const trailer3_real_t radius_cart_right = p->radius_cart_right;
+    const trailer3_real_t _t8 = radius_cart_left*radius_cart_right;
+    const trailer3_real_t _t9 = -TRAILER3_LIT(0.6)*_t8;
+    const trailer3_real_t _t10 = TRAILER3_LIT(1.0)/_t9;
+    const trailer3_real_t _t11 = _t10*_t8;
+    const trailer3_real_t _t12 = TRAILER3_LIT(0.85)*_t2;
+    const trailer3_real_t _t13 = TRAILER3_LIT(0.85)*_t3;
     const trailer3_real_t theta_cart2 = q[4];
-    const trailer3_real_t _t5 = _t0 + theta_cart2;
-    const trailer3_real_t _t6 = TRAILER3_SIN_BOUNDED(_t5);
-    const trailer3_real_t _t7 = TRAILER3_COS_BOUNDED(_t5);
-    const trailer3_real_t _t8 = TRAILER3_LIT(0.3)*_t7;
-    const trailer3_real_t _t9 = TRAILER3_LIT(0.85)*_t2;
-    const trailer3_real_t _t10 = TRAILER3_LIT(0.85)*_t3;
-    const trailer3_real_t _t11 = _t10*_t7;
+    const trailer3_real_t _t14 = _t0 + theta_cart2;
+    const trailer3_real_t _t15 = TRAILER3_SIN_BOUNDED(_t14);
+    const trailer3_real_t _t16 = TRAILER3_COS_BOUNDED(_t14);
+    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
+    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
+    const trailer3_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const trailer3_real_t _t18 = -TRAILER3_LIT(0.6)*_t17;
+    const trailer3_real_t _t19 = TRAILER3_LIT(1.0)/_t18;
+    const trailer3_real_t _t20 = _t17*_t19;
+    const trailer3_real_t _t21 = TRAILER3_LIT(0.85)*_t15;
+    const trailer3_real_t _t22 = TRAILER3_LIT(0.85)*_t16;
     const trailer3_real_t theta_cart3 = q[5];
-    const trailer3_real_t _t12 = _t0 + theta_cart3;
-    const trailer3_real_t _t13 = TRAILER3_SIN_BOUNDED(_t12);
-    const trailer3_real_t _t14 = TRAILER3_COS_BOUNDED(_t12);
-    const trailer3_real_t _t15 = TRAILER3_LIT(0.3)*_t14;
-    const trailer3_real_t _t16 = _t10*_t14;
-    const trailer3_real_t _t17 = TRAILER3_LIT(0.85)*_t13;
-    const trailer3_real_t _t18 = TRAILER3_LIT(0.85)*_t14;
-    const trailer3_real_t _t19 = _t18*_t7;
-    const trailer3_real_t _t20 = TRAILER3_LIT(0.3)*_t2;
-    const trailer3_real_t _t21 = TRAILER3_LIT(0.3)*_t6;
-    const trailer3_real_t _t22 = TRAILER3_LIT(0.3)*_t13;
-    const trailer3_real_t _t23 = -TRAILER3_LIT(1.6666666666666667)*_t2;
-    const trailer3_real_t _t24 = TRAILER3_LIT(0.2)*_t23;
-    const trailer3_real_t _t25 = -TRAILER3_LIT(1.6666666666666667)*_t4;
-    const trailer3_real_t _t26 = TRAILER3_LIT(0.2)*_t25;
-    const trailer3_real_t _t27 = -_t11 - _t6*_t9;
-    const trailer3_real_t _t28 = -_t23*_t27 + _t6;
-    const trailer3_real_t _t29 = -TRAILER3_LIT(1.6666666666666667)*_t28;
-    const trailer3_real_t _t30 = TRAILER3_LIT(0.2)*_t29;
-    const trailer3_real_t _t31 = TRAILER3_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const trailer3_real_t _t32 = _t23*_t31;
-    const trailer3_real_t _t33 = -_t25*_t27 + _t8;
-    const trailer3_real_t _t34 = -TRAILER3_LIT(1.6666666666666667)*_t33;
-    const trailer3_real_t _t35 = TRAILER3_LIT(0.2)*_t34;
-    const trailer3_real_t _t36 = _t21 + _t25*_t31;
-    const trailer3_real_t _t37 = -_t13*_t9 - _t16;
-    const trailer3_real_t _t38 = -_t17*_t6 - _t19;
-    const trailer3_real_t _t39 = _t13 - _t23*_t37 - _t29*_t38;
-    const trailer3_real_t _t40 = -TRAILER3_LIT(1.6666666666666667)*_t39;
-    const trailer3_real_t _t41 = TRAILER3_LIT(0.2)*_t40;
-    const trailer3_real_t _t42 = TRAILER3_LIT(0.85)*_t13*_t3 - _t14*_t9;
-    const trailer3_real_t _t43 = TRAILER3_LIT(0.85)*_t13*_t7 - _t18*_t6;
-    const trailer3_real_t _t44 = -_t14 + _t23*_t42 + _t29*_t43;
-    const trailer3_real_t _t45 = _t15 - _t25*_t37 - _t34*_t38;
-    const trailer3_real_t _t46 = -TRAILER3_LIT(1.6666666666666667)*_t45;
-    const trailer3_real_t _t47 = TRAILER3_LIT(0.2)*_t46;
-    const trailer3_real_t _t48 = _t22 + _t25*_t42 + _t34*_t43;
+    const trailer3_real_t _t23 = _t0 + theta_cart3;
+    const trailer3_real_t _t24 = TRAILER3_SIN_BOUNDED(_t23);
+    const trailer3_real_t _t25 = TRAILER3_COS_BOUNDED(_t23);
+    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
+    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
+    const trailer3_real_t _t26 = radius_cart3_left*radius_cart3_right;
+    const trailer3_real_t _t27 = -TRAILER3_LIT(0.6)*_t26;
+    const trailer3_real_t _t28 = TRAILER3_LIT(1.0)/_t27;
+    const trailer3_real_t _t29 = _t26*_t28;
     const trailer3_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const trailer3_real_t _t49 = K_theta_cart2_x_tractor*_t6;
     const trailer3_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const trailer3_real_t _t50 = K_theta_cart2_x_tractor_2*_t7;
+    const trailer3_real_t _t30 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const trailer3_real_t _t31 = _t11*_t2;
+    const trailer3_real_t _t32 = _t12*_t31 + TRAILER3_LIT(1.0);
+    const trailer3_real_t _t33 = _t30*_t32;
+    const trailer3_real_t _t34 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const trailer3_real_t _t35 = -_t13*_t31;
+    const trailer3_real_t _t36 = _t34*_t35;
     const trailer3_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const trailer3_real_t _t51 = K_theta_cart3_x_tractor*_t13;
     const trailer3_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const trailer3_real_t _t52 = K_theta_cart3_x_tractor_2*_t14;
-    const trailer3_real_t _t53 = TRAILER3_LIT(0.85)*_t6;
+    const trailer3_real_t _t37 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const trailer3_real_t _t38 = _t15*_t32 - _t16*_t35;
+    const trailer3_real_t _t39 = _t20*_t38;
+    const trailer3_real_t _t40 = _t21*_t39 + _t32;
+    const trailer3_real_t _t41 = _t37*_t40;
+    const trailer3_real_t _t42 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const trailer3_real_t _t43 = -_t22*_t39 + _t35;
+    const trailer3_real_t _t44 = _t42*_t43;
+    const trailer3_real_t _t45 = -TRAILER3_LIT(0.3)*_t3;
+    const trailer3_real_t _t46 = -_t11*_t45;
+    const trailer3_real_t _t47 = _t12*_t46;
+    const trailer3_real_t _t48 = _t30*_t47;
+    const trailer3_real_t _t49 = -_t13*_t46 - TRAILER3_LIT(3.0)/TRAILER3_LIT(10.0);
+    const trailer3_real_t _t50 = _t34*_t49;
+    const trailer3_real_t _t51 = _t48 + _t50;
+    const trailer3_real_t _t52 = _t15*_t47 - _t16*_t49;
+    const trailer3_real_t _t53 = _t20*_t52;
+    const trailer3_real_t _t54 = _t21*_t53 + _t47;
+    const trailer3_real_t _t55 = _t37*_t54;
+    const trailer3_real_t _t56 = -_t22*_t53 + _t49;
+    const trailer3_real_t _t57 = _t42*_t56;
+    const trailer3_real_t _t58 = _t55 + _t57;
     const trailer3_real_t e0 = e[0];
     const trailer3_real_t edot0 = edot[0];
     const trailer3_real_t qdd_des0 = qddot_des[0];
     const trailer3_real_t k1_0 = k1[0];
     const trailer3_real_t k2_0 = k2[0];
-    const trailer3_real_t _t54 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer3_real_t _t59 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer3_real_t e1 = e[1];
     const trailer3_real_t edot1 = edot[1];
     const trailer3_real_t qdd_des1 = qddot_des[1];
     const trailer3_real_t k1_1 = k1[1];
     const trailer3_real_t k2_1 = k2[1];
-    const trailer3_real_t _t55 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer3_real_t _t60 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer3_real_t p12_0 = p12[0];
     const trailer3_real_t p22_0 = p22[0];
-    const trailer3_real_t _t56 = e0*p12_0 + edot0*p22_0;
+    const trailer3_real_t _t61 = e0*p12_0 + edot0*p22_0;
     const trailer3_real_t p12_1 = p12[1];
     const trailer3_real_t p22_1 = p22[1];
-    const trailer3_real_t _t57 = e1*p12_1 + edot1*p22_1;
-    const trailer3_real_t _t58 = trailer3_norm2(_t56, _t57);
+    const trailer3_real_t _t62 = e1*p12_1 + edot1*p22_1;
+    const trailer3_real_t _t63 = trailer3_norm2(_t61, _t62);
     const trailer3_real_t eps_1 = eps[0];
-    const trailer3_real_t _t59 = TRAILER3_LIT(1.0)/(TRAILER3_FMAX(_t58, eps_1));
-    const trailer3_real_t _t60 = _t56*_t59;
-    const trailer3_real_t _t61 = _t57*_t59;
-    const trailer3_real_t radius_right = p->radius_right;
-    const trailer3_real_t _t62 = TRAILER3_LIT(2.4154589371980677)*radius_right;
-    const trailer3_real_t radius_left = p->radius_left;
-    const trailer3_real_t _t63 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
-    const trailer3_real_t radius_cart_right = p->radius_cart_right;
-    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/radius_cart_right;
-    const trailer3_real_t radius_cart_left = p->radius_cart_left;
-    const trailer3_real_t _t65 = TRAILER3_LIT(1.0)/radius_cart_left;
-    const trailer3_real_t radius_cart2_right = p->radius_cart2_right;
-    const trailer3_real_t _t66 = TRAILER3_LIT(1.0)/radius_cart2_right;
-    const trailer3_real_t radius_cart2_left = p->radius_cart2_left;
-    const trailer3_real_t _t67 = TRAILER3_LIT(1.0)/radius_cart2_left;
-    const trailer3_real_t radius_cart3_right = p->radius_cart3_right;
-    const trailer3_real_t _t68 = TRAILER3_LIT(1.0)/radius_cart3_right;
-    const trailer3_real_t radius_cart3_left = p->radius_cart3_left;
-    const trailer3_real_t _t69 = TRAILER3_LIT(1.0)/radius_cart3_left;
+    const trailer3_real_t _t64 = TRAILER3_LIT(1.0)/(TRAILER3_FMAX(_t63, eps_1));
+    const trailer3_real_t _t65 = _t61*_t64;
+    const trailer3_real_t _t66 = _t62*_t64;
+    const trailer3_real_t _t67 = TRAILER3_LIT(2.4154589371980677)*radius_right;
+    const trailer3_real_t _t68 = -TRAILER3_LIT(2.4154589371980677)*radius_left;
+    const trailer3_real_t _t69 = TRAILER3_LIT(0.3)*_t2;
     const trailer3_real_t _t70 = TRAILER3_LIT(0.5)*radius_right;
     const trailer3_real_t _t71 = TRAILER3_LIT(0.5)*radius_left;
-    const trailer3_real_t _t72 = TRAILER3_LIT(1.0)/radius_right;
-    const trailer3_real_t _t73 = TRAILER3_LIT(0.207)*_t72;
-    const trailer3_real_t _t74 = TRAILER3_LIT(1.0)/radius_left;
-    const trailer3_real_t _t75 = -TRAILER3_LIT(0.207)*_t74;
-    const trailer3_real_t _t76 = _t24 + _t3;
-    const trailer3_real_t _t77 = -_t20 + _t26;
-    const trailer3_real_t _t78 = _t64*_t76;
-    const trailer3_real_t _t79 = _t64*_t77;
-    const trailer3_real_t _t80 = -_t24 + _t3;
-    const trailer3_real_t _t81 = -_t20 - _t26;
-    const trailer3_real_t _t82 = _t65*_t80;
-    const trailer3_real_t _t83 = _t65*_t81;
-    const trailer3_real_t _t84 = _t30 - _t32 + _t7;
-    const trailer3_real_t _t85 = _t35 - _t36;
-    const trailer3_real_t _t86 = _t66*_t84;
-    const trailer3_real_t _t87 = _t66*_t85;
-    const trailer3_real_t _t88 = -_t30 - _t32 + _t7;
-    const trailer3_real_t _t89 = -_t35 - _t36;
-    const trailer3_real_t _t90 = _t67*_t88;
-    const trailer3_real_t _t91 = _t67*_t89;
-    const trailer3_real_t _t92 = _t41 - _t44;
-    const trailer3_real_t _t93 = _t47 - _t48;
-    const trailer3_real_t _t94 = _t68*_t92;
-    const trailer3_real_t _t95 = _t68*_t93;
-    const trailer3_real_t _t96 = -_t41 - _t44;
-    const trailer3_real_t _t97 = -_t47 - _t48;
-    const trailer3_real_t _t98 = _t69*_t96;
-    const trailer3_real_t _t99 = _t69*_t97;
+    const trailer3_real_t _t72 = TRAILER3_LIT(0.2)*radius_cart_left;
+    const trailer3_real_t _t73 = -TRAILER3_LIT(0.6)*radius_cart_left;
+    const trailer3_real_t _t74 = -TRAILER3_LIT(0.2)*radius_cart_right;
+    const trailer3_real_t _t75 = -TRAILER3_LIT(0.6)*radius_cart_right;
+    const trailer3_real_t _t76 = _t10*(_t2*_t72 + _t3*_t73);
+    const trailer3_real_t _t77 = _t10*(_t2*_t74 + _t3*_t75);
+    const trailer3_real_t _t78 = _t15*_t35 + _t16*_t32;
+    const trailer3_real_t _t79 = TRAILER3_LIT(0.2)*radius_cart2_left;
+    const trailer3_real_t _t80 = -TRAILER3_LIT(0.6)*radius_cart2_left;
+    const trailer3_real_t _t81 = -TRAILER3_LIT(0.2)*radius_cart2_right;
+    const trailer3_real_t _t82 = -TRAILER3_LIT(0.6)*radius_cart2_right;
+    const trailer3_real_t _t83 = _t19*(_t38*_t79 + _t78*_t80);
+    const trailer3_real_t _t84 = _t19*(_t38*_t81 + _t78*_t82);
+    const trailer3_real_t _t85 = _t24*_t40 - _t25*_t43;
+    const trailer3_real_t _t86 = _t24*_t43 + _t25*_t40;
+    const trailer3_real_t _t87 = TRAILER3_LIT(0.2)*radius_cart3_left;
+    const trailer3_real_t _t88 = -TRAILER3_LIT(0.6)*radius_cart3_left;
+    const trailer3_real_t _t89 = -TRAILER3_LIT(0.2)*radius_cart3_right;
+    const trailer3_real_t _t90 = -TRAILER3_LIT(0.6)*radius_cart3_right;
+    const trailer3_real_t _t91 = _t29*_t85;
+    const trailer3_real_t _t92 = _t28*(_t85*_t87 + _t86*_t88);
+    const trailer3_real_t _t93 = _t28*(_t85*_t89 + _t86*_t90);
+    const trailer3_real_t _t94 = TRAILER3_LIT(0.207)*_t6;
+    const trailer3_real_t _t95 = -TRAILER3_LIT(0.207)*_t7;
+    const trailer3_real_t _t96 = _t10*(-_t45*_t72 - _t69*_t73);
+    const trailer3_real_t _t97 = _t10*(-_t45*_t74 - _t69*_t75);
+    const trailer3_real_t _t98 = _t15*_t49 + _t16*_t47;
+    const trailer3_real_t _t99 = _t19*(_t52*_t79 + _t80*_t98);
+    const trailer3_real_t _t100 = _t19*(_t52*_t81 + _t82*_t98);
+    const trailer3_real_t _t101 = _t24*_t54 - _t25*_t56;
+    const trailer3_real_t _t102 = _t24*_t56 + _t25*_t54;
+    const trailer3_real_t _t103 = _t101*_t29;
+    const trailer3_real_t _t104 = _t28*(_t101*_t87 + _t102*_t88);
+    const trailer3_real_t _t105 = _t28*(_t101*_t89 + _t102*_t90);
     const trailer3_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer3_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer3_real_t _t100 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const trailer3_real_t _t101 = _t49 + _t50;
-    const trailer3_real_t _t102 = _t51 + _t52;
-    const trailer3_real_t _t103 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t20;
-    const trailer3_real_t _t104 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t21;
-    const trailer3_real_t _t105 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t22;
-    const trailer3_real_t _t106 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
-            + _t49*_t9 + _t50*_t9;
-    const trailer3_real_t _t107 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
-            + _t51*_t9 + _t52*_t9;
-    const trailer3_real_t _t108 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t17*_t7
-            + _t51*_t53 + _t52*_t53;
-    const trailer3_real_t J_x_tractor = p->J_x_tractor;
-    const trailer3_real_t _t109 = J_x_tractor + _t100*_t23 + _t101*_t29 + _t102*_t40;
-    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer3_real_t _t110 = K_theta_tractor_x_tractor_2 + _t100*_t25 + _t101*_t34
-            + _t102*_t46;
-    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer3_real_t _t111 = J_theta_tractor + _t103*_t25 + _t104*_t34 + _t105*_t46;
-    const trailer3_real_t J_theta_cart = p->J_theta_cart;
-    const trailer3_real_t _t112 = J_theta_cart*_t23 + _t100 + _t106*_t29 + _t107*_t40;
-    const trailer3_real_t _t113 = J_theta_cart*_t25 + _t103 + _t106*_t34 + _t107*_t46;
-    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
-    const trailer3_real_t _t114 = J_theta_cart2*_t29 + _t101 + _t106*_t23 + _t108*_t40;
-    const trailer3_real_t _t115 = J_theta_cart2*_t34 + _t104 + _t106*_t25 + _t108*_t46;
-    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
-    const trailer3_real_t _t116 = J_theta_cart3*_t40 + _t102 + _t107*_t23 + _t108*_t29;
-    const trailer3_real_t _t117 = J_theta_cart3*_t46 + _t105 + _t107*_t25 + _t108*_t34;
-    const trailer3_real_t J_theta_right = p->J_theta_right;
-    const trailer3_real_t _t118 = J_theta_right*_t72;
-    const trailer3_real_t _t119 = J_theta_right*_t73;
-    const trailer3_real_t J_theta_left = p->J_theta_left;
-    const trailer3_real_t _t120 = J_theta_left*_t74;
-    const trailer3_real_t _t121 = J_theta_left*_t75;
-    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer3_real_t _t122 = J_theta_cart_right*_t78;
-    const trailer3_real_t _t123 = J_theta_cart_right*_t79;
-    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer3_real_t _t124 = J_theta_cart_left*_t82;
-    const trailer3_real_t _t125 = J_theta_cart_left*_t83;
-    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const trailer3_real_t _t126 = J_theta_cart2_right*_t86;
-    const trailer3_real_t _t127 = J_theta_cart2_right*_t87;
+    const trailer3_real_t _t106 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const trailer3_real_t _t107 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const trailer3_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const trailer3_real_t _t128 = J_theta_cart2_left*_t90;
-    const trailer3_real_t _t129 = J_theta_cart2_left*_t91;
-    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const trailer3_real_t _t130 = J_theta_cart3_right*_t94;
-    const trailer3_real_t _t131 = J_theta_cart3_right*_t95;
+    const trailer3_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const trailer3_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const trailer3_real_t _t132 = J_theta_cart3_left*_t98;
-    const trailer3_real_t _t133 = J_theta_cart3_left*_t99;
-    const trailer3_real_t _t134 = _t109 + _t112*_t23 + _t114*_t29 + _t116*_t40 + _t118*_t72
-            + _t120*_t74 + _t122*_t78 + _t124*_t82 + _t126*_t86 + _t128*_t90 + _t130*_t94
-            + _t132*_t98;
-    const trailer3_real_t _t135 = _t110 + _t113*_t23 + _t115*_t29 + _t117*_t40 + _t119*_t72
-            + _t121*_t74 + _t123*_t78 + _t125*_t82 + _t127*_t86 + _t129*_t90 + _t131*_t94
-            + _t133*_t98;
-    const trailer3_real_t _t136 = _t111 + _t113*_t25 + _t115*_t34 + _t117*_t46 + _t119*_t73
-            + _t121*_t75 + _t123*_t79 + _t125*_t83 + _t127*_t87 + _t129*_t91 + _t131*_t95
-            + _t133*_t99;
-    const trailer3_real_t _t137 = _t134*_t70 + _t135*_t62;
-    const trailer3_real_t _t138 = _t134*_t71 + _t135*_t63;
-    const trailer3_real_t _t139 = _t135*_t70 + _t136*_t62;
-    const trailer3_real_t _t140 = _t135*_t71 + _t136*_t63;
-    const trailer3_real_t _t141 = _t137*_t70 + _t139*_t62;
-    const trailer3_real_t _t142 = _t138*_t70 + _t140*_t62;
-    const trailer3_real_t _t143 = _t138*_t71 + _t140*_t63;
+    const trailer3_real_t J_theta_cart3_right = p->J_theta_cart3_right;
+    const trailer3_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer3_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer3_real_t J_theta_left = p->J_theta_left;
+    const trailer3_real_t J_theta_right = p->J_theta_right;
+    const trailer3_real_t J_x_tractor = p->J_x_tractor;
+    const trailer3_real_t _t108 = J_theta_cart2_left*_t84*_t84 + J_theta_cart2_right*_t83*_t83
+            + J_theta_cart3_left*_t93*_t93 + J_theta_cart3_right*_t92*_t92
+            + J_theta_cart_left*_t77*_t77 + J_theta_cart_right*_t76*_t76 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const trailer3_real_t J_theta_cart = p->J_theta_cart;
+    const trailer3_real_t _t109 = J_theta_cart*_t31*_t31 + TRAILER3_LIT(2.0)*_t106*_t31 + _t108;
+    const trailer3_real_t J_theta_cart2 = p->J_theta_cart2;
+    const trailer3_real_t _t110 = J_theta_cart2*_t39*_t39 + _t109 + _t33*_t39 + _t36*_t39
+            + _t39*(_t33 + _t36);
+    const trailer3_real_t J_theta_cart3 = p->J_theta_cart3;
+    const trailer3_real_t _t111 = J_theta_cart3*_t91*_t91 + _t110 + _t41*_t91 + _t44*_t91
+            + _t91*(_t41 + _t44);
+    const trailer3_real_t _t112 = J_theta_cart2_left*_t100*_t84 + J_theta_cart2_right*_t83*_t99
+            + J_theta_cart3_left*_t105*_t93 + J_theta_cart3_right*_t104*_t92
+            + J_theta_cart_left*_t77*_t97 + J_theta_cart_right*_t76*_t96 + J_theta_left*_t7*_t95
+            + J_theta_right*_t6*_t94;
+    const trailer3_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer3_real_t _t113 = K_theta_tractor_x_tractor_2 + _t112;
+    const trailer3_real_t _t114 = J_theta_cart*_t31*_t46 + _t106*_t46 - TRAILER3_LIT(0.3)*_t107*_t31
+            + _t113;
+    const trailer3_real_t _t115 = J_theta_cart2*_t39*_t53 + _t114 + _t33*_t53 + _t36*_t53
+            + _t39*_t51;
+    const trailer3_real_t _t116 = J_theta_cart3*_t103*_t91 + _t103*_t41 + _t103*_t44 + _t115
+            + _t58*_t91;
+    const trailer3_real_t _t117 = J_theta_cart2_left*_t100*_t100 + J_theta_cart2_right*_t99*_t99
+            + J_theta_cart3_left*_t105*_t105 + J_theta_cart3_right*_t104*_t104
+            + J_theta_cart_left*_t97*_t97 + J_theta_cart_right*_t96*_t96 + J_theta_left*_t95*_t95
+            + J_theta_right*_t94*_t94;
+    const trailer3_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer3_real_t _t118 = J_theta_tractor + _t117;
+    const trailer3_real_t _t119 = J_theta_cart*_t46*_t46 - TRAILER3_LIT(0.6)*_t107*_t46 + _t118;
+    const trailer3_real_t _t120 = J_theta_cart2*_t53*_t53 + _t119 + _t48*_t53 + _t50*_t53
+            + _t51*_t53;
+    const trailer3_real_t _t121 = J_theta_cart3*_t103*_t103 + _t103*_t55 + _t103*_t57 + _t103*_t58
+            + _t120;
+    const trailer3_real_t _t122 = _t111*_t70 + _t116*_t67;
+    const trailer3_real_t _t123 = _t111*_t71 + _t116*_t68;
+    const trailer3_real_t _t124 = _t116*_t70 + _t121*_t67;
+    const trailer3_real_t _t125 = _t116*_t71 + _t121*_t68;
+    const trailer3_real_t _t126 = _t122*_t70 + _t124*_t67;
+    const trailer3_real_t _t127 = _t123*_t70 + _t125*_t67;
+    const trailer3_real_t _t128 = _t123*_t71 + _t125*_t68;
     const trailer3_real_t H1hat0 = H1hat[0];
     const trailer3_real_t H1hat1 = H1hat[1];
     const trailer3_real_t gain_1 = gain[0];
-    u[0] = H1hat0 + _t141*_t54 + _t142*_t55 + gain_1*(_t141*_t60 + _t142*_t61);
-    u[1] = H1hat1 + _t142*_t54 + _t143*_t55 + gain_1*(_t142*_t60 + _t143*_t61);
-    s[0] = _t56;
-    s[1] = _t57;
-    s_norm[0] = _t58;
+    u[0] = H1hat0 + _t126*_t59 + _t127*_t60 + gain_1*(_t126*_t65 + _t127*_t66);
+    u[1] = H1hat1 + _t127*_t59 + _t128*_t60 + gain_1*(_t127*_t65 + _t128*_t66);
+    s[0] = _t61;
+    s[1] = _t62;
+    s_norm[0] = _t63;
 }
 
 /* trailer3_minimal_tdroc_law_mhat: documented in trailer3_laws.h.
@@ -950,7 +916,7 @@ void trailer3_minimal_tdroc_law_mhat(const trailer3_params_t *p, const trailer3_
 }
 
 /* trailer3_minimal_roc_law: documented in trailer3_laws.h.
-   operations after CSE: 324 add, 479 mul, 10 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 215 add, 410 mul, 6 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -958,14 +924,14 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
     const trailer3_real_t *eps, trailer3_real_t *u, trailer3_real_t *s, trailer3_real_t *s_norm,
     trailer3_real_t *gain)
 {
-    trailer3_real_t kept[36];
+    trailer3_real_t kept[44];
     trailer3_k_minimal_roc_law_keep(p, kept);
     trailer3_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u,
             s, s_norm, gain);
 }
 
 /* trailer3_minimal_asmc_law: documented in trailer3_laws.h.
-   operations after CSE: 320 add, 476 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 211 add, 407 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
@@ -973,7 +939,7 @@ void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t
     const trailer3_real_t *eps, const trailer3_real_t *adapt, trailer3_real_t *u,
     trailer3_real_t *s, trailer3_real_t *s_norm, trailer3_real_t *gain_next)
 {
-    trailer3_real_t kept[36];
+    trailer3_real_t kept[44];
     trailer3_k_minimal_roc_law_keep(p, kept);
     trailer3_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps,
             adapt, u, s, s_norm, gain_next);

@@ -83,7 +83,7 @@ void trailer3_tdroc_weighted_gain(const trailer3_real_t *minv_norm, const traile
  * @param[in]  span [1] row-major (TRAILER3_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (TRAILER3_MINIMAL_TDE_H1HAT_SIZE)
  *
- * operations after CSE: 124 add, 186 mul, 9 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 107 add, 233 mul, 5 div, 6 sin/cos, 0 sqrt
  */
 void trailer3_minimal_tde(const trailer3_params_t *p, const trailer3_real_t *q_prev,
     const trailer3_real_t *u_prev, const trailer3_real_t *qdot_now,
@@ -138,7 +138,7 @@ void trailer3_minimal_tde_mhat(const trailer3_params_t *p, const trailer3_real_t
  *     theta_cart3_left -- measured q
  * @param[out] norm [1] row-major (TRAILER3_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 119 add, 191 mul, 9 div, 6 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 104 add, 233 mul, 5 div, 6 sin/cos, 1 sqrt, 1 fabs
  */
 void trailer3_minimal_minv_norm(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *norm);
@@ -181,7 +181,7 @@ void trailer3_minimal_minv_norm_mhat(const trailer3_params_t *p, const trailer3_
  *     measured q
  * @param[out] M [4] row-major (TRAILER3_MINIMAL_MHAT_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 116 add, 185 mul, 8 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 101 add, 227 mul, 4 div, 6 sin/cos, 0 sqrt
  */
 void trailer3_minimal_mhat(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *M);
@@ -269,7 +269,7 @@ void trailer3_minimal_omega_difference(const trailer3_real_t *newer, const trail
  * @param[in]  H1hat [2] row-major (TRAILER3_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (TRAILER3_MINIMAL_TDC_LAW_U_SIZE)
  *
- * operations after CSE: 124 add, 193 mul, 8 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 109 add, 235 mul, 4 div, 6 sin/cos, 0 sqrt
  */
 void trailer3_minimal_tdc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
@@ -364,7 +364,7 @@ void trailer3_minimal_tdc_law_mhat(const trailer3_params_t *p, const trailer3_re
  * @param[out] s [2] row-major (TRAILER3_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 131 add, 207 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 116 add, 249 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer3_minimal_tdroc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *e, const trailer3_real_t *edot, const trailer3_real_t *qddot_des,
@@ -476,7 +476,7 @@ void trailer3_minimal_tdroc_law_mhat(const trailer3_params_t *p, const trailer3_
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAILER3_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 324 add, 479 mul, 10 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 215 add, 410 mul, 6 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,
@@ -536,7 +536,7 @@ void trailer3_minimal_roc_law(const trailer3_params_t *p, const trailer3_real_t 
  * @param[out] s_norm [1] row-major (TRAILER3_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAILER3_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 320 add, 476 mul, 9 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 211 add, 407 mul, 5 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void trailer3_minimal_asmc_law(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *e, const trailer3_real_t *edot,

@@ -21,15 +21,15 @@ extern "C" {
    only. */
 typedef struct {
     long magic; /* TRAILER3_MODEL_PREPARED_MAGIC once prepared */
-    trailer3_real_t forward_dynamics[40]; /* J_theta_cart, J_theta_cart2, J_theta_cart2_left,
+    trailer3_real_t forward_dynamics[48]; /* J_theta_cart, J_theta_cart2, J_theta_cart2_left,
                                              J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left,
                                              J_theta_cart3_right, J_theta_cart_left,
-                                             J_theta_cart_right, J_theta_tractor, J_x_tractor,
+                                             J_theta_cart_right, J_theta_tractor,
                                              K_theta_cart_x_tractor, K_theta_cart_x_tractor_2,
                                              K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2,
                                              K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2,
                                              K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2,
-                                             21 parameter-only subexpressions, for
+                                             30 parameter-only subexpressions, for
                                              trailer3_forward_dynamics_prepared */
 } trailer3_model_prepared_t;
 
@@ -94,7 +94,7 @@ typedef struct {
  * With fixed parameters, trailer3_model_prepare once and trailer3_forward_dynamics_prepared
  * per call give the same results, bit for bit.
  *
- * operations after CSE: 324 add, 447 mul, 9 div, 8 sin/cos, 0 sqrt
+ * operations after CSE: 211 add, 390 mul, 5 div, 8 sin/cos, 0 sqrt
  */
 trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *qdot, const trailer3_real_t *tau, trailer3_real_t *qddot);
@@ -131,7 +131,7 @@ trailer3_status_t trailer3_forward_dynamics(const trailer3_params_t *p, const tr
  *         TRAILER3_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
  *         TRAILER3_ERR_BAD_PARAMS if not (J_x_tractor > 0).
  *
- * operations after CSE: 3 add, 20 mul, 8 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 4 add, 43 mul, 4 div, 0 sin/cos, 0 sqrt
  */
 trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
     trailer3_model_prepared_t *prepared);
@@ -170,7 +170,7 @@ trailer3_status_t trailer3_model_prepare(const trailer3_params_t *p,
  *         TRAILER3_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER3_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 321 add, 427 mul, 1 div, 8 sin/cos, 0 sqrt
+ * operations after CSE: 207 add, 347 mul, 1 div, 8 sin/cos, 0 sqrt
  */
 trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepared_t *prepared,
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *tau,
@@ -198,7 +198,7 @@ trailer3_status_t trailer3_forward_dynamics_prepared(const trailer3_model_prepar
  *     thetadot_left -- theta_right rate, theta_left rate
  * @param[out] pose_rates [12] row-major (TRAILER3_KINEMATICS_POSE_RATES_SIZE)
  *
- * operations after CSE: 45 add, 89 mul, 6 div, 8 sin/cos, 0 sqrt
+ * operations after CSE: 40 add, 121 mul, 3 div, 8 sin/cos, 0 sqrt
  */
 void trailer3_kinematics(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *pose_rates);
@@ -222,7 +222,7 @@ void trailer3_kinematics(const trailer3_params_t *p, const trailer3_real_t *q,
  *     theta_cart2_left, theta_cart3_right, theta_cart3_left
  * @param[out] M [2x2] row-major (TRAILER3_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 116 add, 185 mul, 8 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 101 add, 227 mul, 4 div, 6 sin/cos, 0 sqrt
  */
 void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_real_t *q,
     trailer3_real_t *M);
@@ -247,7 +247,7 @@ void trailer3_minimal_mass_matrix(const trailer3_params_t *p, const trailer3_rea
  *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
  * @param[out] H [2] row-major (TRAILER3_MINIMAL_BIAS_FORCES_H_SIZE)
  *
- * operations after CSE: 237 add, 366 mul, 6 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 129 add, 267 mul, 4 div, 6 sin/cos, 0 sqrt
  */
 void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, trailer3_real_t *H);
@@ -303,7 +303,7 @@ void trailer3_minimal_bias_forces(const trailer3_params_t *p, const trailer3_rea
  *         TRAILER3_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER3_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 304 add, 456 mul, 9 div, 6 sin/cos, 0 sqrt
+ * operations after CSE: 195 add, 382 mul, 5 div, 6 sin/cos, 0 sqrt
  */
 trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,
@@ -340,7 +340,7 @@ trailer3_status_t trailer3_minimal_forward_dynamics(const trailer3_params_t *p,
  * @param[out] A [16x16] row-major (TRAILER3_LINEARIZATION_A_SIZE) -- 16x16 row-major
  * @param[out] B [16x2] row-major (TRAILER3_LINEARIZATION_B_SIZE) -- 16x2 row-major
  *
- * operations after CSE: 1486 add, 1923 mul, 9 div, 14 sin/cos, 0 sqrt
+ * operations after CSE: 1122 add, 1685 mul, 5 div, 14 sin/cos, 0 sqrt
  */
 void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q,
     const trailer3_real_t *wheel_rates, const trailer3_real_t *tau, trailer3_real_t *A,
@@ -410,7 +410,7 @@ void trailer3_linearization(const trailer3_params_t *p, const trailer3_real_t *q
  *         TRAILER3_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAILER3_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 413 add, 602 mul, 9 div, 12 sin/cos, 0 sqrt
+ * operations after CSE: 303 add, 522 mul, 11 div, 12 sin/cos, 0 sqrt
  */
 trailer3_status_t trailer3_wheel_contact_forces(const trailer3_params_t *p,
     const trailer3_real_t *q, const trailer3_real_t *wheel_rates, const trailer3_real_t *tau,

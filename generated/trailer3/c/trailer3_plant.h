@@ -32,7 +32,7 @@ extern "C" {
  *     wheel torques after friction
  * @param[out] xdot [16] row-major (TRAILER3_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
- * operations after CSE: 312 add, 468 mul, 9 div, 8 sin/cos, 0 sqrt
+ * operations after CSE: 203 add, 399 mul, 5 div, 8 sin/cos, 0 sqrt
  */
 void trailer3_plant_state_derivative(const trailer3_plant_params_t *pp, const trailer3_real_t *x,
     const trailer3_real_t *tau, trailer3_real_t *xdot);

@@ -59,7 +59,7 @@ typedef struct {
                                     _init) */
     trailer3_real_t mhat_prev[4]; /* Mhat(q(t-h)), row-major, for (17) */
     trailer3_real_t k_minimal_tde_mhat[1]; /* minimal_tde_mhat's parameter-only values (at _init) */
-    trailer3_real_t k_minimal_mhat[31]; /* minimal_mhat's parameter-only values (at _init) */
+    trailer3_real_t k_minimal_mhat[42]; /* minimal_mhat's parameter-only values (at _init) */
     trailer3_real_t H1hat[14];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer3_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                     GAIN_MAX */

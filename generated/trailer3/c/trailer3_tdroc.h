@@ -74,7 +74,7 @@ typedef struct {
                                                      (at _init) */
     trailer3_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
     trailer3_real_t k_minimal_tde_mhat[1]; /* minimal_tde_mhat's parameter-only values (at _init) */
-    trailer3_real_t k_minimal_mhat[31]; /* minimal_mhat's parameter-only values (at _init) */
+    trailer3_real_t k_minimal_mhat[42]; /* minimal_mhat's parameter-only values (at _init) */
     trailer3_real_t H1hat[14];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer3_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                     GAIN_MAX */

@@ -31,342 +31,289 @@ void train5_tdroc_weighted_gain(const train5_real_t *minv_norm, const train5_rea
 }
 
 /* train5_minimal_tde: documented in train5_laws.h.
-   operations after CSE: 257 add, 368 mul, 13 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 177 add, 373 mul, 7 div, 10 sin/cos, 0 sqrt */
 void train5_minimal_tde(const train5_params_t *p, const train5_real_t *q_prev,
     const train5_real_t *u_prev, const train5_real_t *qdot_now, const train5_real_t *qdot_then,
     const train5_real_t *span, train5_real_t *H1hat)
 {
+    const train5_real_t radius_left = p->radius_left;
+    const train5_real_t radius_right = p->radius_right;
+    const train5_real_t _t0 = radius_left*radius_right;
+    const train5_real_t _t1 = TRAIN5_LIT(1.0)/_t0;
+    const train5_real_t _t2 = _t1*radius_left;
+    const train5_real_t _t3 = _t1*radius_right;
+    const train5_real_t radius_cart_left = p->radius_cart_left;
+    const train5_real_t radius_cart_right = p->radius_cart_right;
+    const train5_real_t _t4 = radius_cart_left*radius_cart_right;
+    const train5_real_t radius_cart2_left = p->radius_cart2_left;
+    const train5_real_t radius_cart2_right = p->radius_cart2_right;
+    const train5_real_t _t5 = radius_cart2_left*radius_cart2_right;
+    const train5_real_t radius_cart3_left = p->radius_cart3_left;
+    const train5_real_t radius_cart3_right = p->radius_cart3_right;
+    const train5_real_t _t6 = radius_cart3_left*radius_cart3_right;
+    const train5_real_t radius_cart4_left = p->radius_cart4_left;
+    const train5_real_t radius_cart4_right = p->radius_cart4_right;
+    const train5_real_t _t7 = radius_cart4_left*radius_cart4_right;
+    const train5_real_t radius_cart5_left = p->radius_cart5_left;
+    const train5_real_t radius_cart5_right = p->radius_cart5_right;
+    const train5_real_t _t8 = radius_cart5_left*radius_cart5_right;
     const train5_real_t qp2 = q_prev[2];
     const train5_real_t qp3 = q_prev[3];
-    const train5_real_t _t0 = qp2 - qp3;
-    const train5_real_t _t1 = TRAIN5_SIN_BOUNDED(_t0);
-    const train5_real_t _t2 = TRAIN5_COS_BOUNDED(_t0);
-    const train5_real_t _t3 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t9 = qp2 - qp3;
+    const train5_real_t _t10 = TRAIN5_SIN_BOUNDED(_t9);
+    const train5_real_t _t11 = TRAIN5_COS_BOUNDED(_t9);
+    const train5_real_t _t12 = -TRAIN5_LIT(0.6)*_t4;
+    const train5_real_t _t13 = TRAIN5_LIT(1.0)/_t12;
+    const train5_real_t _t14 = _t13*_t4;
+    const train5_real_t _t15 = TRAIN5_LIT(0.85)*_t10;
+    const train5_real_t _t16 = TRAIN5_LIT(0.85)*_t11;
     const train5_real_t qp4 = q_prev[4];
-    const train5_real_t _t4 = qp2 - qp4;
-    const train5_real_t _t5 = TRAIN5_SIN_BOUNDED(_t4);
-    const train5_real_t _t6 = TRAIN5_COS_BOUNDED(_t4);
-    const train5_real_t _t7 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t8 = TRAIN5_LIT(0.85)*_t1;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = _t6*_t9;
+    const train5_real_t _t17 = qp2 - qp4;
+    const train5_real_t _t18 = TRAIN5_SIN_BOUNDED(_t17);
+    const train5_real_t _t19 = TRAIN5_COS_BOUNDED(_t17);
+    const train5_real_t _t20 = -TRAIN5_LIT(0.6)*_t5;
+    const train5_real_t _t21 = TRAIN5_LIT(1.0)/_t20;
+    const train5_real_t _t22 = _t21*_t5;
+    const train5_real_t _t23 = TRAIN5_LIT(0.85)*_t18;
+    const train5_real_t _t24 = TRAIN5_LIT(0.85)*_t19;
     const train5_real_t qp5 = q_prev[5];
-    const train5_real_t _t11 = qp2 - qp5;
-    const train5_real_t _t12 = TRAIN5_SIN_BOUNDED(_t11);
-    const train5_real_t _t13 = TRAIN5_COS_BOUNDED(_t11);
-    const train5_real_t _t14 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t15 = _t13*_t9;
-    const train5_real_t _t16 = TRAIN5_LIT(0.85)*_t5;
-    const train5_real_t _t17 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t18 = _t13*_t17;
+    const train5_real_t _t25 = qp2 - qp5;
+    const train5_real_t _t26 = TRAIN5_SIN_BOUNDED(_t25);
+    const train5_real_t _t27 = TRAIN5_COS_BOUNDED(_t25);
+    const train5_real_t _t28 = -TRAIN5_LIT(0.6)*_t6;
+    const train5_real_t _t29 = TRAIN5_LIT(1.0)/_t28;
+    const train5_real_t _t30 = _t29*_t6;
+    const train5_real_t _t31 = TRAIN5_LIT(0.85)*_t26;
+    const train5_real_t _t32 = TRAIN5_LIT(0.85)*_t27;
     const train5_real_t qp6 = q_prev[6];
-    const train5_real_t _t19 = qp2 - qp6;
-    const train5_real_t _t20 = TRAIN5_SIN_BOUNDED(_t19);
-    const train5_real_t _t21 = TRAIN5_COS_BOUNDED(_t19);
-    const train5_real_t _t22 = TRAIN5_LIT(0.3)*_t21;
-    const train5_real_t _t23 = _t21*_t9;
-    const train5_real_t _t24 = _t17*_t21;
-    const train5_real_t _t25 = TRAIN5_LIT(0.85)*_t12;
-    const train5_real_t _t26 = TRAIN5_LIT(0.85)*_t13;
-    const train5_real_t _t27 = _t21*_t26;
+    const train5_real_t _t33 = qp2 - qp6;
+    const train5_real_t _t34 = TRAIN5_SIN_BOUNDED(_t33);
+    const train5_real_t _t35 = TRAIN5_COS_BOUNDED(_t33);
+    const train5_real_t _t36 = -TRAIN5_LIT(0.6)*_t7;
+    const train5_real_t _t37 = TRAIN5_LIT(1.0)/_t36;
+    const train5_real_t _t38 = _t37*_t7;
+    const train5_real_t _t39 = TRAIN5_LIT(0.85)*_t34;
+    const train5_real_t _t40 = TRAIN5_LIT(0.85)*_t35;
     const train5_real_t qp7 = q_prev[7];
-    const train5_real_t _t28 = qp2 - qp7;
-    const train5_real_t _t29 = TRAIN5_SIN_BOUNDED(_t28);
-    const train5_real_t _t30 = TRAIN5_COS_BOUNDED(_t28);
-    const train5_real_t _t31 = TRAIN5_LIT(0.3)*_t30;
-    const train5_real_t _t32 = _t30*_t9;
-    const train5_real_t _t33 = _t17*_t30;
-    const train5_real_t _t34 = _t26*_t30;
-    const train5_real_t _t35 = TRAIN5_LIT(0.85)*_t20;
-    const train5_real_t _t36 = TRAIN5_LIT(0.85)*_t21;
-    const train5_real_t _t37 = _t30*_t36;
-    const train5_real_t _t38 = TRAIN5_LIT(0.3)*_t1;
-    const train5_real_t _t39 = TRAIN5_LIT(0.3)*_t5;
-    const train5_real_t _t40 = _t5*_t9;
-    const train5_real_t _t41 = TRAIN5_LIT(0.3)*_t12;
-    const train5_real_t _t42 = _t12*_t9;
-    const train5_real_t _t43 = _t12*_t17;
-    const train5_real_t _t44 = TRAIN5_LIT(0.3)*_t20;
-    const train5_real_t _t45 = _t20*_t9;
-    const train5_real_t _t46 = _t17*_t20;
-    const train5_real_t _t47 = _t20*_t26;
-    const train5_real_t _t48 = TRAIN5_LIT(0.3)*_t29;
-    const train5_real_t _t49 = _t29*_t9;
-    const train5_real_t _t50 = _t17*_t29;
-    const train5_real_t _t51 = _t26*_t29;
-    const train5_real_t _t52 = _t29*_t36;
-    const train5_real_t _t53 = TRAIN5_LIT(1.6666666666666667)*_t1;
-    const train5_real_t _t54 = TRAIN5_LIT(0.2)*_t53;
-    const train5_real_t _t55 = -TRAIN5_LIT(1.6666666666666667)*_t3;
-    const train5_real_t _t56 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t57 = -_t10 - _t5*_t8;
-    const train5_real_t _t58 = -_t5 - _t53*_t57;
-    const train5_real_t _t59 = -TRAIN5_LIT(1.6666666666666667)*_t58;
-    const train5_real_t _t60 = TRAIN5_LIT(0.2)*_t59;
-    const train5_real_t _t61 = -_t40 + _t6*_t8;
-    const train5_real_t _t62 = _t53*_t61;
-    const train5_real_t _t63 = -_t55*_t57 + _t7;
-    const train5_real_t _t64 = -TRAIN5_LIT(1.6666666666666667)*_t63;
-    const train5_real_t _t65 = TRAIN5_LIT(0.2)*_t64;
-    const train5_real_t _t66 = -_t39 + _t55*_t61;
-    const train5_real_t _t67 = -_t12*_t8 - _t15;
-    const train5_real_t _t68 = -_t12*_t16 - _t18;
-    const train5_real_t _t69 = -_t12 - _t53*_t67 - _t59*_t68;
-    const train5_real_t _t70 = -TRAIN5_LIT(1.6666666666666667)*_t69;
-    const train5_real_t _t71 = TRAIN5_LIT(0.2)*_t70;
-    const train5_real_t _t72 = _t13*_t8 - _t42;
-    const train5_real_t _t73 = _t53*_t72;
-    const train5_real_t _t74 = _t13*_t16 - _t43;
-    const train5_real_t _t75 = _t59*_t74;
-    const train5_real_t _t76 = _t14 - _t55*_t67 - _t64*_t68;
-    const train5_real_t _t77 = -TRAIN5_LIT(1.6666666666666667)*_t76;
-    const train5_real_t _t78 = TRAIN5_LIT(0.2)*_t77;
-    const train5_real_t _t79 = -_t41 + _t55*_t72 + _t64*_t74;
-    const train5_real_t _t80 = -_t20*_t8 - _t23;
-    const train5_real_t _t81 = -_t16*_t20 - _t24;
-    const train5_real_t _t82 = -_t20*_t25 - _t27;
-    const train5_real_t _t83 = -_t20 - _t53*_t80 - _t59*_t81 - _t70*_t82;
-    const train5_real_t _t84 = -TRAIN5_LIT(1.6666666666666667)*_t83;
-    const train5_real_t _t85 = TRAIN5_LIT(0.2)*_t84;
-    const train5_real_t _t86 = _t21*_t8 - _t45;
-    const train5_real_t _t87 = _t16*_t21 - _t46;
-    const train5_real_t _t88 = _t21*_t25 - _t47;
-    const train5_real_t _t89 = -_t21 + _t53*_t86 + _t59*_t87 + _t70*_t88;
-    const train5_real_t _t90 = _t22 - _t55*_t80 - _t64*_t81 - _t77*_t82;
-    const train5_real_t _t91 = -TRAIN5_LIT(1.6666666666666667)*_t90;
-    const train5_real_t _t92 = TRAIN5_LIT(0.2)*_t91;
-    const train5_real_t _t93 = -_t44 + _t55*_t86 + _t64*_t87 + _t77*_t88;
-    const train5_real_t _t94 = -_t29*_t8 - _t32;
-    const train5_real_t _t95 = -_t16*_t29 - _t33;
-    const train5_real_t _t96 = -_t25*_t29 - _t34;
-    const train5_real_t _t97 = -_t29*_t35 - _t37;
-    const train5_real_t _t98 = -_t29 - _t53*_t94 - _t59*_t95 - _t70*_t96 - _t84*_t97;
-    const train5_real_t _t99 = -TRAIN5_LIT(1.6666666666666667)*_t98;
-    const train5_real_t _t100 = TRAIN5_LIT(0.2)*_t99;
-    const train5_real_t _t101 = _t30*_t8 - _t49;
-    const train5_real_t _t102 = _t16*_t30 - _t50;
-    const train5_real_t _t103 = _t25*_t30 - _t51;
-    const train5_real_t _t104 = _t30*_t35 - _t52;
-    const train5_real_t _t105 = _t101*_t53 + _t102*_t59 + _t103*_t70 + _t104*_t84 - _t30;
-    const train5_real_t _t106 = _t31 - _t55*_t94 - _t64*_t95 - _t77*_t96 - _t91*_t97;
-    const train5_real_t _t107 = -TRAIN5_LIT(1.6666666666666667)*_t106;
-    const train5_real_t _t108 = TRAIN5_LIT(0.2)*_t107;
-    const train5_real_t _t109 = _t101*_t55 + _t102*_t64 + _t103*_t77 + _t104*_t91 - _t48;
+    const train5_real_t _t41 = qp2 - qp7;
+    const train5_real_t _t42 = TRAIN5_SIN_BOUNDED(_t41);
+    const train5_real_t _t43 = TRAIN5_COS_BOUNDED(_t41);
+    const train5_real_t _t44 = -TRAIN5_LIT(0.6)*_t8;
+    const train5_real_t _t45 = TRAIN5_LIT(1.0)/_t44;
+    const train5_real_t _t46 = _t45*_t8;
     const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t _t110 = K_theta_cart2_x_tractor*_t5;
+    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const train5_real_t _t47 = -K_theta_cart2_x_tractor*_t18 + K_theta_cart2_x_tractor_2*_t19;
+    const train5_real_t _t48 = -_t10*_t14;
+    const train5_real_t _t49 = -_t15*_t48 + TRAIN5_LIT(1.0);
+    const train5_real_t _t50 = _t47*_t49;
+    const train5_real_t _t51 = -K_theta_cart2_x_tractor*_t19 - K_theta_cart2_x_tractor_2*_t18;
+    const train5_real_t _t52 = -_t16*_t48;
+    const train5_real_t _t53 = _t51*_t52;
     const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t _t111 = K_theta_cart3_x_tractor*_t12;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t _t112 = K_theta_cart4_x_tractor*_t20;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t _t113 = K_theta_cart5_x_tractor*_t29;
     const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t114 = K_theta_cart3_x_tractor_2*_t13;
+    const train5_real_t _t54 = -K_theta_cart3_x_tractor*_t26 + K_theta_cart3_x_tractor_2*_t27;
+    const train5_real_t _t55 = -_t18*_t49 - _t19*_t52;
+    const train5_real_t _t56 = _t22*_t55;
+    const train5_real_t _t57 = -_t23*_t56 + _t49;
+    const train5_real_t _t58 = _t54*_t57;
+    const train5_real_t _t59 = -K_theta_cart3_x_tractor*_t27 - K_theta_cart3_x_tractor_2*_t26;
+    const train5_real_t _t60 = -_t24*_t56 + _t52;
+    const train5_real_t _t61 = _t59*_t60;
+    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
     const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t115 = K_theta_cart4_x_tractor_2*_t21;
+    const train5_real_t _t62 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t35;
+    const train5_real_t _t63 = -_t26*_t57 - _t27*_t60;
+    const train5_real_t _t64 = _t30*_t63;
+    const train5_real_t _t65 = -_t31*_t64 + _t57;
+    const train5_real_t _t66 = _t62*_t65;
+    const train5_real_t _t67 = -K_theta_cart4_x_tractor*_t35 - K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t68 = -_t32*_t64 + _t60;
+    const train5_real_t _t69 = _t67*_t68;
+    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
     const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t116 = K_theta_cart5_x_tractor_2*_t30;
+    const train5_real_t _t70 = -K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t71 = -_t34*_t65 - _t35*_t68;
+    const train5_real_t _t72 = _t38*_t71;
+    const train5_real_t _t73 = -_t39*_t72 + _t65;
+    const train5_real_t _t74 = _t70*_t73;
+    const train5_real_t _t75 = -K_theta_cart5_x_tractor*_t43 - K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t76 = -_t40*_t72 + _t68;
+    const train5_real_t _t77 = _t75*_t76;
+    const train5_real_t _t78 = -TRAIN5_LIT(0.3)*_t11;
+    const train5_real_t _t79 = -_t14*_t78;
+    const train5_real_t _t80 = -_t15*_t79;
+    const train5_real_t _t81 = _t47*_t80;
+    const train5_real_t _t82 = -_t16*_t79 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t83 = _t51*_t82;
+    const train5_real_t _t84 = _t81 + _t83;
+    const train5_real_t _t85 = -_t18*_t80 - _t19*_t82;
+    const train5_real_t _t86 = _t22*_t85;
+    const train5_real_t _t87 = -_t23*_t86 + _t80;
+    const train5_real_t _t88 = _t54*_t87;
+    const train5_real_t _t89 = -_t24*_t86 + _t82;
+    const train5_real_t _t90 = _t59*_t89;
+    const train5_real_t _t91 = _t88 + _t90;
+    const train5_real_t _t92 = -_t26*_t87 - _t27*_t89;
+    const train5_real_t _t93 = _t30*_t92;
+    const train5_real_t _t94 = -_t31*_t93 + _t87;
+    const train5_real_t _t95 = _t62*_t94;
+    const train5_real_t _t96 = -_t32*_t93 + _t89;
+    const train5_real_t _t97 = _t67*_t96;
+    const train5_real_t _t98 = _t95 + _t97;
+    const train5_real_t _t99 = -_t34*_t94 - _t35*_t96;
+    const train5_real_t _t100 = _t38*_t99;
+    const train5_real_t _t101 = -_t100*_t39 + _t94;
+    const train5_real_t _t102 = _t101*_t70;
+    const train5_real_t _t103 = -_t100*_t40 + _t96;
+    const train5_real_t _t104 = _t103*_t75;
+    const train5_real_t _t105 = _t102 + _t104;
     const train5_real_t span_1 = span[0];
-    const train5_real_t _t117 = TRAIN5_LIT(1.0)/span_1;
+    const train5_real_t _t106 = TRAIN5_LIT(1.0)/span_1;
     const train5_real_t qd_now0 = qdot_now[0];
     const train5_real_t qd_then0 = qdot_then[0];
-    const train5_real_t _t118 = _t117*(qd_now0 - qd_then0);
+    const train5_real_t _t107 = _t106*(qd_now0 - qd_then0);
     const train5_real_t qd_now1 = qdot_now[1];
     const train5_real_t qd_then1 = qdot_then[1];
-    const train5_real_t _t119 = _t117*(qd_now1 - qd_then1);
-    const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t120 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t121 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t122 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t123 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t124 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t125 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t126 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t127 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t128 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t129 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t130 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t131 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t132 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t133 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t134 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t135 = TRAIN5_LIT(0.207)*_t134;
-    const train5_real_t _t136 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t137 = -TRAIN5_LIT(0.207)*_t136;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t138 = J_theta_right*_t134;
-    const train5_real_t _t139 = J_theta_right*_t135;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t140 = J_theta_left*_t136;
-    const train5_real_t _t141 = J_theta_left*_t137;
-    const train5_real_t _t142 = _t2 + _t54;
-    const train5_real_t _t143 = _t38 + _t56;
-    const train5_real_t _t144 = _t122*_t142;
-    const train5_real_t _t145 = _t122*_t143;
-    const train5_real_t _t146 = _t2 - _t54;
-    const train5_real_t _t147 = _t38 - _t56;
-    const train5_real_t _t148 = _t123*_t146;
-    const train5_real_t _t149 = _t123*_t147;
-    const train5_real_t _t150 = _t6 + _t60 - _t62;
-    const train5_real_t _t151 = _t65 - _t66;
-    const train5_real_t _t152 = _t124*_t150;
-    const train5_real_t _t153 = _t124*_t151;
-    const train5_real_t _t154 = _t6 - _t60 - _t62;
-    const train5_real_t _t155 = -_t65 - _t66;
-    const train5_real_t _t156 = _t125*_t154;
-    const train5_real_t _t157 = _t125*_t155;
-    const train5_real_t _t158 = _t13 + _t71 - _t73 - _t75;
-    const train5_real_t _t159 = _t78 - _t79;
-    const train5_real_t _t160 = _t126*_t158;
-    const train5_real_t _t161 = _t126*_t159;
-    const train5_real_t _t162 = _t13 - _t71 - _t73 - _t75;
-    const train5_real_t _t163 = -_t78 - _t79;
-    const train5_real_t _t164 = _t127*_t162;
-    const train5_real_t _t165 = _t127*_t163;
-    const train5_real_t _t166 = _t85 - _t89;
-    const train5_real_t _t167 = _t92 - _t93;
-    const train5_real_t _t168 = _t128*_t166;
-    const train5_real_t _t169 = _t128*_t167;
-    const train5_real_t _t170 = -_t85 - _t89;
-    const train5_real_t _t171 = -_t92 - _t93;
-    const train5_real_t _t172 = _t129*_t170;
-    const train5_real_t _t173 = _t129*_t171;
-    const train5_real_t _t174 = _t100 - _t105;
-    const train5_real_t _t175 = _t108 - _t109;
-    const train5_real_t _t176 = _t130*_t174;
-    const train5_real_t _t177 = _t130*_t175;
-    const train5_real_t _t178 = -_t100 - _t105;
-    const train5_real_t _t179 = -_t108 - _t109;
-    const train5_real_t _t180 = _t131*_t178;
-    const train5_real_t _t181 = _t131*_t179;
+    const train5_real_t _t108 = _t106*(qd_now1 - qd_then1);
+    const train5_real_t _t109 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t110 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t111 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t112 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t113 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t114 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t115 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t116 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t117 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t118 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t119 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t120 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t121 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t123 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t124 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t125 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t126 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t127 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t128 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t129 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t130 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t131 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t132 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t133 = TRAIN5_LIT(0.207)*_t2;
+    const train5_real_t _t134 = -TRAIN5_LIT(0.207)*_t3;
+    const train5_real_t _t135 = -TRAIN5_LIT(0.3)*_t10;
+    const train5_real_t _t136 = _t13*(-_t10*_t113 + _t11*_t114);
+    const train5_real_t _t137 = _t13*(-_t10*_t115 + _t11*_t116);
+    const train5_real_t _t138 = -_t18*_t52 + _t19*_t49;
+    const train5_real_t _t139 = _t21*(_t117*_t55 + _t118*_t138);
+    const train5_real_t _t140 = _t21*(_t119*_t55 + _t120*_t138);
+    const train5_real_t _t141 = -_t26*_t60 + _t27*_t57;
+    const train5_real_t _t142 = _t29*(_t121*_t63 + _t122*_t141);
+    const train5_real_t _t143 = _t29*(_t123*_t63 + _t124*_t141);
+    const train5_real_t _t144 = -_t34*_t68 + _t35*_t65;
+    const train5_real_t _t145 = _t37*(_t125*_t71 + _t126*_t144);
+    const train5_real_t _t146 = _t37*(_t127*_t71 + _t128*_t144);
+    const train5_real_t _t147 = -_t42*_t73 - _t43*_t76;
+    const train5_real_t _t148 = -_t42*_t76 + _t43*_t73;
+    const train5_real_t _t149 = _t147*_t46;
+    const train5_real_t _t150 = _t45*(_t129*_t147 + _t130*_t148);
+    const train5_real_t _t151 = _t45*(_t131*_t147 + _t132*_t148);
+    const train5_real_t _t152 = _t13*(-_t113*_t78 - _t114*_t135);
+    const train5_real_t _t153 = _t13*(-_t115*_t78 - _t116*_t135);
+    const train5_real_t _t154 = -_t18*_t82 + _t19*_t80;
+    const train5_real_t _t155 = _t21*(_t117*_t85 + _t118*_t154);
+    const train5_real_t _t156 = _t21*(_t119*_t85 + _t120*_t154);
+    const train5_real_t _t157 = -_t26*_t89 + _t27*_t87;
+    const train5_real_t _t158 = _t29*(_t121*_t92 + _t122*_t157);
+    const train5_real_t _t159 = _t29*(_t123*_t92 + _t124*_t157);
+    const train5_real_t _t160 = -_t34*_t96 + _t35*_t94;
+    const train5_real_t _t161 = _t37*(_t125*_t99 + _t126*_t160);
+    const train5_real_t _t162 = _t37*(_t127*_t99 + _t128*_t160);
+    const train5_real_t _t163 = -_t101*_t42 - _t103*_t43;
+    const train5_real_t _t164 = _t101*_t43 - _t103*_t42;
+    const train5_real_t _t165 = _t163*_t46;
+    const train5_real_t _t166 = _t45*(_t129*_t163 + _t130*_t164);
+    const train5_real_t _t167 = _t45*(_t131*_t163 + _t132*_t164);
     const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t182 = -K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t183 = K_theta_cart2_x_tractor_2*_t6 - _t110;
-    const train5_real_t _t184 = K_theta_cart3_x_tractor_2*_t13 - _t111;
-    const train5_real_t _t185 = K_theta_cart4_x_tractor_2*_t21 - _t112;
-    const train5_real_t _t186 = K_theta_cart5_x_tractor_2*_t30 - _t113;
-    const train5_real_t _t187 = K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t38;
-    const train5_real_t _t188 = K_theta_cart2_x_tractor*_t7 + K_theta_cart2_x_tractor_2*_t39;
-    const train5_real_t _t189 = K_theta_cart3_x_tractor*_t14 + K_theta_cart3_x_tractor_2*_t41;
-    const train5_real_t _t190 = K_theta_cart4_x_tractor*_t22 + K_theta_cart4_x_tractor_2*_t44;
-    const train5_real_t _t191 = K_theta_cart5_x_tractor*_t31 + K_theta_cart5_x_tractor_2*_t48;
-    const train5_real_t _t192 = K_theta_cart2_x_tractor*_t10 + K_theta_cart2_x_tractor_2*_t40
-            - K_theta_cart2_x_tractor_2*_t6*_t8 + _t110*_t8;
-    const train5_real_t _t193 = K_theta_cart3_x_tractor*_t15 + K_theta_cart3_x_tractor_2*_t42
-            + _t111*_t8 - _t114*_t8;
-    const train5_real_t _t194 = K_theta_cart4_x_tractor*_t23 + K_theta_cart4_x_tractor_2*_t45
-            + _t112*_t8 - _t115*_t8;
-    const train5_real_t _t195 = K_theta_cart5_x_tractor*_t32 + K_theta_cart5_x_tractor_2*_t49
-            + _t113*_t8 - _t116*_t8;
-    const train5_real_t _t196 = K_theta_cart3_x_tractor*_t18 + K_theta_cart3_x_tractor_2*_t43
-            + _t111*_t16 - _t114*_t16;
-    const train5_real_t _t197 = K_theta_cart4_x_tractor*_t24 + K_theta_cart4_x_tractor_2*_t46
-            + _t112*_t16 - _t115*_t16;
-    const train5_real_t _t198 = K_theta_cart5_x_tractor*_t33 + K_theta_cart5_x_tractor_2*_t50
-            + _t113*_t16 - _t116*_t16;
-    const train5_real_t _t199 = K_theta_cart4_x_tractor*_t27 + K_theta_cart4_x_tractor_2*_t47
-            + _t112*_t25 - _t115*_t25;
-    const train5_real_t _t200 = K_theta_cart5_x_tractor*_t34 + K_theta_cart5_x_tractor_2*_t51
-            + _t113*_t25 - _t116*_t25;
-    const train5_real_t _t201 = K_theta_cart5_x_tractor*_t37 + K_theta_cart5_x_tractor_2*_t52
-            + _t113*_t35 - _t116*_t35;
-    const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t202 = J_x_tractor + _t182*_t53 + _t183*_t59 + _t184*_t70 + _t185*_t84
-            + _t186*_t99;
-    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t203 = K_theta_tractor_x_tractor_2 + _t107*_t186 + _t182*_t55 + _t183*_t64
-            + _t184*_t77 + _t185*_t91;
-    const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t204 = J_theta_tractor + _t107*_t191 + _t187*_t55 + _t188*_t64 + _t189*_t77
-            + _t190*_t91;
-    const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t205 = J_theta_cart*_t53 + _t182 + _t192*_t59 + _t193*_t70 + _t194*_t84
-            + _t195*_t99;
-    const train5_real_t _t206 = J_theta_cart*_t55 + _t107*_t195 + _t187 + _t192*_t64 + _t193*_t77
-            + _t194*_t91;
-    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t207 = J_theta_cart2*_t59 + _t183 + _t192*_t53 + _t196*_t70 + _t197*_t84
-            + _t198*_t99;
-    const train5_real_t _t208 = J_theta_cart2*_t64 + _t107*_t198 + _t188 + _t192*_t55 + _t196*_t77
-            + _t197*_t91;
-    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t209 = J_theta_cart3*_t70 + _t184 + _t193*_t53 + _t196*_t59 + _t199*_t84
-            + _t200*_t99;
-    const train5_real_t _t210 = J_theta_cart3*_t77 + _t107*_t200 + _t189 + _t193*_t55 + _t196*_t64
-            + _t199*_t91;
-    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t211 = J_theta_cart4*_t84 + _t185 + _t194*_t53 + _t197*_t59 + _t199*_t70
-            + _t201*_t99;
-    const train5_real_t _t212 = J_theta_cart4*_t91 + _t107*_t201 + _t190 + _t194*_t55 + _t197*_t64
-            + _t199*_t77;
-    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t213 = J_theta_cart5*_t99 + _t186 + _t195*_t53 + _t198*_t59 + _t200*_t70
-            + _t201*_t84;
-    const train5_real_t _t214 = J_theta_cart5*_t107 + _t191 + _t195*_t55 + _t198*_t64 + _t200*_t77
-            + _t201*_t91;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t215 = J_theta_cart_right*_t144;
-    const train5_real_t _t216 = J_theta_cart_right*_t145;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t217 = J_theta_cart_left*_t148;
-    const train5_real_t _t218 = J_theta_cart_left*_t149;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t219 = J_theta_cart2_right*_t152;
-    const train5_real_t _t220 = J_theta_cart2_right*_t153;
+    const train5_real_t _t168 = -K_theta_cart_x_tractor*_t10 + K_theta_cart_x_tractor_2*_t11;
+    const train5_real_t _t169 = -K_theta_cart_x_tractor*_t11 - K_theta_cart_x_tractor_2*_t10;
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t221 = J_theta_cart2_left*_t156;
-    const train5_real_t _t222 = J_theta_cart2_left*_t157;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t223 = J_theta_cart3_right*_t160;
-    const train5_real_t _t224 = J_theta_cart3_right*_t161;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t225 = J_theta_cart3_left*_t164;
-    const train5_real_t _t226 = J_theta_cart3_left*_t165;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t227 = J_theta_cart4_right*_t168;
-    const train5_real_t _t228 = J_theta_cart4_right*_t169;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t229 = J_theta_cart4_left*_t172;
-    const train5_real_t _t230 = J_theta_cart4_left*_t173;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t231 = J_theta_cart5_right*_t176;
-    const train5_real_t _t232 = J_theta_cart5_right*_t177;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t233 = J_theta_cart5_left*_t180;
-    const train5_real_t _t234 = J_theta_cart5_left*_t181;
-    const train5_real_t _t235 = _t134*_t138 + _t136*_t140 + _t144*_t215 + _t148*_t217 + _t152*_t219
-            + _t156*_t221 + _t160*_t223 + _t164*_t225 + _t168*_t227 + _t172*_t229 + _t176*_t231
-            + _t180*_t233 + _t202 + _t205*_t53 + _t207*_t59 + _t209*_t70 + _t211*_t84 + _t213*_t99;
-    const train5_real_t _t236 = _t134*_t139 + _t136*_t141 + _t144*_t216 + _t148*_t218 + _t152*_t220
-            + _t156*_t222 + _t160*_t224 + _t164*_t226 + _t168*_t228 + _t172*_t230 + _t176*_t232
-            + _t180*_t234 + _t203 + _t206*_t53 + _t208*_t59 + _t210*_t70 + _t212*_t84 + _t214*_t99;
-    const train5_real_t _t237 = _t107*_t214 + _t135*_t139 + _t137*_t141 + _t145*_t216 + _t149*_t218
-            + _t153*_t220 + _t157*_t222 + _t161*_t224 + _t165*_t226 + _t169*_t228 + _t173*_t230
-            + _t177*_t232 + _t181*_t234 + _t204 + _t206*_t55 + _t208*_t64 + _t210*_t77 + _t212*_t91;
-    const train5_real_t _t238 = _t120*_t236 + _t132*_t235;
-    const train5_real_t _t239 = _t121*_t236 + _t133*_t235;
-    const train5_real_t _t240 = _t120*_t237 + _t132*_t236;
-    const train5_real_t _t241 = _t121*_t237 + _t133*_t236;
-    const train5_real_t _t242 = _t120*_t240 + _t132*_t238;
-    const train5_real_t _t243 = _t120*_t241 + _t132*_t239;
-    const train5_real_t _t244 = _t121*_t241 + _t133*_t239;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
+    const train5_real_t J_x_tractor = p->J_x_tractor;
+    const train5_real_t _t170 = J_theta_cart2_left*_t140*_t140 + J_theta_cart2_right*_t139*_t139
+            + J_theta_cart3_left*_t143*_t143 + J_theta_cart3_right*_t142*_t142
+            + J_theta_cart4_left*_t146*_t146 + J_theta_cart4_right*_t145*_t145
+            + J_theta_cart5_left*_t151*_t151 + J_theta_cart5_right*_t150*_t150
+            + J_theta_cart_left*_t137*_t137 + J_theta_cart_right*_t136*_t136 + J_theta_left*_t3*_t3
+            + J_theta_right*_t2*_t2 + J_x_tractor;
+    const train5_real_t J_theta_cart = p->J_theta_cart;
+    const train5_real_t _t171 = J_theta_cart*_t48*_t48 + TRAIN5_LIT(2.0)*_t168*_t48 + _t170;
+    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
+    const train5_real_t _t172 = J_theta_cart2*_t56*_t56 + _t171 + _t50*_t56 + _t53*_t56
+            + _t56*(_t50 + _t53);
+    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
+    const train5_real_t _t173 = J_theta_cart3*_t64*_t64 + _t172 + _t58*_t64 + _t61*_t64
+            + _t64*(_t58 + _t61);
+    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
+    const train5_real_t _t174 = J_theta_cart4*_t72*_t72 + _t173 + _t66*_t72 + _t69*_t72
+            + _t72*(_t66 + _t69);
+    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
+    const train5_real_t _t175 = J_theta_cart5*_t149*_t149 + _t149*_t74 + _t149*_t77
+            + _t149*(_t74 + _t77) + _t174;
+    const train5_real_t _t176 = J_theta_cart2_left*_t140*_t156 + J_theta_cart2_right*_t139*_t155
+            + J_theta_cart3_left*_t143*_t159 + J_theta_cart3_right*_t142*_t158
+            + J_theta_cart4_left*_t146*_t162 + J_theta_cart4_right*_t145*_t161
+            + J_theta_cart5_left*_t151*_t167 + J_theta_cart5_right*_t150*_t166
+            + J_theta_cart_left*_t137*_t153 + J_theta_cart_right*_t136*_t152
+            + J_theta_left*_t134*_t3 + J_theta_right*_t133*_t2;
+    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const train5_real_t _t177 = K_theta_tractor_x_tractor_2 + _t176;
+    const train5_real_t _t178 = J_theta_cart*_t48*_t79 + _t168*_t79 - TRAIN5_LIT(0.3)*_t169*_t48
+            + _t177;
+    const train5_real_t _t179 = J_theta_cart2*_t56*_t86 + _t178 + _t50*_t86 + _t53*_t86 + _t56*_t84;
+    const train5_real_t _t180 = J_theta_cart3*_t64*_t93 + _t179 + _t58*_t93 + _t61*_t93 + _t64*_t91;
+    const train5_real_t _t181 = J_theta_cart4*_t100*_t72 + _t100*_t66 + _t100*_t69 + _t180
+            + _t72*_t98;
+    const train5_real_t _t182 = J_theta_cart5*_t149*_t165 + _t105*_t149 + _t165*_t74 + _t165*_t77
+            + _t181;
+    const train5_real_t _t183 = J_theta_cart2_left*_t156*_t156 + J_theta_cart2_right*_t155*_t155
+            + J_theta_cart3_left*_t159*_t159 + J_theta_cart3_right*_t158*_t158
+            + J_theta_cart4_left*_t162*_t162 + J_theta_cart4_right*_t161*_t161
+            + J_theta_cart5_left*_t167*_t167 + J_theta_cart5_right*_t166*_t166
+            + J_theta_cart_left*_t153*_t153 + J_theta_cart_right*_t152*_t152
+            + J_theta_left*_t134*_t134 + J_theta_right*_t133*_t133;
+    const train5_real_t J_theta_tractor = p->J_theta_tractor;
+    const train5_real_t _t184 = J_theta_tractor + _t183;
+    const train5_real_t _t185 = J_theta_cart*_t79*_t79 - TRAIN5_LIT(0.6)*_t169*_t79 + _t184;
+    const train5_real_t _t186 = J_theta_cart2*_t86*_t86 + _t185 + _t81*_t86 + _t83*_t86 + _t84*_t86;
+    const train5_real_t _t187 = J_theta_cart3*_t93*_t93 + _t186 + _t88*_t93 + _t90*_t93 + _t91*_t93;
+    const train5_real_t _t188 = J_theta_cart4*_t100*_t100 + _t100*_t95 + _t100*_t97 + _t100*_t98
+            + _t187;
+    const train5_real_t _t189 = J_theta_cart5*_t165*_t165 + _t102*_t165 + _t104*_t165 + _t105*_t165
+            + _t188;
+    const train5_real_t _t190 = _t109*_t182 + _t111*_t175;
+    const train5_real_t _t191 = _t110*_t182 + _t112*_t175;
+    const train5_real_t _t192 = _t109*_t189 + _t111*_t182;
+    const train5_real_t _t193 = _t110*_t189 + _t112*_t182;
+    const train5_real_t _t194 = _t109*_t192 + _t111*_t190;
+    const train5_real_t _t195 = _t109*_t193 + _t111*_t191;
+    const train5_real_t _t196 = _t110*_t193 + _t112*_t191;
     const train5_real_t up0 = u_prev[0];
     const train5_real_t up1 = u_prev[1];
-    H1hat[0] = -_t118*_t242 - _t119*_t243 + up0;
-    H1hat[1] = -_t118*_t243 - _t119*_t244 + up1;
+    H1hat[0] = -_t107*_t194 - _t108*_t195 + up0;
+    H1hat[1] = -_t107*_t195 - _t108*_t196 + up1;
 }
 
 /* train5_minimal_tde_mhat: documented in train5_laws.h.
@@ -381,7 +328,7 @@ void train5_minimal_tde_mhat(const train5_params_t *p, const train5_real_t *mhat
 }
 
 /* train5_minimal_minv_norm: documented in train5_laws.h.
-   operations after CSE: 254 add, 385 mul, 13 div, 10 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 174 add, 373 mul, 7 div, 10 sin/cos, 1 sqrt, 1 fabs */
 void train5_minimal_minv_norm(const train5_params_t *p, const train5_real_t *q, train5_real_t *norm)
 {
     const train5_real_t theta_tractor = q[2];
@@ -390,316 +337,270 @@ void train5_minimal_minv_norm(const train5_params_t *p, const train5_real_t *q, 
     const train5_real_t _t1 = _t0 + theta_cart;
     const train5_real_t _t2 = TRAIN5_SIN_BOUNDED(_t1);
     const train5_real_t _t3 = TRAIN5_COS_BOUNDED(_t1);
-    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t theta_cart2 = q[4];
-    const train5_real_t _t5 = _t0 + theta_cart2;
-    const train5_real_t _t6 = TRAIN5_SIN_BOUNDED(_t5);
-    const train5_real_t _t7 = TRAIN5_COS_BOUNDED(_t5);
-    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
-    const train5_real_t _t11 = _t10*_t7;
-    const train5_real_t theta_cart3 = q[5];
-    const train5_real_t _t12 = _t0 + theta_cart3;
-    const train5_real_t _t13 = TRAIN5_SIN_BOUNDED(_t12);
-    const train5_real_t _t14 = TRAIN5_COS_BOUNDED(_t12);
-    const train5_real_t _t15 = TRAIN5_LIT(0.3)*_t14;
-    const train5_real_t _t16 = _t10*_t14;
-    const train5_real_t _t17 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t18 = TRAIN5_LIT(0.85)*_t7;
-    const train5_real_t _t19 = _t14*_t18;
-    const train5_real_t theta_cart4 = q[6];
-    const train5_real_t _t20 = _t0 + theta_cart4;
-    const train5_real_t _t21 = TRAIN5_SIN_BOUNDED(_t20);
-    const train5_real_t _t22 = TRAIN5_COS_BOUNDED(_t20);
-    const train5_real_t _t23 = TRAIN5_LIT(0.3)*_t22;
-    const train5_real_t _t24 = _t10*_t22;
-    const train5_real_t _t25 = _t18*_t22;
-    const train5_real_t _t26 = TRAIN5_LIT(0.85)*_t13;
-    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t14;
-    const train5_real_t _t28 = _t22*_t27;
-    const train5_real_t theta_cart5 = q[7];
-    const train5_real_t _t29 = _t0 + theta_cart5;
-    const train5_real_t _t30 = TRAIN5_SIN_BOUNDED(_t29);
-    const train5_real_t _t31 = TRAIN5_COS_BOUNDED(_t29);
-    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t31;
-    const train5_real_t _t33 = _t10*_t31;
-    const train5_real_t _t34 = _t18*_t31;
-    const train5_real_t _t35 = _t27*_t31;
-    const train5_real_t _t36 = TRAIN5_LIT(0.85)*_t30;
-    const train5_real_t _t37 = TRAIN5_LIT(0.85)*_t31;
-    const train5_real_t _t38 = _t22*_t37;
-    const train5_real_t _t39 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t40 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t41 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t42 = TRAIN5_LIT(0.3)*_t21;
-    const train5_real_t _t43 = TRAIN5_LIT(0.3)*_t30;
-    const train5_real_t _t44 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t45 = TRAIN5_LIT(0.2)*_t44;
-    const train5_real_t _t46 = -TRAIN5_LIT(1.6666666666666667)*_t4;
-    const train5_real_t _t47 = TRAIN5_LIT(0.2)*_t46;
-    const train5_real_t _t48 = -_t11 - _t6*_t9;
-    const train5_real_t _t49 = -_t44*_t48 + _t6;
-    const train5_real_t _t50 = -TRAIN5_LIT(1.6666666666666667)*_t49;
-    const train5_real_t _t51 = TRAIN5_LIT(0.2)*_t50;
-    const train5_real_t _t52 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const train5_real_t _t53 = _t44*_t52;
-    const train5_real_t _t54 = -_t46*_t48 + _t8;
-    const train5_real_t _t55 = -TRAIN5_LIT(1.6666666666666667)*_t54;
-    const train5_real_t _t56 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t57 = _t40 + _t46*_t52;
-    const train5_real_t _t58 = -_t13*_t9 - _t16;
-    const train5_real_t _t59 = -_t13*_t17 - _t19;
-    const train5_real_t _t60 = _t13 - _t44*_t58 - _t50*_t59;
-    const train5_real_t _t61 = -TRAIN5_LIT(1.6666666666666667)*_t60;
-    const train5_real_t _t62 = TRAIN5_LIT(0.2)*_t61;
-    const train5_real_t _t63 = TRAIN5_LIT(0.85)*_t13*_t3 - _t14*_t9;
-    const train5_real_t _t64 = _t44*_t63;
-    const train5_real_t _t65 = TRAIN5_LIT(0.85)*_t13*_t7 - _t14*_t17;
-    const train5_real_t _t66 = _t50*_t65;
-    const train5_real_t _t67 = _t15 - _t46*_t58 - _t55*_t59;
-    const train5_real_t _t68 = -TRAIN5_LIT(1.6666666666666667)*_t67;
-    const train5_real_t _t69 = TRAIN5_LIT(0.2)*_t68;
-    const train5_real_t _t70 = _t41 + _t46*_t63 + _t55*_t65;
-    const train5_real_t _t71 = -_t21*_t9 - _t24;
-    const train5_real_t _t72 = -_t17*_t21 - _t25;
-    const train5_real_t _t73 = -_t21*_t26 - _t28;
-    const train5_real_t _t74 = _t21 - _t44*_t71 - _t50*_t72 - _t61*_t73;
-    const train5_real_t _t75 = -TRAIN5_LIT(1.6666666666666667)*_t74;
-    const train5_real_t _t76 = TRAIN5_LIT(0.2)*_t75;
-    const train5_real_t _t77 = TRAIN5_LIT(0.85)*_t21*_t3 - _t22*_t9;
-    const train5_real_t _t78 = -_t17*_t22 + TRAIN5_LIT(0.85)*_t21*_t7;
-    const train5_real_t _t79 = TRAIN5_LIT(0.85)*_t14*_t21 - _t22*_t26;
-    const train5_real_t _t80 = -_t22 + _t44*_t77 + _t50*_t78 + _t61*_t79;
-    const train5_real_t _t81 = _t23 - _t46*_t71 - _t55*_t72 - _t68*_t73;
-    const train5_real_t _t82 = -TRAIN5_LIT(1.6666666666666667)*_t81;
-    const train5_real_t _t83 = TRAIN5_LIT(0.2)*_t82;
-    const train5_real_t _t84 = _t42 + _t46*_t77 + _t55*_t78 + _t68*_t79;
-    const train5_real_t _t85 = -_t30*_t9 - _t33;
-    const train5_real_t _t86 = -_t17*_t30 - _t34;
-    const train5_real_t _t87 = -_t26*_t30 - _t35;
-    const train5_real_t _t88 = -_t21*_t36 - _t38;
-    const train5_real_t _t89 = _t30 - _t44*_t85 - _t50*_t86 - _t61*_t87 - _t75*_t88;
-    const train5_real_t _t90 = -TRAIN5_LIT(1.6666666666666667)*_t89;
-    const train5_real_t _t91 = TRAIN5_LIT(0.2)*_t90;
-    const train5_real_t _t92 = TRAIN5_LIT(0.85)*_t3*_t30 - _t31*_t9;
-    const train5_real_t _t93 = -_t17*_t31 + TRAIN5_LIT(0.85)*_t30*_t7;
-    const train5_real_t _t94 = TRAIN5_LIT(0.85)*_t14*_t30 - _t26*_t31;
-    const train5_real_t _t95 = -_t21*_t37 + TRAIN5_LIT(0.85)*_t22*_t30;
-    const train5_real_t _t96 = -_t31 + _t44*_t92 + _t50*_t93 + _t61*_t94 + _t75*_t95;
-    const train5_real_t _t97 = _t32 - _t46*_t85 - _t55*_t86 - _t68*_t87 - _t82*_t88;
-    const train5_real_t _t98 = -TRAIN5_LIT(1.6666666666666667)*_t97;
-    const train5_real_t _t99 = TRAIN5_LIT(0.2)*_t98;
-    const train5_real_t _t100 = _t43 + _t46*_t92 + _t55*_t93 + _t68*_t94 + _t82*_t95;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t _t101 = K_theta_cart2_x_tractor*_t6;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t102 = K_theta_cart2_x_tractor_2*_t7;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t _t103 = K_theta_cart3_x_tractor*_t13;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t104 = K_theta_cart3_x_tractor_2*_t14;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t _t105 = K_theta_cart4_x_tractor*_t21;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t106 = K_theta_cart4_x_tractor_2*_t22;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t _t107 = K_theta_cart5_x_tractor*_t30;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t108 = K_theta_cart5_x_tractor_2*_t31;
-    const train5_real_t _t109 = TRAIN5_LIT(0.85)*_t21;
-    const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t110 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t111 = TRAIN5_LIT(0.5)*radius_right;
     const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t112 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t113 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t114 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t115 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t116 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t _t117 = _t3 + _t45;
-    const train5_real_t _t118 = _t116*_t117;
+    const train5_real_t radius_right = p->radius_right;
+    const train5_real_t _t4 = radius_left*radius_right;
+    const train5_real_t _t5 = TRAIN5_LIT(1.0)/_t4;
+    const train5_real_t _t6 = _t5*radius_left;
+    const train5_real_t _t7 = _t5*radius_right;
     const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t119 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t _t120 = _t3 - _t45;
-    const train5_real_t _t121 = _t119*_t120;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t122 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t _t123 = _t51 - _t53 + _t7;
-    const train5_real_t _t124 = _t122*_t123;
+    const train5_real_t radius_cart_right = p->radius_cart_right;
+    const train5_real_t _t8 = radius_cart_left*radius_cart_right;
+    const train5_real_t _t9 = -TRAIN5_LIT(0.6)*_t8;
+    const train5_real_t _t10 = TRAIN5_LIT(1.0)/_t9;
+    const train5_real_t _t11 = _t10*_t8;
+    const train5_real_t _t12 = TRAIN5_LIT(0.85)*_t2;
+    const train5_real_t _t13 = TRAIN5_LIT(0.85)*_t3;
+    const train5_real_t theta_cart2 = q[4];
+    const train5_real_t _t14 = _t0 + theta_cart2;
+    const train5_real_t _t15 = TRAIN5_SIN_BOUNDED(_t14);
+    const train5_real_t _t16 = TRAIN5_COS_BOUNDED(_t14);
     const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t125 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t _t126 = -_t51 - _t53 + _t7;
-    const train5_real_t _t127 = _t125*_t126;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t128 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t _t129 = _t14 + _t62 - _t64 - _t66;
-    const train5_real_t _t130 = _t128*_t129;
+    const train5_real_t radius_cart2_right = p->radius_cart2_right;
+    const train5_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const train5_real_t _t18 = -TRAIN5_LIT(0.6)*_t17;
+    const train5_real_t _t19 = TRAIN5_LIT(1.0)/_t18;
+    const train5_real_t _t20 = _t17*_t19;
+    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t15;
+    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t16;
+    const train5_real_t theta_cart3 = q[5];
+    const train5_real_t _t23 = _t0 + theta_cart3;
+    const train5_real_t _t24 = TRAIN5_SIN_BOUNDED(_t23);
+    const train5_real_t _t25 = TRAIN5_COS_BOUNDED(_t23);
     const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t131 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t _t132 = _t14 - _t62 - _t64 - _t66;
-    const train5_real_t _t133 = _t131*_t132;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t134 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t _t135 = _t76 - _t80;
-    const train5_real_t _t136 = _t134*_t135;
+    const train5_real_t radius_cart3_right = p->radius_cart3_right;
+    const train5_real_t _t26 = radius_cart3_left*radius_cart3_right;
+    const train5_real_t _t27 = -TRAIN5_LIT(0.6)*_t26;
+    const train5_real_t _t28 = TRAIN5_LIT(1.0)/_t27;
+    const train5_real_t _t29 = _t26*_t28;
+    const train5_real_t _t30 = TRAIN5_LIT(0.85)*_t24;
+    const train5_real_t _t31 = TRAIN5_LIT(0.85)*_t25;
+    const train5_real_t theta_cart4 = q[6];
+    const train5_real_t _t32 = _t0 + theta_cart4;
+    const train5_real_t _t33 = TRAIN5_SIN_BOUNDED(_t32);
+    const train5_real_t _t34 = TRAIN5_COS_BOUNDED(_t32);
     const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t137 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t _t138 = -_t76 - _t80;
-    const train5_real_t _t139 = _t137*_t138;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t140 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t _t141 = _t91 - _t96;
-    const train5_real_t _t142 = _t140*_t141;
+    const train5_real_t radius_cart4_right = p->radius_cart4_right;
+    const train5_real_t _t35 = radius_cart4_left*radius_cart4_right;
+    const train5_real_t _t36 = -TRAIN5_LIT(0.6)*_t35;
+    const train5_real_t _t37 = TRAIN5_LIT(1.0)/_t36;
+    const train5_real_t _t38 = _t35*_t37;
+    const train5_real_t _t39 = TRAIN5_LIT(0.85)*_t33;
+    const train5_real_t _t40 = TRAIN5_LIT(0.85)*_t34;
+    const train5_real_t theta_cart5 = q[7];
+    const train5_real_t _t41 = _t0 + theta_cart5;
+    const train5_real_t _t42 = TRAIN5_SIN_BOUNDED(_t41);
+    const train5_real_t _t43 = TRAIN5_COS_BOUNDED(_t41);
     const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t143 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t144 = -_t91 - _t96;
-    const train5_real_t _t145 = _t143*_t144;
+    const train5_real_t radius_cart5_right = p->radius_cart5_right;
+    const train5_real_t _t44 = radius_cart5_left*radius_cart5_right;
+    const train5_real_t _t45 = -TRAIN5_LIT(0.6)*_t44;
+    const train5_real_t _t46 = TRAIN5_LIT(1.0)/_t45;
+    const train5_real_t _t47 = _t44*_t46;
+    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const train5_real_t _t48 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t49 = _t11*_t2;
+    const train5_real_t _t50 = _t12*_t49 + TRAIN5_LIT(1.0);
+    const train5_real_t _t51 = _t48*_t50;
+    const train5_real_t _t52 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t53 = -_t13*_t49;
+    const train5_real_t _t54 = _t52*_t53;
+    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const train5_real_t _t55 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t56 = _t15*_t50 - _t16*_t53;
+    const train5_real_t _t57 = _t20*_t56;
+    const train5_real_t _t58 = _t21*_t57 + _t50;
+    const train5_real_t _t59 = _t55*_t58;
+    const train5_real_t _t60 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t61 = -_t22*_t57 + _t53;
+    const train5_real_t _t62 = _t60*_t61;
+    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
+    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
+    const train5_real_t _t63 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t64 = _t24*_t58 - _t25*_t61;
+    const train5_real_t _t65 = _t29*_t64;
+    const train5_real_t _t66 = _t30*_t65 + _t58;
+    const train5_real_t _t67 = _t63*_t66;
+    const train5_real_t _t68 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t69 = -_t31*_t65 + _t61;
+    const train5_real_t _t70 = _t68*_t69;
+    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
+    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
+    const train5_real_t _t71 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t72 = _t33*_t66 - _t34*_t69;
+    const train5_real_t _t73 = _t38*_t72;
+    const train5_real_t _t74 = _t39*_t73 + _t66;
+    const train5_real_t _t75 = _t71*_t74;
+    const train5_real_t _t76 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t77 = -_t40*_t73 + _t69;
+    const train5_real_t _t78 = _t76*_t77;
+    const train5_real_t _t79 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t80 = -_t11*_t79;
+    const train5_real_t _t81 = _t12*_t80;
+    const train5_real_t _t82 = _t48*_t81;
+    const train5_real_t _t83 = -_t13*_t80 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t84 = _t52*_t83;
+    const train5_real_t _t85 = _t82 + _t84;
+    const train5_real_t _t86 = _t15*_t81 - _t16*_t83;
+    const train5_real_t _t87 = _t20*_t86;
+    const train5_real_t _t88 = _t21*_t87 + _t81;
+    const train5_real_t _t89 = _t55*_t88;
+    const train5_real_t _t90 = -_t22*_t87 + _t83;
+    const train5_real_t _t91 = _t60*_t90;
+    const train5_real_t _t92 = _t89 + _t91;
+    const train5_real_t _t93 = _t24*_t88 - _t25*_t90;
+    const train5_real_t _t94 = _t29*_t93;
+    const train5_real_t _t95 = _t30*_t94 + _t88;
+    const train5_real_t _t96 = _t63*_t95;
+    const train5_real_t _t97 = -_t31*_t94 + _t90;
+    const train5_real_t _t98 = _t68*_t97;
+    const train5_real_t _t99 = _t96 + _t98;
+    const train5_real_t _t100 = _t33*_t95 - _t34*_t97;
+    const train5_real_t _t101 = _t100*_t38;
+    const train5_real_t _t102 = _t101*_t39 + _t95;
+    const train5_real_t _t103 = _t102*_t71;
+    const train5_real_t _t104 = -_t101*_t40 + _t97;
+    const train5_real_t _t105 = _t104*_t76;
+    const train5_real_t _t106 = _t103 + _t105;
+    const train5_real_t _t107 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t108 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t109 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t110 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t111 = _t42*_t74 - _t43*_t77;
+    const train5_real_t _t112 = _t111*_t47;
     const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t146 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t147 = _t101 + _t102;
-    const train5_real_t _t148 = _t103 + _t104;
-    const train5_real_t _t149 = _t105 + _t106;
-    const train5_real_t _t150 = _t107 + _t108;
-    const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t151 = J_x_tractor + _t146*_t44 + _t147*_t50 + _t148*_t61 + _t149*_t75
-            + _t150*_t90;
-    const train5_real_t _t152 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
-            + _t101*_t9 + _t102*_t9;
-    const train5_real_t _t153 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
-            + _t103*_t9 + _t104*_t9;
-    const train5_real_t _t154 = K_theta_cart4_x_tractor*_t24 - K_theta_cart4_x_tractor_2*_t10*_t21
-            + _t105*_t9 + _t106*_t9;
-    const train5_real_t _t155 = K_theta_cart5_x_tractor*_t33 - K_theta_cart5_x_tractor_2*_t10*_t30
-            + _t107*_t9 + _t108*_t9;
-    const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t156 = J_theta_cart*_t44 + _t146 + _t152*_t50 + _t153*_t61 + _t154*_t75
-            + _t155*_t90;
-    const train5_real_t _t157 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t13*_t18
-            + _t103*_t17 + _t104*_t17;
-    const train5_real_t _t158 = K_theta_cart4_x_tractor*_t25 - K_theta_cart4_x_tractor_2*_t18*_t21
-            + _t105*_t17 + _t106*_t17;
-    const train5_real_t _t159 = K_theta_cart5_x_tractor*_t34 - K_theta_cart5_x_tractor_2*_t18*_t30
-            + _t107*_t17 + _t108*_t17;
-    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t160 = J_theta_cart2*_t50 + _t147 + _t152*_t44 + _t157*_t61 + _t158*_t75
-            + _t159*_t90;
-    const train5_real_t _t161 = K_theta_cart4_x_tractor*_t28 - K_theta_cart4_x_tractor_2*_t21*_t27
-            + _t105*_t26 + _t106*_t26;
-    const train5_real_t _t162 = K_theta_cart5_x_tractor*_t35 - K_theta_cart5_x_tractor_2*_t27*_t30
-            + _t107*_t26 + _t108*_t26;
-    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t163 = J_theta_cart3*_t61 + _t148 + _t153*_t44 + _t157*_t50 + _t161*_t75
-            + _t162*_t90;
-    const train5_real_t _t164 = K_theta_cart5_x_tractor*_t38 - K_theta_cart5_x_tractor_2*_t22*_t36
-            + _t107*_t109 + _t108*_t109;
-    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t165 = J_theta_cart4*_t75 + _t149 + _t154*_t44 + _t158*_t50 + _t161*_t61
-            + _t164*_t90;
-    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t166 = J_theta_cart5*_t90 + _t150 + _t155*_t44 + _t159*_t50 + _t162*_t61
-            + _t164*_t75;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t167 = J_theta_right*_t114;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t168 = J_theta_left*_t115;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t169 = J_theta_cart_right*_t118;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t170 = J_theta_cart_left*_t121;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t171 = J_theta_cart2_right*_t124;
+    const train5_real_t _t113 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t114 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t115 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t116 = _t10*(_t114*_t2 + _t115*_t3);
+    const train5_real_t _t117 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t118 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t119 = _t10*(_t117*_t2 + _t118*_t3);
+    const train5_real_t _t120 = _t15*_t53 + _t16*_t50;
+    const train5_real_t _t121 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t123 = _t19*(_t120*_t122 + _t121*_t56);
+    const train5_real_t _t124 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t125 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t126 = _t19*(_t120*_t125 + _t124*_t56);
+    const train5_real_t _t127 = _t24*_t61 + _t25*_t58;
+    const train5_real_t _t128 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t129 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t130 = _t28*(_t127*_t129 + _t128*_t64);
+    const train5_real_t _t131 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t132 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t133 = _t28*(_t127*_t132 + _t131*_t64);
+    const train5_real_t _t134 = _t33*_t69 + _t34*_t66;
+    const train5_real_t _t135 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t136 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t137 = _t37*(_t134*_t136 + _t135*_t72);
+    const train5_real_t _t138 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t139 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t140 = _t37*(_t134*_t139 + _t138*_t72);
+    const train5_real_t _t141 = _t42*_t77 + _t43*_t74;
+    const train5_real_t _t142 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t143 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t144 = _t46*(_t111*_t142 + _t141*_t143);
+    const train5_real_t _t145 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t146 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t147 = _t46*(_t111*_t145 + _t141*_t146);
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t172 = J_theta_cart2_left*_t127;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t173 = J_theta_cart3_right*_t130;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t174 = J_theta_cart3_left*_t133;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t175 = J_theta_cart4_right*_t136;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t176 = J_theta_cart4_left*_t139;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t177 = J_theta_cart5_right*_t142;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t178 = J_theta_cart5_left*_t145;
-    const train5_real_t _t179 = _t114*_t167 + _t115*_t168 + _t118*_t169 + _t121*_t170 + _t124*_t171
-            + _t127*_t172 + _t130*_t173 + _t133*_t174 + _t136*_t175 + _t139*_t176 + _t142*_t177
-            + _t145*_t178 + _t151 + _t156*_t44 + _t160*_t50 + _t163*_t61 + _t165*_t75 + _t166*_t90;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
+    const train5_real_t J_x_tractor = p->J_x_tractor;
+    const train5_real_t _t148 = J_theta_cart2_left*_t126*_t126 + J_theta_cart2_right*_t123*_t123
+            + J_theta_cart3_left*_t133*_t133 + J_theta_cart3_right*_t130*_t130
+            + J_theta_cart4_left*_t140*_t140 + J_theta_cart4_right*_t137*_t137
+            + J_theta_cart5_left*_t147*_t147 + J_theta_cart5_right*_t144*_t144
+            + J_theta_cart_left*_t119*_t119 + J_theta_cart_right*_t116*_t116 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const train5_real_t J_theta_cart = p->J_theta_cart;
+    const train5_real_t _t149 = J_theta_cart*_t49*_t49 + TRAIN5_LIT(2.0)*_t113*_t49 + _t148;
+    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
+    const train5_real_t _t150 = J_theta_cart2*_t57*_t57 + _t149 + _t51*_t57 + _t54*_t57
+            + _t57*(_t51 + _t54);
+    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
+    const train5_real_t _t151 = J_theta_cart3*_t65*_t65 + _t150 + _t59*_t65 + _t62*_t65
+            + _t65*(_t59 + _t62);
+    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
+    const train5_real_t _t152 = J_theta_cart4*_t73*_t73 + _t151 + _t67*_t73 + _t70*_t73
+            + _t73*(_t67 + _t70);
+    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
+    const train5_real_t _t153 = J_theta_cart5*_t112*_t112 + _t112*_t75 + _t112*_t78
+            + _t112*(_t75 + _t78) + _t152;
+    const train5_real_t _t154 = _t102*_t42 - _t104*_t43;
+    const train5_real_t _t155 = _t154*_t47;
+    const train5_real_t _t156 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const train5_real_t _t157 = TRAIN5_LIT(0.207)*_t6;
+    const train5_real_t _t158 = -TRAIN5_LIT(0.207)*_t7;
+    const train5_real_t _t159 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t160 = _t10*(-_t114*_t79 - _t115*_t159);
+    const train5_real_t _t161 = _t10*(-_t117*_t79 - _t118*_t159);
+    const train5_real_t _t162 = _t15*_t83 + _t16*_t81;
+    const train5_real_t _t163 = _t19*(_t121*_t86 + _t122*_t162);
+    const train5_real_t _t164 = _t19*(_t124*_t86 + _t125*_t162);
+    const train5_real_t _t165 = _t24*_t90 + _t25*_t88;
+    const train5_real_t _t166 = _t28*(_t128*_t93 + _t129*_t165);
+    const train5_real_t _t167 = _t28*(_t131*_t93 + _t132*_t165);
+    const train5_real_t _t168 = _t33*_t97 + _t34*_t95;
+    const train5_real_t _t169 = _t37*(_t100*_t135 + _t136*_t168);
+    const train5_real_t _t170 = _t37*(_t100*_t138 + _t139*_t168);
+    const train5_real_t _t171 = _t102*_t43 + _t104*_t42;
+    const train5_real_t _t172 = _t46*(_t142*_t154 + _t143*_t171);
+    const train5_real_t _t173 = _t46*(_t145*_t154 + _t146*_t171);
+    const train5_real_t _t174 = J_theta_cart2_left*_t126*_t164 + J_theta_cart2_right*_t123*_t163
+            + J_theta_cart3_left*_t133*_t167 + J_theta_cart3_right*_t130*_t166
+            + J_theta_cart4_left*_t140*_t170 + J_theta_cart4_right*_t137*_t169
+            + J_theta_cart5_left*_t147*_t173 + J_theta_cart5_right*_t144*_t172
+            + J_theta_cart_left*_t119*_t161 + J_theta_cart_right*_t116*_t160
+            + J_theta_left*_t158*_t7 + J_theta_right*_t157*_t6;
     const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t180 = K_theta_tractor_x_tractor_2 + _t146*_t46 + _t147*_t55 + _t148*_t68
-            + _t149*_t82 + _t150*_t98;
-    const train5_real_t _t181 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t39;
-    const train5_real_t _t182 = J_theta_cart*_t46 + _t152*_t55 + _t153*_t68 + _t154*_t82
-            + _t155*_t98 + _t181;
-    const train5_real_t _t183 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t40;
-    const train5_real_t _t184 = J_theta_cart2*_t55 + _t152*_t46 + _t157*_t68 + _t158*_t82
-            + _t159*_t98 + _t183;
-    const train5_real_t _t185 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t41;
-    const train5_real_t _t186 = J_theta_cart3*_t68 + _t153*_t46 + _t157*_t55 + _t161*_t82
-            + _t162*_t98 + _t185;
-    const train5_real_t _t187 = K_theta_cart4_x_tractor*_t23 - K_theta_cart4_x_tractor_2*_t42;
-    const train5_real_t _t188 = J_theta_cart4*_t82 + _t154*_t46 + _t158*_t55 + _t161*_t68
-            + _t164*_t98 + _t187;
-    const train5_real_t _t189 = K_theta_cart5_x_tractor*_t32 - K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t190 = J_theta_cart5*_t98 + _t155*_t46 + _t159*_t55 + _t162*_t68
-            + _t164*_t82 + _t189;
-    const train5_real_t _t191 = TRAIN5_LIT(0.207)*_t114;
-    const train5_real_t _t192 = J_theta_right*_t191;
-    const train5_real_t _t193 = -TRAIN5_LIT(0.207)*_t115;
-    const train5_real_t _t194 = J_theta_left*_t193;
-    const train5_real_t _t195 = -_t39 + _t47;
-    const train5_real_t _t196 = _t116*_t195;
-    const train5_real_t _t197 = J_theta_cart_right*_t196;
-    const train5_real_t _t198 = -_t39 - _t47;
-    const train5_real_t _t199 = _t119*_t198;
-    const train5_real_t _t200 = J_theta_cart_left*_t199;
-    const train5_real_t _t201 = _t56 - _t57;
-    const train5_real_t _t202 = _t122*_t201;
-    const train5_real_t _t203 = J_theta_cart2_right*_t202;
-    const train5_real_t _t204 = -_t56 - _t57;
-    const train5_real_t _t205 = _t125*_t204;
-    const train5_real_t _t206 = J_theta_cart2_left*_t205;
-    const train5_real_t _t207 = _t69 - _t70;
-    const train5_real_t _t208 = _t128*_t207;
-    const train5_real_t _t209 = J_theta_cart3_right*_t208;
-    const train5_real_t _t210 = -_t69 - _t70;
-    const train5_real_t _t211 = _t131*_t210;
-    const train5_real_t _t212 = J_theta_cart3_left*_t211;
-    const train5_real_t _t213 = _t83 - _t84;
-    const train5_real_t _t214 = _t134*_t213;
-    const train5_real_t _t215 = J_theta_cart4_right*_t214;
-    const train5_real_t _t216 = -_t83 - _t84;
-    const train5_real_t _t217 = _t137*_t216;
-    const train5_real_t _t218 = J_theta_cart4_left*_t217;
-    const train5_real_t _t219 = -_t100 + _t99;
-    const train5_real_t _t220 = _t140*_t219;
-    const train5_real_t _t221 = J_theta_cart5_right*_t220;
-    const train5_real_t _t222 = -_t100 - _t99;
-    const train5_real_t _t223 = _t143*_t222;
-    const train5_real_t _t224 = J_theta_cart5_left*_t223;
-    const train5_real_t _t225 = _t114*_t192 + _t115*_t194 + _t118*_t197 + _t121*_t200 + _t124*_t203
-            + _t127*_t206 + _t130*_t209 + _t133*_t212 + _t136*_t215 + _t139*_t218 + _t142*_t221
-            + _t145*_t224 + _t180 + _t182*_t44 + _t184*_t50 + _t186*_t61 + _t188*_t75 + _t190*_t90;
-    const train5_real_t _t226 = _t112*_t225 + _t113*_t179;
+    const train5_real_t _t175 = K_theta_tractor_x_tractor_2 + _t174;
+    const train5_real_t _t176 = J_theta_cart*_t49*_t80 + _t113*_t80 - TRAIN5_LIT(0.3)*_t156*_t49
+            + _t175;
+    const train5_real_t _t177 = J_theta_cart2*_t57*_t87 + _t176 + _t51*_t87 + _t54*_t87 + _t57*_t85;
+    const train5_real_t _t178 = J_theta_cart3*_t65*_t94 + _t177 + _t59*_t94 + _t62*_t94 + _t65*_t92;
+    const train5_real_t _t179 = J_theta_cart4*_t101*_t73 + _t101*_t67 + _t101*_t70 + _t178
+            + _t73*_t99;
+    const train5_real_t _t180 = J_theta_cart5*_t112*_t155 + _t106*_t112 + _t155*_t75 + _t155*_t78
+            + _t179;
+    const train5_real_t _t181 = _t109*_t180 + _t110*_t153;
+    const train5_real_t _t182 = J_theta_cart2_left*_t164*_t164 + J_theta_cart2_right*_t163*_t163
+            + J_theta_cart3_left*_t167*_t167 + J_theta_cart3_right*_t166*_t166
+            + J_theta_cart4_left*_t170*_t170 + J_theta_cart4_right*_t169*_t169
+            + J_theta_cart5_left*_t173*_t173 + J_theta_cart5_right*_t172*_t172
+            + J_theta_cart_left*_t161*_t161 + J_theta_cart_right*_t160*_t160
+            + J_theta_left*_t158*_t158 + J_theta_right*_t157*_t157;
     const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t227 = J_theta_tractor + _t181*_t46 + _t183*_t55 + _t185*_t68 + _t187*_t82
-            + _t189*_t98;
-    const train5_real_t _t228 = _t182*_t46 + _t184*_t55 + _t186*_t68 + _t188*_t82 + _t190*_t98
-            + _t191*_t192 + _t193*_t194 + _t196*_t197 + _t199*_t200 + _t202*_t203 + _t205*_t206
-            + _t208*_t209 + _t211*_t212 + _t214*_t215 + _t217*_t218 + _t220*_t221 + _t223*_t224
-            + _t227;
-    const train5_real_t _t229 = _t112*_t228 + _t113*_t225;
-    const train5_real_t _t230 = _t110*_t229 + _t111*_t226;
-    const train5_real_t _t231 = _t230*_t230;
-    const train5_real_t _t232 = _t110*_t225 + _t111*_t179;
-    const train5_real_t _t233 = _t110*_t228 + _t111*_t225;
-    const train5_real_t _t234 = _t110*_t233 + _t111*_t232;
-    const train5_real_t _t235 = _t112*_t229 + _t113*_t226;
-    norm[0] = TRAIN5_SQRT(TRAIN5_LIT(2.0)*_t231 + _t234*_t234
-            + _t235*_t235)*(TRAIN5_LIT(1.0)/TRAIN5_FABS(_t231 - _t234*_t235));
+    const train5_real_t _t183 = J_theta_tractor + _t182;
+    const train5_real_t _t184 = J_theta_cart*_t80*_t80 - TRAIN5_LIT(0.6)*_t156*_t80 + _t183;
+    const train5_real_t _t185 = J_theta_cart2*_t87*_t87 + _t184 + _t82*_t87 + _t84*_t87 + _t85*_t87;
+    const train5_real_t _t186 = J_theta_cart3*_t94*_t94 + _t185 + _t89*_t94 + _t91*_t94 + _t92*_t94;
+    const train5_real_t _t187 = J_theta_cart4*_t101*_t101 + _t101*_t96 + _t101*_t98 + _t101*_t99
+            + _t186;
+    const train5_real_t _t188 = J_theta_cart5*_t155*_t155 + _t103*_t155 + _t105*_t155 + _t106*_t155
+            + _t187;
+    const train5_real_t _t189 = _t109*_t188 + _t110*_t180;
+    const train5_real_t _t190 = _t107*_t189 + _t108*_t181;
+    const train5_real_t _t191 = _t190*_t190;
+    const train5_real_t _t192 = _t107*_t180 + _t108*_t153;
+    const train5_real_t _t193 = _t107*_t188 + _t108*_t180;
+    const train5_real_t _t194 = _t107*_t193 + _t108*_t192;
+    const train5_real_t _t195 = _t109*_t189 + _t110*_t181;
+    norm[0] = TRAIN5_SQRT(TRAIN5_LIT(2.0)*_t191 + _t194*_t194
+            + _t195*_t195)*(TRAIN5_LIT(1.0)/TRAIN5_FABS(_t191 - _t194*_t195));
 }
 
 /* train5_minimal_minv_norm_mhat: documented in train5_laws.h.
@@ -711,10 +612,10 @@ void train5_minimal_minv_norm_mhat(const train5_params_t *p, const train5_real_t
 }
 
 /* train5_minimal_mhat: documented in train5_laws.h.
-   operations after CSE: 251 add, 379 mul, 12 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 171 add, 367 mul, 6 div, 10 sin/cos, 0 sqrt */
 void train5_minimal_mhat(const train5_params_t *p, const train5_real_t *q, train5_real_t *M)
 {
-    train5_real_t kept[45];
+    train5_real_t kept[64];
     train5_k_minimal_mhat_keep(p, kept);
     train5_k_minimal_mhat(kept, q, M);
 }
@@ -782,7 +683,7 @@ void train5_minimal_omega_difference(const train5_real_t *newer, const train5_re
 }
 
 /* train5_minimal_tdc_law: documented in train5_laws.h.
-   operations after CSE: 259 add, 387 mul, 12 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 179 add, 375 mul, 6 div, 10 sin/cos, 0 sqrt */
 void train5_minimal_tdc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *e, const train5_real_t *edot, const train5_real_t *qddot_des,
     const train5_real_t *k1, const train5_real_t *k2, const train5_real_t *p12,
@@ -796,328 +697,283 @@ void train5_minimal_tdc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t _t1 = _t0 + theta_cart;
     const train5_real_t _t2 = TRAIN5_SIN_BOUNDED(_t1);
     const train5_real_t _t3 = TRAIN5_COS_BOUNDED(_t1);
-    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t radius_left = p->radius_left;
+    const train5_real_t radius_right = p->radius_right;
+    const train5_real_t _t4 = radius_left*radius_right;
+    const train5_real_t _t5 = TRAIN5_LIT(1.0)/_t4;
+    const train5_real_t _t6 = _t5*radius_left;
+    const train5_real_t _t7 = _t5*radius_right;
+    const train5_real_t radius_cart_left = p->radius_cart_left;
+    const train5_real_t radius_cart_right = p->radius_cart_right;
+    const train5_real_t _t8 = radius_cart_left*radius_cart_right;
+    const train5_real_t _t9 = -TRAIN5_LIT(0.6)*_t8;
+    const train5_real_t _t10 = TRAIN5_LIT(1.0)/_t9;
+    const train5_real_t _t11 = _t10*_t8;
+    const train5_real_t _t12 = TRAIN5_LIT(0.85)*_t2;
+    const train5_real_t _t13 = TRAIN5_LIT(0.85)*_t3;
     const train5_real_t theta_cart2 = q[4];
-    const train5_real_t _t5 = _t0 + theta_cart2;
-    const train5_real_t _t6 = TRAIN5_SIN_BOUNDED(_t5);
-    const train5_real_t _t7 = TRAIN5_COS_BOUNDED(_t5);
-    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
-    const train5_real_t _t11 = _t10*_t7;
+    const train5_real_t _t14 = _t0 + theta_cart2;
+    const train5_real_t _t15 = TRAIN5_SIN_BOUNDED(_t14);
+    const train5_real_t _t16 = TRAIN5_COS_BOUNDED(_t14);
+    const train5_real_t radius_cart2_left = p->radius_cart2_left;
+    const train5_real_t radius_cart2_right = p->radius_cart2_right;
+    const train5_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const train5_real_t _t18 = -TRAIN5_LIT(0.6)*_t17;
+    const train5_real_t _t19 = TRAIN5_LIT(1.0)/_t18;
+    const train5_real_t _t20 = _t17*_t19;
+    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t15;
+    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t16;
     const train5_real_t theta_cart3 = q[5];
-    const train5_real_t _t12 = _t0 + theta_cart3;
-    const train5_real_t _t13 = TRAIN5_SIN_BOUNDED(_t12);
-    const train5_real_t _t14 = TRAIN5_COS_BOUNDED(_t12);
-    const train5_real_t _t15 = TRAIN5_LIT(0.3)*_t14;
-    const train5_real_t _t16 = _t10*_t14;
-    const train5_real_t _t17 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t18 = TRAIN5_LIT(0.85)*_t7;
-    const train5_real_t _t19 = _t14*_t18;
+    const train5_real_t _t23 = _t0 + theta_cart3;
+    const train5_real_t _t24 = TRAIN5_SIN_BOUNDED(_t23);
+    const train5_real_t _t25 = TRAIN5_COS_BOUNDED(_t23);
+    const train5_real_t radius_cart3_left = p->radius_cart3_left;
+    const train5_real_t radius_cart3_right = p->radius_cart3_right;
+    const train5_real_t _t26 = radius_cart3_left*radius_cart3_right;
+    const train5_real_t _t27 = -TRAIN5_LIT(0.6)*_t26;
+    const train5_real_t _t28 = TRAIN5_LIT(1.0)/_t27;
+    const train5_real_t _t29 = _t26*_t28;
+    const train5_real_t _t30 = TRAIN5_LIT(0.85)*_t24;
+    const train5_real_t _t31 = TRAIN5_LIT(0.85)*_t25;
     const train5_real_t theta_cart4 = q[6];
-    const train5_real_t _t20 = _t0 + theta_cart4;
-    const train5_real_t _t21 = TRAIN5_SIN_BOUNDED(_t20);
-    const train5_real_t _t22 = TRAIN5_COS_BOUNDED(_t20);
-    const train5_real_t _t23 = TRAIN5_LIT(0.3)*_t22;
-    const train5_real_t _t24 = _t10*_t22;
-    const train5_real_t _t25 = _t18*_t22;
-    const train5_real_t _t26 = TRAIN5_LIT(0.85)*_t13;
-    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t14;
-    const train5_real_t _t28 = _t22*_t27;
+    const train5_real_t _t32 = _t0 + theta_cart4;
+    const train5_real_t _t33 = TRAIN5_SIN_BOUNDED(_t32);
+    const train5_real_t _t34 = TRAIN5_COS_BOUNDED(_t32);
+    const train5_real_t radius_cart4_left = p->radius_cart4_left;
+    const train5_real_t radius_cart4_right = p->radius_cart4_right;
+    const train5_real_t _t35 = radius_cart4_left*radius_cart4_right;
+    const train5_real_t _t36 = -TRAIN5_LIT(0.6)*_t35;
+    const train5_real_t _t37 = TRAIN5_LIT(1.0)/_t36;
+    const train5_real_t _t38 = _t35*_t37;
+    const train5_real_t _t39 = TRAIN5_LIT(0.85)*_t33;
+    const train5_real_t _t40 = TRAIN5_LIT(0.85)*_t34;
     const train5_real_t theta_cart5 = q[7];
-    const train5_real_t _t29 = _t0 + theta_cart5;
-    const train5_real_t _t30 = TRAIN5_SIN_BOUNDED(_t29);
-    const train5_real_t _t31 = TRAIN5_COS_BOUNDED(_t29);
-    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t31;
-    const train5_real_t _t33 = _t10*_t31;
-    const train5_real_t _t34 = _t18*_t31;
-    const train5_real_t _t35 = _t27*_t31;
-    const train5_real_t _t36 = TRAIN5_LIT(0.85)*_t30;
-    const train5_real_t _t37 = TRAIN5_LIT(0.85)*_t31;
-    const train5_real_t _t38 = _t22*_t37;
-    const train5_real_t _t39 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t40 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t41 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t42 = TRAIN5_LIT(0.3)*_t21;
-    const train5_real_t _t43 = TRAIN5_LIT(0.3)*_t30;
-    const train5_real_t _t44 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t45 = TRAIN5_LIT(0.2)*_t44;
-    const train5_real_t _t46 = -TRAIN5_LIT(1.6666666666666667)*_t4;
-    const train5_real_t _t47 = TRAIN5_LIT(0.2)*_t46;
-    const train5_real_t _t48 = -_t11 - _t6*_t9;
-    const train5_real_t _t49 = -_t44*_t48 + _t6;
-    const train5_real_t _t50 = -TRAIN5_LIT(1.6666666666666667)*_t49;
-    const train5_real_t _t51 = TRAIN5_LIT(0.2)*_t50;
-    const train5_real_t _t52 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const train5_real_t _t53 = _t44*_t52;
-    const train5_real_t _t54 = -_t46*_t48 + _t8;
-    const train5_real_t _t55 = -TRAIN5_LIT(1.6666666666666667)*_t54;
-    const train5_real_t _t56 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t57 = _t40 + _t46*_t52;
-    const train5_real_t _t58 = -_t13*_t9 - _t16;
-    const train5_real_t _t59 = -_t13*_t17 - _t19;
-    const train5_real_t _t60 = _t13 - _t44*_t58 - _t50*_t59;
-    const train5_real_t _t61 = -TRAIN5_LIT(1.6666666666666667)*_t60;
-    const train5_real_t _t62 = TRAIN5_LIT(0.2)*_t61;
-    const train5_real_t _t63 = TRAIN5_LIT(0.85)*_t13*_t3 - _t14*_t9;
-    const train5_real_t _t64 = _t44*_t63;
-    const train5_real_t _t65 = TRAIN5_LIT(0.85)*_t13*_t7 - _t14*_t17;
-    const train5_real_t _t66 = _t50*_t65;
-    const train5_real_t _t67 = _t15 - _t46*_t58 - _t55*_t59;
-    const train5_real_t _t68 = -TRAIN5_LIT(1.6666666666666667)*_t67;
-    const train5_real_t _t69 = TRAIN5_LIT(0.2)*_t68;
-    const train5_real_t _t70 = _t41 + _t46*_t63 + _t55*_t65;
-    const train5_real_t _t71 = -_t21*_t9 - _t24;
-    const train5_real_t _t72 = -_t17*_t21 - _t25;
-    const train5_real_t _t73 = -_t21*_t26 - _t28;
-    const train5_real_t _t74 = _t21 - _t44*_t71 - _t50*_t72 - _t61*_t73;
-    const train5_real_t _t75 = -TRAIN5_LIT(1.6666666666666667)*_t74;
-    const train5_real_t _t76 = TRAIN5_LIT(0.2)*_t75;
-    const train5_real_t _t77 = TRAIN5_LIT(0.85)*_t21*_t3 - _t22*_t9;
-    const train5_real_t _t78 = -_t17*_t22 + TRAIN5_LIT(0.85)*_t21*_t7;
-    const train5_real_t _t79 = TRAIN5_LIT(0.85)*_t14*_t21 - _t22*_t26;
-    const train5_real_t _t80 = -_t22 + _t44*_t77 + _t50*_t78 + _t61*_t79;
-    const train5_real_t _t81 = _t23 - _t46*_t71 - _t55*_t72 - _t68*_t73;
-    const train5_real_t _t82 = -TRAIN5_LIT(1.6666666666666667)*_t81;
-    const train5_real_t _t83 = TRAIN5_LIT(0.2)*_t82;
-    const train5_real_t _t84 = _t42 + _t46*_t77 + _t55*_t78 + _t68*_t79;
-    const train5_real_t _t85 = -_t30*_t9 - _t33;
-    const train5_real_t _t86 = -_t17*_t30 - _t34;
-    const train5_real_t _t87 = -_t26*_t30 - _t35;
-    const train5_real_t _t88 = -_t21*_t36 - _t38;
-    const train5_real_t _t89 = _t30 - _t44*_t85 - _t50*_t86 - _t61*_t87 - _t75*_t88;
-    const train5_real_t _t90 = -TRAIN5_LIT(1.6666666666666667)*_t89;
-    const train5_real_t _t91 = TRAIN5_LIT(0.2)*_t90;
-    const train5_real_t _t92 = TRAIN5_LIT(0.85)*_t3*_t30 - _t31*_t9;
-    const train5_real_t _t93 = -_t17*_t31 + TRAIN5_LIT(0.85)*_t30*_t7;
-    const train5_real_t _t94 = TRAIN5_LIT(0.85)*_t14*_t30 - _t26*_t31;
-    const train5_real_t _t95 = -_t21*_t37 + TRAIN5_LIT(0.85)*_t22*_t30;
-    const train5_real_t _t96 = -_t31 + _t44*_t92 + _t50*_t93 + _t61*_t94 + _t75*_t95;
-    const train5_real_t _t97 = _t32 - _t46*_t85 - _t55*_t86 - _t68*_t87 - _t82*_t88;
-    const train5_real_t _t98 = -TRAIN5_LIT(1.6666666666666667)*_t97;
-    const train5_real_t _t99 = TRAIN5_LIT(0.2)*_t98;
-    const train5_real_t _t100 = _t43 + _t46*_t92 + _t55*_t93 + _t68*_t94 + _t82*_t95;
+    const train5_real_t _t41 = _t0 + theta_cart5;
+    const train5_real_t _t42 = TRAIN5_SIN_BOUNDED(_t41);
+    const train5_real_t _t43 = TRAIN5_COS_BOUNDED(_t41);
+    const train5_real_t radius_cart5_left = p->radius_cart5_left;
+    const train5_real_t radius_cart5_right = p->radius_cart5_right;
+    const train5_real_t _t44 = radius_cart5_left*radius_cart5_right;
+    const train5_real_t _t45 = -TRAIN5_LIT(0.6)*_t44;
+    const train5_real_t _t46 = TRAIN5_LIT(1.0)/_t45;
+    const train5_real_t _t47 = _t44*_t46;
     const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t _t101 = K_theta_cart2_x_tractor*_t6;
     const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t102 = K_theta_cart2_x_tractor_2*_t7;
+    const train5_real_t _t48 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t49 = _t11*_t2;
+    const train5_real_t _t50 = _t12*_t49 + TRAIN5_LIT(1.0);
+    const train5_real_t _t51 = _t48*_t50;
+    const train5_real_t _t52 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t53 = -_t13*_t49;
+    const train5_real_t _t54 = _t52*_t53;
     const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t _t103 = K_theta_cart3_x_tractor*_t13;
     const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t104 = K_theta_cart3_x_tractor_2*_t14;
+    const train5_real_t _t55 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t56 = _t15*_t50 - _t16*_t53;
+    const train5_real_t _t57 = _t20*_t56;
+    const train5_real_t _t58 = _t21*_t57 + _t50;
+    const train5_real_t _t59 = _t55*_t58;
+    const train5_real_t _t60 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t61 = -_t22*_t57 + _t53;
+    const train5_real_t _t62 = _t60*_t61;
     const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t _t105 = K_theta_cart4_x_tractor*_t21;
     const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t106 = K_theta_cart4_x_tractor_2*_t22;
+    const train5_real_t _t63 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t64 = _t24*_t58 - _t25*_t61;
+    const train5_real_t _t65 = _t29*_t64;
+    const train5_real_t _t66 = _t30*_t65 + _t58;
+    const train5_real_t _t67 = _t63*_t66;
+    const train5_real_t _t68 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t69 = -_t31*_t65 + _t61;
+    const train5_real_t _t70 = _t68*_t69;
     const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t _t107 = K_theta_cart5_x_tractor*_t30;
     const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t108 = K_theta_cart5_x_tractor_2*_t31;
-    const train5_real_t _t109 = TRAIN5_LIT(0.85)*_t21;
+    const train5_real_t _t71 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t72 = _t33*_t66 - _t34*_t69;
+    const train5_real_t _t73 = _t38*_t72;
+    const train5_real_t _t74 = _t39*_t73 + _t66;
+    const train5_real_t _t75 = _t71*_t74;
+    const train5_real_t _t76 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t77 = -_t40*_t73 + _t69;
+    const train5_real_t _t78 = _t76*_t77;
+    const train5_real_t _t79 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t80 = -_t11*_t79;
+    const train5_real_t _t81 = _t12*_t80;
+    const train5_real_t _t82 = _t48*_t81;
+    const train5_real_t _t83 = -_t13*_t80 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t84 = _t52*_t83;
+    const train5_real_t _t85 = _t82 + _t84;
+    const train5_real_t _t86 = _t15*_t81 - _t16*_t83;
+    const train5_real_t _t87 = _t20*_t86;
+    const train5_real_t _t88 = _t21*_t87 + _t81;
+    const train5_real_t _t89 = _t55*_t88;
+    const train5_real_t _t90 = -_t22*_t87 + _t83;
+    const train5_real_t _t91 = _t60*_t90;
+    const train5_real_t _t92 = _t89 + _t91;
+    const train5_real_t _t93 = _t24*_t88 - _t25*_t90;
+    const train5_real_t _t94 = _t29*_t93;
+    const train5_real_t _t95 = _t30*_t94 + _t88;
+    const train5_real_t _t96 = _t63*_t95;
+    const train5_real_t _t97 = -_t31*_t94 + _t90;
+    const train5_real_t _t98 = _t68*_t97;
+    const train5_real_t _t99 = _t96 + _t98;
+    const train5_real_t _t100 = _t33*_t95 - _t34*_t97;
+    const train5_real_t _t101 = _t100*_t38;
+    const train5_real_t _t102 = _t101*_t39 + _t95;
+    const train5_real_t _t103 = _t102*_t71;
+    const train5_real_t _t104 = -_t101*_t40 + _t97;
+    const train5_real_t _t105 = _t104*_t76;
+    const train5_real_t _t106 = _t103 + _t105;
     const train5_real_t e0 = e[0];
     const train5_real_t edot0 = edot[0];
     const train5_real_t qdd_des0 = qddot_des[0];
     const train5_real_t k1_0 = k1[0];
     const train5_real_t k2_0 = k2[0];
-    const train5_real_t _t110 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const train5_real_t _t107 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const train5_real_t e1 = e[1];
     const train5_real_t edot1 = edot[1];
     const train5_real_t qdd_des1 = qddot_des[1];
     const train5_real_t k1_1 = k1[1];
     const train5_real_t k2_1 = k2[1];
-    const train5_real_t _t111 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t112 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t113 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t114 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t115 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t116 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t117 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t118 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t119 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t120 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t121 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t122 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t123 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t124 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t125 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t126 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t127 = TRAIN5_LIT(0.207)*_t126;
-    const train5_real_t _t128 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t129 = -TRAIN5_LIT(0.207)*_t128;
-    const train5_real_t _t130 = _t3 + _t45;
-    const train5_real_t _t131 = -_t39 + _t47;
-    const train5_real_t _t132 = _t114*_t130;
-    const train5_real_t _t133 = _t114*_t131;
-    const train5_real_t _t134 = _t3 - _t45;
-    const train5_real_t _t135 = -_t39 - _t47;
-    const train5_real_t _t136 = _t115*_t134;
-    const train5_real_t _t137 = _t115*_t135;
-    const train5_real_t _t138 = _t51 - _t53 + _t7;
-    const train5_real_t _t139 = _t56 - _t57;
-    const train5_real_t _t140 = _t116*_t138;
-    const train5_real_t _t141 = _t116*_t139;
-    const train5_real_t _t142 = -_t51 - _t53 + _t7;
-    const train5_real_t _t143 = -_t56 - _t57;
-    const train5_real_t _t144 = _t117*_t142;
-    const train5_real_t _t145 = _t117*_t143;
-    const train5_real_t _t146 = _t14 + _t62 - _t64 - _t66;
-    const train5_real_t _t147 = _t69 - _t70;
-    const train5_real_t _t148 = _t118*_t146;
-    const train5_real_t _t149 = _t118*_t147;
-    const train5_real_t _t150 = _t14 - _t62 - _t64 - _t66;
-    const train5_real_t _t151 = -_t69 - _t70;
-    const train5_real_t _t152 = _t119*_t150;
-    const train5_real_t _t153 = _t119*_t151;
-    const train5_real_t _t154 = _t76 - _t80;
-    const train5_real_t _t155 = _t83 - _t84;
-    const train5_real_t _t156 = _t120*_t154;
-    const train5_real_t _t157 = _t120*_t155;
-    const train5_real_t _t158 = -_t76 - _t80;
-    const train5_real_t _t159 = -_t83 - _t84;
-    const train5_real_t _t160 = _t121*_t158;
-    const train5_real_t _t161 = _t121*_t159;
-    const train5_real_t _t162 = _t91 - _t96;
-    const train5_real_t _t163 = -_t100 + _t99;
-    const train5_real_t _t164 = _t122*_t162;
-    const train5_real_t _t165 = _t122*_t163;
-    const train5_real_t _t166 = -_t91 - _t96;
-    const train5_real_t _t167 = -_t100 - _t99;
-    const train5_real_t _t168 = _t123*_t166;
-    const train5_real_t _t169 = _t123*_t167;
+    const train5_real_t _t108 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const train5_real_t _t109 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t110 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t111 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t112 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t113 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t114 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t115 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t116 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t117 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t118 = _t10*(_t114*_t2 + _t115*_t3);
+    const train5_real_t _t119 = _t10*(_t116*_t2 + _t117*_t3);
+    const train5_real_t _t120 = _t15*_t53 + _t16*_t50;
+    const train5_real_t _t121 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t123 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t124 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t125 = _t19*(_t120*_t122 + _t121*_t56);
+    const train5_real_t _t126 = _t19*(_t120*_t124 + _t123*_t56);
+    const train5_real_t _t127 = _t24*_t61 + _t25*_t58;
+    const train5_real_t _t128 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t129 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t130 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t131 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t132 = _t28*(_t127*_t129 + _t128*_t64);
+    const train5_real_t _t133 = _t28*(_t127*_t131 + _t130*_t64);
+    const train5_real_t _t134 = _t33*_t69 + _t34*_t66;
+    const train5_real_t _t135 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t136 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t137 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t138 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t139 = _t37*(_t134*_t136 + _t135*_t72);
+    const train5_real_t _t140 = _t37*(_t134*_t138 + _t137*_t72);
+    const train5_real_t _t141 = _t42*_t74 - _t43*_t77;
+    const train5_real_t _t142 = _t42*_t77 + _t43*_t74;
+    const train5_real_t _t143 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t144 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t145 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t146 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t147 = _t141*_t47;
+    const train5_real_t _t148 = _t46*(_t141*_t143 + _t142*_t144);
+    const train5_real_t _t149 = _t46*(_t141*_t145 + _t142*_t146);
+    const train5_real_t _t150 = TRAIN5_LIT(0.207)*_t6;
+    const train5_real_t _t151 = -TRAIN5_LIT(0.207)*_t7;
+    const train5_real_t _t152 = _t10*(-_t111*_t115 - _t114*_t79);
+    const train5_real_t _t153 = _t10*(-_t111*_t117 - _t116*_t79);
+    const train5_real_t _t154 = _t15*_t83 + _t16*_t81;
+    const train5_real_t _t155 = _t19*(_t121*_t86 + _t122*_t154);
+    const train5_real_t _t156 = _t19*(_t123*_t86 + _t124*_t154);
+    const train5_real_t _t157 = _t24*_t90 + _t25*_t88;
+    const train5_real_t _t158 = _t28*(_t128*_t93 + _t129*_t157);
+    const train5_real_t _t159 = _t28*(_t130*_t93 + _t131*_t157);
+    const train5_real_t _t160 = _t33*_t97 + _t34*_t95;
+    const train5_real_t _t161 = _t37*(_t100*_t135 + _t136*_t160);
+    const train5_real_t _t162 = _t37*(_t100*_t137 + _t138*_t160);
+    const train5_real_t _t163 = _t102*_t42 - _t104*_t43;
+    const train5_real_t _t164 = _t102*_t43 + _t104*_t42;
+    const train5_real_t _t165 = _t163*_t47;
+    const train5_real_t _t166 = _t46*(_t143*_t163 + _t144*_t164);
+    const train5_real_t _t167 = _t46*(_t145*_t163 + _t146*_t164);
     const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t170 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t171 = _t101 + _t102;
-    const train5_real_t _t172 = _t103 + _t104;
-    const train5_real_t _t173 = _t105 + _t106;
-    const train5_real_t _t174 = _t107 + _t108;
-    const train5_real_t _t175 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t39;
-    const train5_real_t _t176 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t40;
-    const train5_real_t _t177 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t41;
-    const train5_real_t _t178 = K_theta_cart4_x_tractor*_t23 - K_theta_cart4_x_tractor_2*_t42;
-    const train5_real_t _t179 = K_theta_cart5_x_tractor*_t32 - K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t180 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
-            + _t101*_t9 + _t102*_t9;
-    const train5_real_t _t181 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
-            + _t103*_t9 + _t104*_t9;
-    const train5_real_t _t182 = K_theta_cart4_x_tractor*_t24 - K_theta_cart4_x_tractor_2*_t10*_t21
-            + _t105*_t9 + _t106*_t9;
-    const train5_real_t _t183 = K_theta_cart5_x_tractor*_t33 - K_theta_cart5_x_tractor_2*_t10*_t30
-            + _t107*_t9 + _t108*_t9;
-    const train5_real_t _t184 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t13*_t18
-            + _t103*_t17 + _t104*_t17;
-    const train5_real_t _t185 = K_theta_cart4_x_tractor*_t25 - K_theta_cart4_x_tractor_2*_t18*_t21
-            + _t105*_t17 + _t106*_t17;
-    const train5_real_t _t186 = K_theta_cart5_x_tractor*_t34 - K_theta_cart5_x_tractor_2*_t18*_t30
-            + _t107*_t17 + _t108*_t17;
-    const train5_real_t _t187 = K_theta_cart4_x_tractor*_t28 - K_theta_cart4_x_tractor_2*_t21*_t27
-            + _t105*_t26 + _t106*_t26;
-    const train5_real_t _t188 = K_theta_cart5_x_tractor*_t35 - K_theta_cart5_x_tractor_2*_t27*_t30
-            + _t107*_t26 + _t108*_t26;
-    const train5_real_t _t189 = K_theta_cart5_x_tractor*_t38 - K_theta_cart5_x_tractor_2*_t22*_t36
-            + _t107*_t109 + _t108*_t109;
-    const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t190 = J_x_tractor + _t170*_t44 + _t171*_t50 + _t172*_t61 + _t173*_t75
-            + _t174*_t90;
-    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t191 = K_theta_tractor_x_tractor_2 + _t170*_t46 + _t171*_t55 + _t172*_t68
-            + _t173*_t82 + _t174*_t98;
-    const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t192 = J_theta_tractor + _t175*_t46 + _t176*_t55 + _t177*_t68 + _t178*_t82
-            + _t179*_t98;
-    const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t193 = J_theta_cart*_t44 + _t170 + _t180*_t50 + _t181*_t61 + _t182*_t75
-            + _t183*_t90;
-    const train5_real_t _t194 = J_theta_cart*_t46 + _t175 + _t180*_t55 + _t181*_t68 + _t182*_t82
-            + _t183*_t98;
-    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t195 = J_theta_cart2*_t50 + _t171 + _t180*_t44 + _t184*_t61 + _t185*_t75
-            + _t186*_t90;
-    const train5_real_t _t196 = J_theta_cart2*_t55 + _t176 + _t180*_t46 + _t184*_t68 + _t185*_t82
-            + _t186*_t98;
-    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t197 = J_theta_cart3*_t61 + _t172 + _t181*_t44 + _t184*_t50 + _t187*_t75
-            + _t188*_t90;
-    const train5_real_t _t198 = J_theta_cart3*_t68 + _t177 + _t181*_t46 + _t184*_t55 + _t187*_t82
-            + _t188*_t98;
-    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t199 = J_theta_cart4*_t75 + _t173 + _t182*_t44 + _t185*_t50 + _t187*_t61
-            + _t189*_t90;
-    const train5_real_t _t200 = J_theta_cart4*_t82 + _t178 + _t182*_t46 + _t185*_t55 + _t187*_t68
-            + _t189*_t98;
-    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t201 = J_theta_cart5*_t90 + _t174 + _t183*_t44 + _t186*_t50 + _t188*_t61
-            + _t189*_t75;
-    const train5_real_t _t202 = J_theta_cart5*_t98 + _t179 + _t183*_t46 + _t186*_t55 + _t188*_t68
-            + _t189*_t82;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t203 = J_theta_right*_t126;
-    const train5_real_t _t204 = J_theta_right*_t127;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t205 = J_theta_left*_t128;
-    const train5_real_t _t206 = J_theta_left*_t129;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t207 = J_theta_cart_right*_t132;
-    const train5_real_t _t208 = J_theta_cart_right*_t133;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t209 = J_theta_cart_left*_t136;
-    const train5_real_t _t210 = J_theta_cart_left*_t137;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t211 = J_theta_cart2_right*_t140;
-    const train5_real_t _t212 = J_theta_cart2_right*_t141;
+    const train5_real_t _t168 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t169 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t213 = J_theta_cart2_left*_t144;
-    const train5_real_t _t214 = J_theta_cart2_left*_t145;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t215 = J_theta_cart3_right*_t148;
-    const train5_real_t _t216 = J_theta_cart3_right*_t149;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t217 = J_theta_cart3_left*_t152;
-    const train5_real_t _t218 = J_theta_cart3_left*_t153;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t219 = J_theta_cart4_right*_t156;
-    const train5_real_t _t220 = J_theta_cart4_right*_t157;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t221 = J_theta_cart4_left*_t160;
-    const train5_real_t _t222 = J_theta_cart4_left*_t161;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t223 = J_theta_cart5_right*_t164;
-    const train5_real_t _t224 = J_theta_cart5_right*_t165;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t225 = J_theta_cart5_left*_t168;
-    const train5_real_t _t226 = J_theta_cart5_left*_t169;
-    const train5_real_t _t227 = _t126*_t203 + _t128*_t205 + _t132*_t207 + _t136*_t209 + _t140*_t211
-            + _t144*_t213 + _t148*_t215 + _t152*_t217 + _t156*_t219 + _t160*_t221 + _t164*_t223
-            + _t168*_t225 + _t190 + _t193*_t44 + _t195*_t50 + _t197*_t61 + _t199*_t75 + _t201*_t90;
-    const train5_real_t _t228 = _t126*_t204 + _t128*_t206 + _t132*_t208 + _t136*_t210 + _t140*_t212
-            + _t144*_t214 + _t148*_t216 + _t152*_t218 + _t156*_t220 + _t160*_t222 + _t164*_t224
-            + _t168*_t226 + _t191 + _t194*_t44 + _t196*_t50 + _t198*_t61 + _t200*_t75 + _t202*_t90;
-    const train5_real_t _t229 = _t127*_t204 + _t129*_t206 + _t133*_t208 + _t137*_t210 + _t141*_t212
-            + _t145*_t214 + _t149*_t216 + _t153*_t218 + _t157*_t220 + _t161*_t222 + _t165*_t224
-            + _t169*_t226 + _t192 + _t194*_t46 + _t196*_t55 + _t198*_t68 + _t200*_t82 + _t202*_t98;
-    const train5_real_t _t230 = _t112*_t228 + _t124*_t227;
-    const train5_real_t _t231 = _t113*_t228 + _t125*_t227;
-    const train5_real_t _t232 = _t112*_t229 + _t124*_t228;
-    const train5_real_t _t233 = _t113*_t229 + _t125*_t228;
-    const train5_real_t _t234 = _t112*_t232 + _t124*_t230;
-    const train5_real_t _t235 = _t112*_t233 + _t124*_t231;
-    const train5_real_t _t236 = _t113*_t233 + _t125*_t231;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
+    const train5_real_t J_x_tractor = p->J_x_tractor;
+    const train5_real_t _t170 = J_theta_cart2_left*_t126*_t126 + J_theta_cart2_right*_t125*_t125
+            + J_theta_cart3_left*_t133*_t133 + J_theta_cart3_right*_t132*_t132
+            + J_theta_cart4_left*_t140*_t140 + J_theta_cart4_right*_t139*_t139
+            + J_theta_cart5_left*_t149*_t149 + J_theta_cart5_right*_t148*_t148
+            + J_theta_cart_left*_t119*_t119 + J_theta_cart_right*_t118*_t118 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const train5_real_t J_theta_cart = p->J_theta_cart;
+    const train5_real_t _t171 = J_theta_cart*_t49*_t49 + TRAIN5_LIT(2.0)*_t168*_t49 + _t170;
+    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
+    const train5_real_t _t172 = J_theta_cart2*_t57*_t57 + _t171 + _t51*_t57 + _t54*_t57
+            + _t57*(_t51 + _t54);
+    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
+    const train5_real_t _t173 = J_theta_cart3*_t65*_t65 + _t172 + _t59*_t65 + _t62*_t65
+            + _t65*(_t59 + _t62);
+    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
+    const train5_real_t _t174 = J_theta_cart4*_t73*_t73 + _t173 + _t67*_t73 + _t70*_t73
+            + _t73*(_t67 + _t70);
+    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
+    const train5_real_t _t175 = J_theta_cart5*_t147*_t147 + _t147*_t75 + _t147*_t78
+            + _t147*(_t75 + _t78) + _t174;
+    const train5_real_t _t176 = J_theta_cart2_left*_t126*_t156 + J_theta_cart2_right*_t125*_t155
+            + J_theta_cart3_left*_t133*_t159 + J_theta_cart3_right*_t132*_t158
+            + J_theta_cart4_left*_t140*_t162 + J_theta_cart4_right*_t139*_t161
+            + J_theta_cart5_left*_t149*_t167 + J_theta_cart5_right*_t148*_t166
+            + J_theta_cart_left*_t119*_t153 + J_theta_cart_right*_t118*_t152
+            + J_theta_left*_t151*_t7 + J_theta_right*_t150*_t6;
+    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const train5_real_t _t177 = K_theta_tractor_x_tractor_2 + _t176;
+    const train5_real_t _t178 = J_theta_cart*_t49*_t80 + _t168*_t80 - TRAIN5_LIT(0.3)*_t169*_t49
+            + _t177;
+    const train5_real_t _t179 = J_theta_cart2*_t57*_t87 + _t178 + _t51*_t87 + _t54*_t87 + _t57*_t85;
+    const train5_real_t _t180 = J_theta_cart3*_t65*_t94 + _t179 + _t59*_t94 + _t62*_t94 + _t65*_t92;
+    const train5_real_t _t181 = J_theta_cart4*_t101*_t73 + _t101*_t67 + _t101*_t70 + _t180
+            + _t73*_t99;
+    const train5_real_t _t182 = J_theta_cart5*_t147*_t165 + _t106*_t147 + _t165*_t75 + _t165*_t78
+            + _t181;
+    const train5_real_t _t183 = J_theta_cart2_left*_t156*_t156 + J_theta_cart2_right*_t155*_t155
+            + J_theta_cart3_left*_t159*_t159 + J_theta_cart3_right*_t158*_t158
+            + J_theta_cart4_left*_t162*_t162 + J_theta_cart4_right*_t161*_t161
+            + J_theta_cart5_left*_t167*_t167 + J_theta_cart5_right*_t166*_t166
+            + J_theta_cart_left*_t153*_t153 + J_theta_cart_right*_t152*_t152
+            + J_theta_left*_t151*_t151 + J_theta_right*_t150*_t150;
+    const train5_real_t J_theta_tractor = p->J_theta_tractor;
+    const train5_real_t _t184 = J_theta_tractor + _t183;
+    const train5_real_t _t185 = J_theta_cart*_t80*_t80 - TRAIN5_LIT(0.6)*_t169*_t80 + _t184;
+    const train5_real_t _t186 = J_theta_cart2*_t87*_t87 + _t185 + _t82*_t87 + _t84*_t87 + _t85*_t87;
+    const train5_real_t _t187 = J_theta_cart3*_t94*_t94 + _t186 + _t89*_t94 + _t91*_t94 + _t92*_t94;
+    const train5_real_t _t188 = J_theta_cart4*_t101*_t101 + _t101*_t96 + _t101*_t98 + _t101*_t99
+            + _t187;
+    const train5_real_t _t189 = J_theta_cart5*_t165*_t165 + _t103*_t165 + _t105*_t165 + _t106*_t165
+            + _t188;
+    const train5_real_t _t190 = _t109*_t182 + _t112*_t175;
+    const train5_real_t _t191 = _t110*_t182 + _t113*_t175;
+    const train5_real_t _t192 = _t109*_t189 + _t112*_t182;
+    const train5_real_t _t193 = _t110*_t189 + _t113*_t182;
+    const train5_real_t _t194 = _t109*_t192 + _t112*_t190;
+    const train5_real_t _t195 = _t109*_t193 + _t112*_t191;
+    const train5_real_t _t196 = _t110*_t193 + _t113*_t191;
     const train5_real_t H1hat0 = H1hat[0];
     const train5_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t110*_t234 + _t111*_t235;
-    u[1] = H1hat1 + _t110*_t235 + _t111*_t236;
+    u[0] = H1hat0 + _t107*_t194 + _t108*_t195;
+    u[1] = H1hat1 + _t107*_t195 + _t108*_t196;
 }
 
 /* train5_minimal_tdc_law_mhat: documented in train5_laws.h.
@@ -1131,7 +987,7 @@ void train5_minimal_tdc_law_mhat(const train5_params_t *p, const train5_real_t *
 }
 
 /* train5_minimal_tdroc_law: documented in train5_laws.h.
-   operations after CSE: 266 add, 401 mul, 13 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 186 add, 389 mul, 7 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void train5_minimal_tdroc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *e, const train5_real_t *edot, const train5_real_t *qddot_des,
     const train5_real_t *k1, const train5_real_t *k2, const train5_real_t *p12,
@@ -1144,343 +1000,298 @@ void train5_minimal_tdroc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t _t1 = _t0 + theta_cart;
     const train5_real_t _t2 = TRAIN5_SIN_BOUNDED(_t1);
     const train5_real_t _t3 = TRAIN5_COS_BOUNDED(_t1);
-    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t radius_left = p->radius_left;
+    const train5_real_t radius_right = p->radius_right;
+    const train5_real_t _t4 = radius_left*radius_right;
+    const train5_real_t _t5 = TRAIN5_LIT(1.0)/_t4;
+    const train5_real_t _t6 = _t5*radius_left;
+    const train5_real_t _t7 = _t5*radius_right;
+    const train5_real_t radius_cart_left = p->radius_cart_left;
+    const train5_real_t radius_cart_right = p->radius_cart_right;
+    const train5_real_t _t8 = radius_cart_left*radius_cart_right;
+    const train5_real_t _t9 = -TRAIN5_LIT(0.6)*_t8;
+    const train5_real_t _t10 = TRAIN5_LIT(1.0)/_t9;
+    const train5_real_t _t11 = _t10*_t8;
+    const train5_real_t _t12 = TRAIN5_LIT(0.85)*_t2;
+    const train5_real_t _t13 = TRAIN5_LIT(0.85)*_t3;
     const train5_real_t theta_cart2 = q[4];
-    const train5_real_t _t5 = _t0 + theta_cart2;
-    const train5_real_t _t6 = TRAIN5_SIN_BOUNDED(_t5);
-    const train5_real_t _t7 = TRAIN5_COS_BOUNDED(_t5);
-    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
-    const train5_real_t _t11 = _t10*_t7;
+    const train5_real_t _t14 = _t0 + theta_cart2;
+    const train5_real_t _t15 = TRAIN5_SIN_BOUNDED(_t14);
+    const train5_real_t _t16 = TRAIN5_COS_BOUNDED(_t14);
+    const train5_real_t radius_cart2_left = p->radius_cart2_left;
+    const train5_real_t radius_cart2_right = p->radius_cart2_right;
+    const train5_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const train5_real_t _t18 = -TRAIN5_LIT(0.6)*_t17;
+    const train5_real_t _t19 = TRAIN5_LIT(1.0)/_t18;
+    const train5_real_t _t20 = _t17*_t19;
+    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t15;
+    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t16;
     const train5_real_t theta_cart3 = q[5];
-    const train5_real_t _t12 = _t0 + theta_cart3;
-    const train5_real_t _t13 = TRAIN5_SIN_BOUNDED(_t12);
-    const train5_real_t _t14 = TRAIN5_COS_BOUNDED(_t12);
-    const train5_real_t _t15 = TRAIN5_LIT(0.3)*_t14;
-    const train5_real_t _t16 = _t10*_t14;
-    const train5_real_t _t17 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t18 = TRAIN5_LIT(0.85)*_t7;
-    const train5_real_t _t19 = _t14*_t18;
+    const train5_real_t _t23 = _t0 + theta_cart3;
+    const train5_real_t _t24 = TRAIN5_SIN_BOUNDED(_t23);
+    const train5_real_t _t25 = TRAIN5_COS_BOUNDED(_t23);
+    const train5_real_t radius_cart3_left = p->radius_cart3_left;
+    const train5_real_t radius_cart3_right = p->radius_cart3_right;
+    const train5_real_t _t26 = radius_cart3_left*radius_cart3_right;
+    const train5_real_t _t27 = -TRAIN5_LIT(0.6)*_t26;
+    const train5_real_t _t28 = TRAIN5_LIT(1.0)/_t27;
+    const train5_real_t _t29 = _t26*_t28;
+    const train5_real_t _t30 = TRAIN5_LIT(0.85)*_t24;
+    const train5_real_t _t31 = TRAIN5_LIT(0.85)*_t25;
     const train5_real_t theta_cart4 = q[6];
-    const train5_real_t _t20 = _t0 + theta_cart4;
-    const train5_real_t _t21 = TRAIN5_SIN_BOUNDED(_t20);
-    const train5_real_t _t22 = TRAIN5_COS_BOUNDED(_t20);
-    const train5_real_t _t23 = TRAIN5_LIT(0.3)*_t22;
-    const train5_real_t _t24 = _t10*_t22;
-    const train5_real_t _t25 = _t18*_t22;
-    const train5_real_t _t26 = TRAIN5_LIT(0.85)*_t13;
-    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t14;
-    const train5_real_t _t28 = _t22*_t27;
+    const train5_real_t _t32 = _t0 + theta_cart4;
+    const train5_real_t _t33 = TRAIN5_SIN_BOUNDED(_t32);
+    const train5_real_t _t34 = TRAIN5_COS_BOUNDED(_t32);
+    const train5_real_t radius_cart4_left = p->radius_cart4_left;
+    const train5_real_t radius_cart4_right = p->radius_cart4_right;
+    const train5_real_t _t35 = radius_cart4_left*radius_cart4_right;
+    const train5_real_t _t36 = -TRAIN5_LIT(0.6)*_t35;
+    const train5_real_t _t37 = TRAIN5_LIT(1.0)/_t36;
+    const train5_real_t _t38 = _t35*_t37;
+    const train5_real_t _t39 = TRAIN5_LIT(0.85)*_t33;
+    const train5_real_t _t40 = TRAIN5_LIT(0.85)*_t34;
     const train5_real_t theta_cart5 = q[7];
-    const train5_real_t _t29 = _t0 + theta_cart5;
-    const train5_real_t _t30 = TRAIN5_SIN_BOUNDED(_t29);
-    const train5_real_t _t31 = TRAIN5_COS_BOUNDED(_t29);
-    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t31;
-    const train5_real_t _t33 = _t10*_t31;
-    const train5_real_t _t34 = _t18*_t31;
-    const train5_real_t _t35 = _t27*_t31;
-    const train5_real_t _t36 = TRAIN5_LIT(0.85)*_t30;
-    const train5_real_t _t37 = TRAIN5_LIT(0.85)*_t31;
-    const train5_real_t _t38 = _t22*_t37;
-    const train5_real_t _t39 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t40 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t41 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t42 = TRAIN5_LIT(0.3)*_t21;
-    const train5_real_t _t43 = TRAIN5_LIT(0.3)*_t30;
-    const train5_real_t _t44 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t45 = TRAIN5_LIT(0.2)*_t44;
-    const train5_real_t _t46 = -TRAIN5_LIT(1.6666666666666667)*_t4;
-    const train5_real_t _t47 = TRAIN5_LIT(0.2)*_t46;
-    const train5_real_t _t48 = -_t11 - _t6*_t9;
-    const train5_real_t _t49 = -_t44*_t48 + _t6;
-    const train5_real_t _t50 = -TRAIN5_LIT(1.6666666666666667)*_t49;
-    const train5_real_t _t51 = TRAIN5_LIT(0.2)*_t50;
-    const train5_real_t _t52 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const train5_real_t _t53 = _t44*_t52;
-    const train5_real_t _t54 = -_t46*_t48 + _t8;
-    const train5_real_t _t55 = -TRAIN5_LIT(1.6666666666666667)*_t54;
-    const train5_real_t _t56 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t57 = _t40 + _t46*_t52;
-    const train5_real_t _t58 = -_t13*_t9 - _t16;
-    const train5_real_t _t59 = -_t13*_t17 - _t19;
-    const train5_real_t _t60 = _t13 - _t44*_t58 - _t50*_t59;
-    const train5_real_t _t61 = -TRAIN5_LIT(1.6666666666666667)*_t60;
-    const train5_real_t _t62 = TRAIN5_LIT(0.2)*_t61;
-    const train5_real_t _t63 = TRAIN5_LIT(0.85)*_t13*_t3 - _t14*_t9;
-    const train5_real_t _t64 = _t44*_t63;
-    const train5_real_t _t65 = TRAIN5_LIT(0.85)*_t13*_t7 - _t14*_t17;
-    const train5_real_t _t66 = _t50*_t65;
-    const train5_real_t _t67 = _t15 - _t46*_t58 - _t55*_t59;
-    const train5_real_t _t68 = -TRAIN5_LIT(1.6666666666666667)*_t67;
-    const train5_real_t _t69 = TRAIN5_LIT(0.2)*_t68;
-    const train5_real_t _t70 = _t41 + _t46*_t63 + _t55*_t65;
-    const train5_real_t _t71 = -_t21*_t9 - _t24;
-    const train5_real_t _t72 = -_t17*_t21 - _t25;
-    const train5_real_t _t73 = -_t21*_t26 - _t28;
-    const train5_real_t _t74 = _t21 - _t44*_t71 - _t50*_t72 - _t61*_t73;
-    const train5_real_t _t75 = -TRAIN5_LIT(1.6666666666666667)*_t74;
-    const train5_real_t _t76 = TRAIN5_LIT(0.2)*_t75;
-    const train5_real_t _t77 = TRAIN5_LIT(0.85)*_t21*_t3 - _t22*_t9;
-    const train5_real_t _t78 = -_t17*_t22 + TRAIN5_LIT(0.85)*_t21*_t7;
-    const train5_real_t _t79 = TRAIN5_LIT(0.85)*_t14*_t21 - _t22*_t26;
-    const train5_real_t _t80 = -_t22 + _t44*_t77 + _t50*_t78 + _t61*_t79;
-    const train5_real_t _t81 = _t23 - _t46*_t71 - _t55*_t72 - _t68*_t73;
-    const train5_real_t _t82 = -TRAIN5_LIT(1.6666666666666667)*_t81;
-    const train5_real_t _t83 = TRAIN5_LIT(0.2)*_t82;
-    const train5_real_t _t84 = _t42 + _t46*_t77 + _t55*_t78 + _t68*_t79;
-    const train5_real_t _t85 = -_t30*_t9 - _t33;
-    const train5_real_t _t86 = -_t17*_t30 - _t34;
-    const train5_real_t _t87 = -_t26*_t30 - _t35;
-    const train5_real_t _t88 = -_t21*_t36 - _t38;
-    const train5_real_t _t89 = _t30 - _t44*_t85 - _t50*_t86 - _t61*_t87 - _t75*_t88;
-    const train5_real_t _t90 = -TRAIN5_LIT(1.6666666666666667)*_t89;
-    const train5_real_t _t91 = TRAIN5_LIT(0.2)*_t90;
-    const train5_real_t _t92 = TRAIN5_LIT(0.85)*_t3*_t30 - _t31*_t9;
-    const train5_real_t _t93 = -_t17*_t31 + TRAIN5_LIT(0.85)*_t30*_t7;
-    const train5_real_t _t94 = TRAIN5_LIT(0.85)*_t14*_t30 - _t26*_t31;
-    const train5_real_t _t95 = -_t21*_t37 + TRAIN5_LIT(0.85)*_t22*_t30;
-    const train5_real_t _t96 = -_t31 + _t44*_t92 + _t50*_t93 + _t61*_t94 + _t75*_t95;
-    const train5_real_t _t97 = _t32 - _t46*_t85 - _t55*_t86 - _t68*_t87 - _t82*_t88;
-    const train5_real_t _t98 = -TRAIN5_LIT(1.6666666666666667)*_t97;
-    const train5_real_t _t99 = TRAIN5_LIT(0.2)*_t98;
-    const train5_real_t _t100 = _t43 + _t46*_t92 + _t55*_t93 + _t68*_t94 + _t82*_t95;
+    const train5_real_t _t41 = _t0 + theta_cart5;
+    const train5_real_t _t42 = TRAIN5_SIN_BOUNDED(_t41);
+    const train5_real_t _t43 = TRAIN5_COS_BOUNDED(_t41);
+    const train5_real_t radius_cart5_left = p->radius_cart5_left;
+    const train5_real_t radius_cart5_right = p->radius_cart5_right;
+    const train5_real_t _t44 = radius_cart5_left*radius_cart5_right;
+    const train5_real_t _t45 = -TRAIN5_LIT(0.6)*_t44;
+    const train5_real_t _t46 = TRAIN5_LIT(1.0)/_t45;
+    const train5_real_t _t47 = _t44*_t46;
     const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t _t101 = K_theta_cart2_x_tractor*_t6;
     const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t102 = K_theta_cart2_x_tractor_2*_t7;
+    const train5_real_t _t48 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t49 = _t11*_t2;
+    const train5_real_t _t50 = _t12*_t49 + TRAIN5_LIT(1.0);
+    const train5_real_t _t51 = _t48*_t50;
+    const train5_real_t _t52 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t53 = -_t13*_t49;
+    const train5_real_t _t54 = _t52*_t53;
     const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t _t103 = K_theta_cart3_x_tractor*_t13;
     const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t104 = K_theta_cart3_x_tractor_2*_t14;
+    const train5_real_t _t55 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t56 = _t15*_t50 - _t16*_t53;
+    const train5_real_t _t57 = _t20*_t56;
+    const train5_real_t _t58 = _t21*_t57 + _t50;
+    const train5_real_t _t59 = _t55*_t58;
+    const train5_real_t _t60 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t61 = -_t22*_t57 + _t53;
+    const train5_real_t _t62 = _t60*_t61;
     const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t _t105 = K_theta_cart4_x_tractor*_t21;
     const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t106 = K_theta_cart4_x_tractor_2*_t22;
+    const train5_real_t _t63 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t64 = _t24*_t58 - _t25*_t61;
+    const train5_real_t _t65 = _t29*_t64;
+    const train5_real_t _t66 = _t30*_t65 + _t58;
+    const train5_real_t _t67 = _t63*_t66;
+    const train5_real_t _t68 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t69 = -_t31*_t65 + _t61;
+    const train5_real_t _t70 = _t68*_t69;
     const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t _t107 = K_theta_cart5_x_tractor*_t30;
     const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t108 = K_theta_cart5_x_tractor_2*_t31;
-    const train5_real_t _t109 = TRAIN5_LIT(0.85)*_t21;
+    const train5_real_t _t71 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t72 = _t33*_t66 - _t34*_t69;
+    const train5_real_t _t73 = _t38*_t72;
+    const train5_real_t _t74 = _t39*_t73 + _t66;
+    const train5_real_t _t75 = _t71*_t74;
+    const train5_real_t _t76 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t77 = -_t40*_t73 + _t69;
+    const train5_real_t _t78 = _t76*_t77;
+    const train5_real_t _t79 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t80 = -_t11*_t79;
+    const train5_real_t _t81 = _t12*_t80;
+    const train5_real_t _t82 = _t48*_t81;
+    const train5_real_t _t83 = -_t13*_t80 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t84 = _t52*_t83;
+    const train5_real_t _t85 = _t82 + _t84;
+    const train5_real_t _t86 = _t15*_t81 - _t16*_t83;
+    const train5_real_t _t87 = _t20*_t86;
+    const train5_real_t _t88 = _t21*_t87 + _t81;
+    const train5_real_t _t89 = _t55*_t88;
+    const train5_real_t _t90 = -_t22*_t87 + _t83;
+    const train5_real_t _t91 = _t60*_t90;
+    const train5_real_t _t92 = _t89 + _t91;
+    const train5_real_t _t93 = _t24*_t88 - _t25*_t90;
+    const train5_real_t _t94 = _t29*_t93;
+    const train5_real_t _t95 = _t30*_t94 + _t88;
+    const train5_real_t _t96 = _t63*_t95;
+    const train5_real_t _t97 = -_t31*_t94 + _t90;
+    const train5_real_t _t98 = _t68*_t97;
+    const train5_real_t _t99 = _t96 + _t98;
+    const train5_real_t _t100 = _t33*_t95 - _t34*_t97;
+    const train5_real_t _t101 = _t100*_t38;
+    const train5_real_t _t102 = _t101*_t39 + _t95;
+    const train5_real_t _t103 = _t102*_t71;
+    const train5_real_t _t104 = -_t101*_t40 + _t97;
+    const train5_real_t _t105 = _t104*_t76;
+    const train5_real_t _t106 = _t103 + _t105;
     const train5_real_t e0 = e[0];
     const train5_real_t edot0 = edot[0];
     const train5_real_t qdd_des0 = qddot_des[0];
     const train5_real_t k1_0 = k1[0];
     const train5_real_t k2_0 = k2[0];
-    const train5_real_t _t110 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const train5_real_t _t107 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const train5_real_t e1 = e[1];
     const train5_real_t edot1 = edot[1];
     const train5_real_t qdd_des1 = qddot_des[1];
     const train5_real_t k1_1 = k1[1];
     const train5_real_t k2_1 = k2[1];
-    const train5_real_t _t111 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const train5_real_t _t108 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const train5_real_t p12_0 = p12[0];
     const train5_real_t p22_0 = p22[0];
-    const train5_real_t _t112 = e0*p12_0 + edot0*p22_0;
+    const train5_real_t _t109 = e0*p12_0 + edot0*p22_0;
     const train5_real_t p12_1 = p12[1];
     const train5_real_t p22_1 = p22[1];
-    const train5_real_t _t113 = e1*p12_1 + edot1*p22_1;
-    const train5_real_t _t114 = train5_norm2(_t112, _t113);
+    const train5_real_t _t110 = e1*p12_1 + edot1*p22_1;
+    const train5_real_t _t111 = train5_norm2(_t109, _t110);
     const train5_real_t eps_1 = eps[0];
-    const train5_real_t _t115 = TRAIN5_LIT(1.0)/(TRAIN5_FMAX(_t114, eps_1));
-    const train5_real_t _t116 = _t112*_t115;
-    const train5_real_t _t117 = _t113*_t115;
-    const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t118 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t119 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t120 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t121 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t122 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t123 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t124 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t125 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t126 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t127 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t128 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t129 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t130 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t131 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t132 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t133 = TRAIN5_LIT(0.207)*_t132;
-    const train5_real_t _t134 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t135 = -TRAIN5_LIT(0.207)*_t134;
-    const train5_real_t _t136 = _t3 + _t45;
-    const train5_real_t _t137 = -_t39 + _t47;
-    const train5_real_t _t138 = _t120*_t136;
-    const train5_real_t _t139 = _t120*_t137;
-    const train5_real_t _t140 = _t3 - _t45;
-    const train5_real_t _t141 = -_t39 - _t47;
-    const train5_real_t _t142 = _t121*_t140;
-    const train5_real_t _t143 = _t121*_t141;
-    const train5_real_t _t144 = _t51 - _t53 + _t7;
-    const train5_real_t _t145 = _t56 - _t57;
-    const train5_real_t _t146 = _t122*_t144;
-    const train5_real_t _t147 = _t122*_t145;
-    const train5_real_t _t148 = -_t51 - _t53 + _t7;
-    const train5_real_t _t149 = -_t56 - _t57;
-    const train5_real_t _t150 = _t123*_t148;
-    const train5_real_t _t151 = _t123*_t149;
-    const train5_real_t _t152 = _t14 + _t62 - _t64 - _t66;
-    const train5_real_t _t153 = _t69 - _t70;
-    const train5_real_t _t154 = _t124*_t152;
-    const train5_real_t _t155 = _t124*_t153;
-    const train5_real_t _t156 = _t14 - _t62 - _t64 - _t66;
-    const train5_real_t _t157 = -_t69 - _t70;
-    const train5_real_t _t158 = _t125*_t156;
-    const train5_real_t _t159 = _t125*_t157;
-    const train5_real_t _t160 = _t76 - _t80;
-    const train5_real_t _t161 = _t83 - _t84;
-    const train5_real_t _t162 = _t126*_t160;
-    const train5_real_t _t163 = _t126*_t161;
-    const train5_real_t _t164 = -_t76 - _t80;
-    const train5_real_t _t165 = -_t83 - _t84;
-    const train5_real_t _t166 = _t127*_t164;
-    const train5_real_t _t167 = _t127*_t165;
-    const train5_real_t _t168 = _t91 - _t96;
-    const train5_real_t _t169 = -_t100 + _t99;
-    const train5_real_t _t170 = _t128*_t168;
-    const train5_real_t _t171 = _t128*_t169;
-    const train5_real_t _t172 = -_t91 - _t96;
-    const train5_real_t _t173 = -_t100 - _t99;
-    const train5_real_t _t174 = _t129*_t172;
-    const train5_real_t _t175 = _t129*_t173;
+    const train5_real_t _t112 = TRAIN5_LIT(1.0)/(TRAIN5_FMAX(_t111, eps_1));
+    const train5_real_t _t113 = _t109*_t112;
+    const train5_real_t _t114 = _t110*_t112;
+    const train5_real_t _t115 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t116 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t117 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t118 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t119 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t120 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t121 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t123 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t124 = _t10*(_t120*_t2 + _t121*_t3);
+    const train5_real_t _t125 = _t10*(_t122*_t2 + _t123*_t3);
+    const train5_real_t _t126 = _t15*_t53 + _t16*_t50;
+    const train5_real_t _t127 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t128 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t129 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t130 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t131 = _t19*(_t126*_t128 + _t127*_t56);
+    const train5_real_t _t132 = _t19*(_t126*_t130 + _t129*_t56);
+    const train5_real_t _t133 = _t24*_t61 + _t25*_t58;
+    const train5_real_t _t134 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t135 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t136 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t137 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t138 = _t28*(_t133*_t135 + _t134*_t64);
+    const train5_real_t _t139 = _t28*(_t133*_t137 + _t136*_t64);
+    const train5_real_t _t140 = _t33*_t69 + _t34*_t66;
+    const train5_real_t _t141 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t142 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t143 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t144 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t145 = _t37*(_t140*_t142 + _t141*_t72);
+    const train5_real_t _t146 = _t37*(_t140*_t144 + _t143*_t72);
+    const train5_real_t _t147 = _t42*_t74 - _t43*_t77;
+    const train5_real_t _t148 = _t42*_t77 + _t43*_t74;
+    const train5_real_t _t149 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t150 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t151 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t152 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t153 = _t147*_t47;
+    const train5_real_t _t154 = _t46*(_t147*_t149 + _t148*_t150);
+    const train5_real_t _t155 = _t46*(_t147*_t151 + _t148*_t152);
+    const train5_real_t _t156 = TRAIN5_LIT(0.207)*_t6;
+    const train5_real_t _t157 = -TRAIN5_LIT(0.207)*_t7;
+    const train5_real_t _t158 = _t10*(-_t117*_t121 - _t120*_t79);
+    const train5_real_t _t159 = _t10*(-_t117*_t123 - _t122*_t79);
+    const train5_real_t _t160 = _t15*_t83 + _t16*_t81;
+    const train5_real_t _t161 = _t19*(_t127*_t86 + _t128*_t160);
+    const train5_real_t _t162 = _t19*(_t129*_t86 + _t130*_t160);
+    const train5_real_t _t163 = _t24*_t90 + _t25*_t88;
+    const train5_real_t _t164 = _t28*(_t134*_t93 + _t135*_t163);
+    const train5_real_t _t165 = _t28*(_t136*_t93 + _t137*_t163);
+    const train5_real_t _t166 = _t33*_t97 + _t34*_t95;
+    const train5_real_t _t167 = _t37*(_t100*_t141 + _t142*_t166);
+    const train5_real_t _t168 = _t37*(_t100*_t143 + _t144*_t166);
+    const train5_real_t _t169 = _t102*_t42 - _t104*_t43;
+    const train5_real_t _t170 = _t102*_t43 + _t104*_t42;
+    const train5_real_t _t171 = _t169*_t47;
+    const train5_real_t _t172 = _t46*(_t149*_t169 + _t150*_t170);
+    const train5_real_t _t173 = _t46*(_t151*_t169 + _t152*_t170);
     const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t176 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t177 = _t101 + _t102;
-    const train5_real_t _t178 = _t103 + _t104;
-    const train5_real_t _t179 = _t105 + _t106;
-    const train5_real_t _t180 = _t107 + _t108;
-    const train5_real_t _t181 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t39;
-    const train5_real_t _t182 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t40;
-    const train5_real_t _t183 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t41;
-    const train5_real_t _t184 = K_theta_cart4_x_tractor*_t23 - K_theta_cart4_x_tractor_2*_t42;
-    const train5_real_t _t185 = K_theta_cart5_x_tractor*_t32 - K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t186 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
-            + _t101*_t9 + _t102*_t9;
-    const train5_real_t _t187 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
-            + _t103*_t9 + _t104*_t9;
-    const train5_real_t _t188 = K_theta_cart4_x_tractor*_t24 - K_theta_cart4_x_tractor_2*_t10*_t21
-            + _t105*_t9 + _t106*_t9;
-    const train5_real_t _t189 = K_theta_cart5_x_tractor*_t33 - K_theta_cart5_x_tractor_2*_t10*_t30
-            + _t107*_t9 + _t108*_t9;
-    const train5_real_t _t190 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t13*_t18
-            + _t103*_t17 + _t104*_t17;
-    const train5_real_t _t191 = K_theta_cart4_x_tractor*_t25 - K_theta_cart4_x_tractor_2*_t18*_t21
-            + _t105*_t17 + _t106*_t17;
-    const train5_real_t _t192 = K_theta_cart5_x_tractor*_t34 - K_theta_cart5_x_tractor_2*_t18*_t30
-            + _t107*_t17 + _t108*_t17;
-    const train5_real_t _t193 = K_theta_cart4_x_tractor*_t28 - K_theta_cart4_x_tractor_2*_t21*_t27
-            + _t105*_t26 + _t106*_t26;
-    const train5_real_t _t194 = K_theta_cart5_x_tractor*_t35 - K_theta_cart5_x_tractor_2*_t27*_t30
-            + _t107*_t26 + _t108*_t26;
-    const train5_real_t _t195 = K_theta_cart5_x_tractor*_t38 - K_theta_cart5_x_tractor_2*_t22*_t36
-            + _t107*_t109 + _t108*_t109;
-    const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t196 = J_x_tractor + _t176*_t44 + _t177*_t50 + _t178*_t61 + _t179*_t75
-            + _t180*_t90;
-    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t197 = K_theta_tractor_x_tractor_2 + _t176*_t46 + _t177*_t55 + _t178*_t68
-            + _t179*_t82 + _t180*_t98;
-    const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t198 = J_theta_tractor + _t181*_t46 + _t182*_t55 + _t183*_t68 + _t184*_t82
-            + _t185*_t98;
-    const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t199 = J_theta_cart*_t44 + _t176 + _t186*_t50 + _t187*_t61 + _t188*_t75
-            + _t189*_t90;
-    const train5_real_t _t200 = J_theta_cart*_t46 + _t181 + _t186*_t55 + _t187*_t68 + _t188*_t82
-            + _t189*_t98;
-    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t201 = J_theta_cart2*_t50 + _t177 + _t186*_t44 + _t190*_t61 + _t191*_t75
-            + _t192*_t90;
-    const train5_real_t _t202 = J_theta_cart2*_t55 + _t182 + _t186*_t46 + _t190*_t68 + _t191*_t82
-            + _t192*_t98;
-    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t203 = J_theta_cart3*_t61 + _t178 + _t187*_t44 + _t190*_t50 + _t193*_t75
-            + _t194*_t90;
-    const train5_real_t _t204 = J_theta_cart3*_t68 + _t183 + _t187*_t46 + _t190*_t55 + _t193*_t82
-            + _t194*_t98;
-    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t205 = J_theta_cart4*_t75 + _t179 + _t188*_t44 + _t191*_t50 + _t193*_t61
-            + _t195*_t90;
-    const train5_real_t _t206 = J_theta_cart4*_t82 + _t184 + _t188*_t46 + _t191*_t55 + _t193*_t68
-            + _t195*_t98;
-    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t207 = J_theta_cart5*_t90 + _t180 + _t189*_t44 + _t192*_t50 + _t194*_t61
-            + _t195*_t75;
-    const train5_real_t _t208 = J_theta_cart5*_t98 + _t185 + _t189*_t46 + _t192*_t55 + _t194*_t68
-            + _t195*_t82;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t209 = J_theta_right*_t132;
-    const train5_real_t _t210 = J_theta_right*_t133;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t211 = J_theta_left*_t134;
-    const train5_real_t _t212 = J_theta_left*_t135;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t213 = J_theta_cart_right*_t138;
-    const train5_real_t _t214 = J_theta_cart_right*_t139;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t215 = J_theta_cart_left*_t142;
-    const train5_real_t _t216 = J_theta_cart_left*_t143;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t217 = J_theta_cart2_right*_t146;
-    const train5_real_t _t218 = J_theta_cart2_right*_t147;
+    const train5_real_t _t174 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t175 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t219 = J_theta_cart2_left*_t150;
-    const train5_real_t _t220 = J_theta_cart2_left*_t151;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t221 = J_theta_cart3_right*_t154;
-    const train5_real_t _t222 = J_theta_cart3_right*_t155;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t223 = J_theta_cart3_left*_t158;
-    const train5_real_t _t224 = J_theta_cart3_left*_t159;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t225 = J_theta_cart4_right*_t162;
-    const train5_real_t _t226 = J_theta_cart4_right*_t163;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t227 = J_theta_cart4_left*_t166;
-    const train5_real_t _t228 = J_theta_cart4_left*_t167;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t229 = J_theta_cart5_right*_t170;
-    const train5_real_t _t230 = J_theta_cart5_right*_t171;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t231 = J_theta_cart5_left*_t174;
-    const train5_real_t _t232 = J_theta_cart5_left*_t175;
-    const train5_real_t _t233 = _t132*_t209 + _t134*_t211 + _t138*_t213 + _t142*_t215 + _t146*_t217
-            + _t150*_t219 + _t154*_t221 + _t158*_t223 + _t162*_t225 + _t166*_t227 + _t170*_t229
-            + _t174*_t231 + _t196 + _t199*_t44 + _t201*_t50 + _t203*_t61 + _t205*_t75 + _t207*_t90;
-    const train5_real_t _t234 = _t132*_t210 + _t134*_t212 + _t138*_t214 + _t142*_t216 + _t146*_t218
-            + _t150*_t220 + _t154*_t222 + _t158*_t224 + _t162*_t226 + _t166*_t228 + _t170*_t230
-            + _t174*_t232 + _t197 + _t200*_t44 + _t202*_t50 + _t204*_t61 + _t206*_t75 + _t208*_t90;
-    const train5_real_t _t235 = _t133*_t210 + _t135*_t212 + _t139*_t214 + _t143*_t216 + _t147*_t218
-            + _t151*_t220 + _t155*_t222 + _t159*_t224 + _t163*_t226 + _t167*_t228 + _t171*_t230
-            + _t175*_t232 + _t198 + _t200*_t46 + _t202*_t55 + _t204*_t68 + _t206*_t82 + _t208*_t98;
-    const train5_real_t _t236 = _t118*_t234 + _t130*_t233;
-    const train5_real_t _t237 = _t119*_t234 + _t131*_t233;
-    const train5_real_t _t238 = _t118*_t235 + _t130*_t234;
-    const train5_real_t _t239 = _t119*_t235 + _t131*_t234;
-    const train5_real_t _t240 = _t118*_t238 + _t130*_t236;
-    const train5_real_t _t241 = _t118*_t239 + _t130*_t237;
-    const train5_real_t _t242 = _t119*_t239 + _t131*_t237;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
+    const train5_real_t J_x_tractor = p->J_x_tractor;
+    const train5_real_t _t176 = J_theta_cart2_left*_t132*_t132 + J_theta_cart2_right*_t131*_t131
+            + J_theta_cart3_left*_t139*_t139 + J_theta_cart3_right*_t138*_t138
+            + J_theta_cart4_left*_t146*_t146 + J_theta_cart4_right*_t145*_t145
+            + J_theta_cart5_left*_t155*_t155 + J_theta_cart5_right*_t154*_t154
+            + J_theta_cart_left*_t125*_t125 + J_theta_cart_right*_t124*_t124 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const train5_real_t J_theta_cart = p->J_theta_cart;
+    const train5_real_t _t177 = J_theta_cart*_t49*_t49 + TRAIN5_LIT(2.0)*_t174*_t49 + _t176;
+    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
+    const train5_real_t _t178 = J_theta_cart2*_t57*_t57 + _t177 + _t51*_t57 + _t54*_t57
+            + _t57*(_t51 + _t54);
+    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
+    const train5_real_t _t179 = J_theta_cart3*_t65*_t65 + _t178 + _t59*_t65 + _t62*_t65
+            + _t65*(_t59 + _t62);
+    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
+    const train5_real_t _t180 = J_theta_cart4*_t73*_t73 + _t179 + _t67*_t73 + _t70*_t73
+            + _t73*(_t67 + _t70);
+    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
+    const train5_real_t _t181 = J_theta_cart5*_t153*_t153 + _t153*_t75 + _t153*_t78
+            + _t153*(_t75 + _t78) + _t180;
+    const train5_real_t _t182 = J_theta_cart2_left*_t132*_t162 + J_theta_cart2_right*_t131*_t161
+            + J_theta_cart3_left*_t139*_t165 + J_theta_cart3_right*_t138*_t164
+            + J_theta_cart4_left*_t146*_t168 + J_theta_cart4_right*_t145*_t167
+            + J_theta_cart5_left*_t155*_t173 + J_theta_cart5_right*_t154*_t172
+            + J_theta_cart_left*_t125*_t159 + J_theta_cart_right*_t124*_t158
+            + J_theta_left*_t157*_t7 + J_theta_right*_t156*_t6;
+    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const train5_real_t _t183 = K_theta_tractor_x_tractor_2 + _t182;
+    const train5_real_t _t184 = J_theta_cart*_t49*_t80 + _t174*_t80 - TRAIN5_LIT(0.3)*_t175*_t49
+            + _t183;
+    const train5_real_t _t185 = J_theta_cart2*_t57*_t87 + _t184 + _t51*_t87 + _t54*_t87 + _t57*_t85;
+    const train5_real_t _t186 = J_theta_cart3*_t65*_t94 + _t185 + _t59*_t94 + _t62*_t94 + _t65*_t92;
+    const train5_real_t _t187 = J_theta_cart4*_t101*_t73 + _t101*_t67 + _t101*_t70 + _t186
+            + _t73*_t99;
+    const train5_real_t _t188 = J_theta_cart5*_t153*_t171 + _t106*_t153 + _t171*_t75 + _t171*_t78
+            + _t187;
+    const train5_real_t _t189 = J_theta_cart2_left*_t162*_t162 + J_theta_cart2_right*_t161*_t161
+            + J_theta_cart3_left*_t165*_t165 + J_theta_cart3_right*_t164*_t164
+            + J_theta_cart4_left*_t168*_t168 + J_theta_cart4_right*_t167*_t167
+            + J_theta_cart5_left*_t173*_t173 + J_theta_cart5_right*_t172*_t172
+            + J_theta_cart_left*_t159*_t159 + J_theta_cart_right*_t158*_t158
+            + J_theta_left*_t157*_t157 + J_theta_right*_t156*_t156;
+    const train5_real_t J_theta_tractor = p->J_theta_tractor;
+    const train5_real_t _t190 = J_theta_tractor + _t189;
+    const train5_real_t _t191 = J_theta_cart*_t80*_t80 - TRAIN5_LIT(0.6)*_t175*_t80 + _t190;
+    const train5_real_t _t192 = J_theta_cart2*_t87*_t87 + _t191 + _t82*_t87 + _t84*_t87 + _t85*_t87;
+    const train5_real_t _t193 = J_theta_cart3*_t94*_t94 + _t192 + _t89*_t94 + _t91*_t94 + _t92*_t94;
+    const train5_real_t _t194 = J_theta_cart4*_t101*_t101 + _t101*_t96 + _t101*_t98 + _t101*_t99
+            + _t193;
+    const train5_real_t _t195 = J_theta_cart5*_t171*_t171 + _t103*_t171 + _t105*_t171 + _t106*_t171
+            + _t194;
+    const train5_real_t _t196 = _t115*_t188 + _t118*_t181;
+    const train5_real_t _t197 = _t116*_t188 + _t119*_t181;
+    const train5_real_t _t198 = _t115*_t195 + _t118*_t188;
+    const train5_real_t _t199 = _t116*_t195 + _t119*_t188;
+    const train5_real_t _t200 = _t115*_t198 + _t118*_t196;
+    const train5_real_t _t201 = _t115*_t199 + _t118*_t197;
+    const train5_real_t _t202 = _t116*_t199 + _t119*_t197;
     const train5_real_t H1hat0 = H1hat[0];
     const train5_real_t H1hat1 = H1hat[1];
     const train5_real_t gain_1 = gain[0];
-    u[0] = H1hat0 + _t110*_t240 + _t111*_t241 + gain_1*(_t116*_t240 + _t117*_t241);
-    u[1] = H1hat1 + _t110*_t241 + _t111*_t242 + gain_1*(_t116*_t241 + _t117*_t242);
-    s[0] = _t112;
-    s[1] = _t113;
-    s_norm[0] = _t114;
+    u[0] = H1hat0 + _t107*_t200 + _t108*_t201 + gain_1*(_t113*_t200 + _t114*_t201);
+    u[1] = H1hat1 + _t107*_t201 + _t108*_t202 + gain_1*(_t113*_t201 + _t114*_t202);
+    s[0] = _t109;
+    s[1] = _t110;
+    s_norm[0] = _t111;
 }
 
 /* train5_minimal_tdroc_law_mhat: documented in train5_laws.h.
@@ -1496,7 +1307,7 @@ void train5_minimal_tdroc_law_mhat(const train5_params_t *p, const train5_real_t
 }
 
 /* train5_minimal_roc_law: documented in train5_laws.h.
-   operations after CSE: 759 add, 1065 mul, 14 div, 10 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 353 add, 652 mul, 8 div, 10 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void train5_minimal_roc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *e, const train5_real_t *edot,
     const train5_real_t *qddot_des, const train5_real_t *k1, const train5_real_t *k2,
@@ -1504,14 +1315,14 @@ void train5_minimal_roc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *eps, train5_real_t *u, train5_real_t *s, train5_real_t *s_norm,
     train5_real_t *gain)
 {
-    train5_real_t kept[53];
+    train5_real_t kept[66];
     train5_k_minimal_roc_law_keep(p, kept);
     train5_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u, s,
             s_norm, gain);
 }
 
 /* train5_minimal_asmc_law: documented in train5_laws.h.
-   operations after CSE: 755 add, 1062 mul, 13 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 349 add, 649 mul, 7 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void train5_minimal_asmc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *e, const train5_real_t *edot,
     const train5_real_t *qddot_des, const train5_real_t *k1, const train5_real_t *k2,
@@ -1519,7 +1330,7 @@ void train5_minimal_asmc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *eps, const train5_real_t *adapt, train5_real_t *u, train5_real_t *s,
     train5_real_t *s_norm, train5_real_t *gain_next)
 {
-    train5_real_t kept[53];
+    train5_real_t kept[66];
     train5_k_minimal_roc_law_keep(p, kept);
     train5_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps, adapt,
             u, s, s_norm, gain_next);

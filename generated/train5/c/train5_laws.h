@@ -82,7 +82,7 @@ void train5_tdroc_weighted_gain(const train5_real_t *minv_norm, const train5_rea
  * @param[in]  span [1] row-major (TRAIN5_MINIMAL_TDE_SPAN_SIZE): span -- h or 2h
  * @param[out] H1hat [2] row-major (TRAIN5_MINIMAL_TDE_H1HAT_SIZE)
  *
- * operations after CSE: 257 add, 368 mul, 13 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 177 add, 373 mul, 7 div, 10 sin/cos, 0 sqrt
  */
 void train5_minimal_tde(const train5_params_t *p, const train5_real_t *q_prev,
     const train5_real_t *u_prev, const train5_real_t *qdot_now, const train5_real_t *qdot_then,
@@ -138,7 +138,7 @@ void train5_minimal_tde_mhat(const train5_params_t *p, const train5_real_t *mhat
  *     theta_cart5_left -- measured q
  * @param[out] norm [1] row-major (TRAIN5_MINIMAL_MINV_NORM_NORM_SIZE)
  *
- * operations after CSE: 254 add, 385 mul, 13 div, 10 sin/cos, 1 sqrt, 1 fabs
+ * operations after CSE: 174 add, 373 mul, 7 div, 10 sin/cos, 1 sqrt, 1 fabs
  */
 void train5_minimal_minv_norm(const train5_params_t *p, const train5_real_t *q,
     train5_real_t *norm);
@@ -182,7 +182,7 @@ void train5_minimal_minv_norm_mhat(const train5_params_t *p, const train5_real_t
  *     measured q
  * @param[out] M [4] row-major (TRAIN5_MINIMAL_MHAT_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 251 add, 379 mul, 12 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 171 add, 367 mul, 6 div, 10 sin/cos, 0 sqrt
  */
 void train5_minimal_mhat(const train5_params_t *p, const train5_real_t *q, train5_real_t *M);
 
@@ -270,7 +270,7 @@ void train5_minimal_omega_difference(const train5_real_t *newer, const train5_re
  * @param[in]  H1hat [2] row-major (TRAIN5_MINIMAL_TDC_LAW_H1HAT_SIZE): H1hat0, H1hat1 -- (17)
  * @param[out] u [2] row-major (TRAIN5_MINIMAL_TDC_LAW_U_SIZE)
  *
- * operations after CSE: 259 add, 387 mul, 12 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 179 add, 375 mul, 6 div, 10 sin/cos, 0 sqrt
  */
 void train5_minimal_tdc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *e, const train5_real_t *edot, const train5_real_t *qddot_des,
@@ -363,7 +363,7 @@ void train5_minimal_tdc_law_mhat(const train5_params_t *p, const train5_real_t *
  * @param[out] s [2] row-major (TRAIN5_MINIMAL_TDROC_LAW_S_SIZE)
  * @param[out] s_norm [1] row-major (TRAIN5_MINIMAL_TDROC_LAW_S_NORM_SIZE)
  *
- * operations after CSE: 266 add, 401 mul, 13 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 186 add, 389 mul, 7 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void train5_minimal_tdroc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *e, const train5_real_t *edot, const train5_real_t *qddot_des,
@@ -478,7 +478,7 @@ void train5_minimal_tdroc_law_mhat(const train5_params_t *p, const train5_real_t
  * @param[out] s_norm [1] row-major (TRAIN5_MINIMAL_ROC_LAW_S_NORM_SIZE)
  * @param[out] gain [1] row-major (TRAIN5_MINIMAL_ROC_LAW_GAIN_SIZE)
  *
- * operations after CSE: 759 add, 1065 mul, 14 div, 10 sin/cos, 3 sqrt, 3 cmp, 1 fmax
+ * operations after CSE: 353 add, 652 mul, 8 div, 10 sin/cos, 3 sqrt, 3 cmp, 1 fmax
  */
 void train5_minimal_roc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *e, const train5_real_t *edot,
@@ -541,7 +541,7 @@ void train5_minimal_roc_law(const train5_params_t *p, const train5_real_t *q,
  * @param[out] s_norm [1] row-major (TRAIN5_MINIMAL_ASMC_LAW_S_NORM_SIZE)
  * @param[out] gain_next [1] row-major (TRAIN5_MINIMAL_ASMC_LAW_GAIN_NEXT_SIZE)
  *
- * operations after CSE: 755 add, 1062 mul, 13 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax
+ * operations after CSE: 349 add, 649 mul, 7 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax
  */
 void train5_minimal_asmc_law(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *e, const train5_real_t *edot,

@@ -21,19 +21,19 @@ extern "C" {
    only. */
 typedef struct {
     long magic; /* TRAIN5_MODEL_PREPARED_MAGIC once prepared */
-    train5_real_t forward_dynamics[57]; /* J_theta_cart, J_theta_cart2, J_theta_cart2_left,
+    train5_real_t forward_dynamics[70]; /* J_theta_cart, J_theta_cart2, J_theta_cart2_left,
                                            J_theta_cart2_right, J_theta_cart3, J_theta_cart3_left,
                                            J_theta_cart3_right, J_theta_cart4, J_theta_cart4_left,
                                            J_theta_cart4_right, J_theta_cart5, J_theta_cart5_left,
                                            J_theta_cart5_right, J_theta_cart_left,
-                                           J_theta_cart_right, J_theta_tractor, J_x_tractor,
+                                           J_theta_cart_right, J_theta_tractor,
                                            K_theta_cart_x_tractor, K_theta_cart_x_tractor_2,
                                            K_theta_cart2_x_tractor, K_theta_cart2_x_tractor_2,
                                            K_theta_cart3_x_tractor, K_theta_cart3_x_tractor_2,
                                            K_theta_cart4_x_tractor, K_theta_cart4_x_tractor_2,
                                            K_theta_cart5_x_tractor, K_theta_cart5_x_tractor_2,
                                            K_theta_tractor_x_tractor, K_theta_tractor_x_tractor_2,
-                                           28 parameter-only subexpressions, for
+                                           42 parameter-only subexpressions, for
                                            train5_forward_dynamics_prepared */
 } train5_model_prepared_t;
 
@@ -113,7 +113,7 @@ typedef struct {
  * With fixed parameters, train5_model_prepare once and train5_forward_dynamics_prepared
  * per call give the same results, bit for bit.
  *
- * operations after CSE: 771 add, 983 mul, 13 div, 12 sin/cos, 0 sqrt
+ * operations after CSE: 357 add, 634 mul, 7 div, 12 sin/cos, 0 sqrt
  */
 train5_status_t train5_forward_dynamics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *tau, train5_real_t *qddot);
@@ -160,7 +160,7 @@ train5_status_t train5_forward_dynamics(const train5_params_t *p, const train5_r
  *         TRAIN5_ERR_BAD_PARAMS if not (J_theta_tractor > 0),
  *         TRAIN5_ERR_BAD_PARAMS if not (J_x_tractor > 0).
  *
- * operations after CSE: 3 add, 23 mul, 12 div, 0 sin/cos, 0 sqrt
+ * operations after CSE: 4 add, 57 mul, 6 div, 0 sin/cos, 0 sqrt
  */
 train5_status_t train5_model_prepare(const train5_params_t *p, train5_model_prepared_t *prepared);
 
@@ -203,7 +203,7 @@ train5_status_t train5_model_prepare(const train5_params_t *p, train5_model_prep
  *         TRAIN5_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAIN5_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 768 add, 960 mul, 1 div, 12 sin/cos, 0 sqrt
+ * operations after CSE: 353 add, 577 mul, 1 div, 12 sin/cos, 0 sqrt
  */
 train5_status_t train5_forward_dynamics_prepared(const train5_model_prepared_t *prepared,
     const train5_real_t *q, const train5_real_t *qdot, const train5_real_t *tau,
@@ -234,7 +234,7 @@ train5_status_t train5_forward_dynamics_prepared(const train5_model_prepared_t *
  *     thetadot_left -- theta_right rate, theta_left rate
  * @param[out] pose_rates [18] row-major (TRAIN5_KINEMATICS_POSE_RATES_SIZE)
  *
- * operations after CSE: 105 add, 188 mul, 10 div, 12 sin/cos, 0 sqrt
+ * operations after CSE: 72 add, 203 mul, 5 div, 12 sin/cos, 0 sqrt
  */
 void train5_kinematics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, train5_real_t *pose_rates);
@@ -260,7 +260,7 @@ void train5_kinematics(const train5_params_t *p, const train5_real_t *q,
  *     theta_cart4_right, theta_cart4_left, theta_cart5_right, theta_cart5_left
  * @param[out] M [2x2] row-major (TRAIN5_MINIMAL_MASS_MATRIX_M_SIZE) -- 2x2 row-major
  *
- * operations after CSE: 251 add, 379 mul, 12 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 171 add, 367 mul, 6 div, 10 sin/cos, 0 sqrt
  */
 void train5_minimal_mass_matrix(const train5_params_t *p, const train5_real_t *q, train5_real_t *M);
 
@@ -286,7 +286,7 @@ void train5_minimal_mass_matrix(const train5_params_t *p, const train5_real_t *q
  *     thetadot_right, thetadot_left -- theta_right rate, theta_left rate
  * @param[out] H [2] row-major (TRAIN5_MINIMAL_BIAS_FORCES_H_SIZE)
  *
- * operations after CSE: 616 add, 892 mul, 10 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 227 add, 447 mul, 6 div, 10 sin/cos, 0 sqrt
  */
 void train5_minimal_bias_forces(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, train5_real_t *H);
@@ -354,7 +354,7 @@ void train5_minimal_bias_forces(const train5_params_t *p, const train5_real_t *q
  *         TRAIN5_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAIN5_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 739 add, 1046 mul, 13 div, 10 sin/cos, 0 sqrt
+ * operations after CSE: 333 add, 624 mul, 7 div, 10 sin/cos, 0 sqrt
  */
 train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *wheel_accels);
@@ -392,7 +392,7 @@ train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const 
  * @param[out] A [22x22] row-major (TRAIN5_LINEARIZATION_A_SIZE) -- 22x22 row-major
  * @param[out] B [22x2] row-major (TRAIN5_LINEARIZATION_B_SIZE) -- 22x2 row-major
  *
- * operations after CSE: 4085 add, 5081 mul, 13 div, 22 sin/cos, 0 sqrt
+ * operations after CSE: 2392 add, 3420 mul, 7 div, 22 sin/cos, 0 sqrt
  */
 void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *A, train5_real_t *B);
@@ -475,7 +475,7 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
  *         TRAIN5_ERR_BAD_PARAMS if not (det(S^T M S) > 0: a positive-definite model),
  *         TRAIN5_ERR_NONFINITE_OUTPUT if a result is not finite.
  *
- * operations after CSE: 951 add, 1336 mul, 13 div, 20 sin/cos, 0 sqrt
+ * operations after CSE: 536 add, 896 mul, 17 div, 20 sin/cos, 0 sqrt
  */
 train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *longitudinal,

@@ -33,7 +33,7 @@ extern "C" {
  *     wheel torques after friction
  * @param[out] xdot [22] row-major (TRAIN5_PLANT_STATE_DERIVATIVE_XDOT_SIZE)
  *
- * operations after CSE: 751 add, 1062 mul, 13 div, 12 sin/cos, 0 sqrt
+ * operations after CSE: 345 add, 649 mul, 7 div, 12 sin/cos, 0 sqrt
  */
 void train5_plant_state_derivative(const train5_plant_params_t *pp, const train5_real_t *x,
     const train5_real_t *tau, train5_real_t *xdot);

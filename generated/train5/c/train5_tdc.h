@@ -58,7 +58,7 @@ typedef struct {
                                   _init) */
     train5_real_t mhat_prev[4]; /* Mhat(q(t-h)), row-major, for (17) */
     train5_real_t k_minimal_tde_mhat[1]; /* minimal_tde_mhat's parameter-only values (at _init) */
-    train5_real_t k_minimal_mhat[45]; /* minimal_mhat's parameter-only values (at _init) */
+    train5_real_t k_minimal_mhat[64]; /* minimal_mhat's parameter-only values (at _init) */
     train5_real_t H1hat[20];    /* last estimate of H1 (TDE) or H-hat (model) */
     train5_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                   GAIN_MAX */

@@ -73,7 +73,7 @@ typedef struct {
                                                  _init) */
     train5_real_t minv_norm;   /* ||Mhat(q)^-1||_F of (25) at the last gain update's q */
     train5_real_t k_minimal_tde_mhat[1]; /* minimal_tde_mhat's parameter-only values (at _init) */
-    train5_real_t k_minimal_mhat[45]; /* minimal_mhat's parameter-only values (at _init) */
+    train5_real_t k_minimal_mhat[64]; /* minimal_mhat's parameter-only values (at _init) */
     train5_real_t H1hat[20];    /* last estimate of H1 (TDE) or H-hat (model) */
     train5_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                   GAIN_MAX */
