@@ -155,7 +155,7 @@ def root_frame_contact_forms(model: RobotModel, sm: StagedMinimal) -> ContactFor
     dep = list(s.dependent)
     on_manifold = {s.qdot[i]: sm.velocities[i] for i in range(len(s.q))
                    if sm.velocities[i] != s.qdot[i]}
-    chain = s.chain_at(root_frame=True)
+    chain = s.ordered_chain(root_frame=True)
     if chain is None:
         m = stage.matrix(s.mass_matrix.xreplace(at_root))
         h = stage.matrix(s.bias.xreplace(at_root).xreplace(on_manifold))

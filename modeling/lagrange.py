@@ -37,6 +37,9 @@ from modeling.symbolic_linalg import (
 )
 from modeling.wheel_constraints import WheelConstraint
 
+# The fewest hitches for which M S and M Ṡη + H are evaluated in chain order (``ordered_chain``)
+MIN_ORDERED_HITCHES = 2
+
 
 def default_simplify(expr: sp.Expr) -> sp.Expr:
     """Cheap canonical form: expanded, with sin² + cos² = 1 applied (see trig_canonical)."""
@@ -299,6 +302,16 @@ class ConstrainedSystem:
             return chain
         return chain.at(self.root_frame_point())
 
+    def ordered_chain(self, root_frame: bool) -> ChainInertia | None:
+        """``chain_at(root_frame)`` where the chain order pays: two hitches or more. With
+        one hitch M couples a single pair of yaws, so the dense products are already
+        O(1); the running sums only add operations (20–23 on the one-trailer robot) and
+        widen the float32 certifier's enclosures (the trailer's M̄ determinant, written
+        through them, is no longer proved nonzero over its box: docs/FLOAT32.md)."""
+        chain = self.chain_at(root_frame)
+        return (chain if chain is not None and len(chain.yaws) - 1 >= MIN_ORDERED_HITCHES
+                else None)
+
     # --- minimal form -----------------------------------------------------------------
     @cached_property
     def minimal_mass_matrix(self) -> sp.Matrix:
@@ -339,9 +352,10 @@ class ConstrainedSystem:
         positive), the solve runs in u (``_staged_in_twist``): S_u carries no wheel
         radius, so M̄_u and H̄_u are the short forms a hand derivation in (v, ω) writes.
 
-        ``chain_ordered`` (a hitch chain's ``chain_inertia``): M S and M Ṡ η + H in chain
+        ``chain_ordered`` (a hitch chain's ``ordered_chain``): M S and M Ṡ η + H in chain
         order, O(n) (issue 51); False: the dense products, O(n²), the same values."""
-        chain = self.chain_at(root_frame and bool(self.planar_frame)) if chain_ordered else None
+        chain = (self.ordered_chain(root_frame and bool(self.planar_frame)) if chain_ordered
+                 else None)
         s = self.staged_null_space(stage)
         eta = sp.Matrix(self.eta)
         if root_frame and self.planar_frame:

@@ -54,7 +54,7 @@ typedef struct {
     trailer_real_t qdot_prev2[2]; /* qdot(t-2h) */
     trailer_real_t u_prev[2];   /* u(t-h) applied: B tau (paper) or tau (minimal) */
     trailer_real_t u_prev2[2];  /* u(t-2h) applied */
-    trailer_real_t k_minimal_asmc_law[22]; /* minimal_asmc_law's parameter-only values (at _init) */
+    trailer_real_t k_minimal_asmc_law[18]; /* minimal_asmc_law's parameter-only values (at _init) */
     trailer_real_t H1hat[8];    /* last estimate of H1 (TDE) or H-hat (model) */
     trailer_real_t gain;        /* switching gain used in the last step (ASMC: adapted gain), <=
                                    GAIN_MAX */

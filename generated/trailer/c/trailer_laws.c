@@ -31,89 +31,91 @@ void trailer_tdroc_weighted_gain(const trailer_real_t *minv_norm, const trailer_
 }
 
 /* trailer_minimal_tde: documented in trailer_laws.h.
-   operations after CSE: 39 add, 93 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 40 add, 68 mul, 5 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_tde(const trailer_params_t *p, const trailer_real_t *q_prev,
     const trailer_real_t *u_prev, const trailer_real_t *qdot_now, const trailer_real_t *qdot_then,
     const trailer_real_t *span, trailer_real_t *H1hat)
 {
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t0 = radius_left*radius_right;
-    const trailer_real_t _t1 = TRAILER_LIT(1.0)/_t0;
-    const trailer_real_t _t2 = _t1*radius_left;
-    const trailer_real_t _t3 = _t1*radius_right;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t4 = radius_cart_left*radius_cart_right;
     const trailer_real_t qp2 = q_prev[2];
     const trailer_real_t qp3 = q_prev[3];
-    const trailer_real_t _t5 = qp2 - qp3;
-    const trailer_real_t _t6 = TRAILER_SIN_BOUNDED(_t5);
-    const trailer_real_t _t7 = TRAILER_COS_BOUNDED(_t5);
-    const trailer_real_t _t8 = -TRAILER_LIT(0.6)*_t4;
-    const trailer_real_t _t9 = TRAILER_LIT(1.0)/_t8;
-    const trailer_real_t _t10 = _t4*_t9;
+    const trailer_real_t _t0 = qp2 - qp3;
+    const trailer_real_t _t1 = TRAILER_SIN_BOUNDED(_t0);
+    const trailer_real_t _t2 = TRAILER_COS_BOUNDED(_t0);
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t5 = TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t span_1 = span[0];
-    const trailer_real_t _t11 = TRAILER_LIT(1.0)/span_1;
+    const trailer_real_t _t9 = TRAILER_LIT(1.0)/span_1;
     const trailer_real_t qd_now0 = qdot_now[0];
     const trailer_real_t qd_then0 = qdot_then[0];
-    const trailer_real_t _t12 = _t11*(qd_now0 - qd_then0);
+    const trailer_real_t _t10 = _t9*(qd_now0 - qd_then0);
     const trailer_real_t qd_now1 = qdot_now[1];
     const trailer_real_t qd_then1 = qdot_then[1];
-    const trailer_real_t _t13 = _t11*(qd_now1 - qd_then1);
-    const trailer_real_t _t14 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t15 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t11 = _t9*(qd_now1 - qd_then1);
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t12 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t13 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t14 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t15 = TRAILER_LIT(1.0)/radius_cart_left;
     const trailer_real_t _t16 = TRAILER_LIT(0.5)*radius_right;
     const trailer_real_t _t17 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t18 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t19 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t20 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t21 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t22 = TRAILER_LIT(0.207)*_t2;
-    const trailer_real_t _t23 = -TRAILER_LIT(0.207)*_t3;
-    const trailer_real_t _t24 = -TRAILER_LIT(0.3)*_t7;
-    const trailer_real_t _t25 = -TRAILER_LIT(0.3)*_t6;
-    const trailer_real_t _t26 = -_t10*_t6;
-    const trailer_real_t _t27 = _t9*(-_t18*_t6 + _t19*_t7);
-    const trailer_real_t _t28 = _t9*(-_t20*_t6 + _t21*_t7);
-    const trailer_real_t _t29 = -_t10*_t24;
-    const trailer_real_t _t30 = _t9*(-_t18*_t24 - _t19*_t25);
-    const trailer_real_t _t31 = _t9*(-_t20*_t24 - _t21*_t25);
+    const trailer_real_t _t18 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t19 = TRAILER_LIT(0.207)*_t18;
+    const trailer_real_t _t20 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t21 = -TRAILER_LIT(0.207)*_t20;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t22 = J_theta_right*_t18;
+    const trailer_real_t _t23 = J_theta_right*_t19;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t24 = J_theta_left*_t20;
+    const trailer_real_t _t25 = J_theta_left*_t21;
+    const trailer_real_t _t26 = _t2 + _t6;
+    const trailer_real_t _t27 = _t4 + _t8;
+    const trailer_real_t _t28 = _t14*_t26;
+    const trailer_real_t _t29 = _t14*_t27;
+    const trailer_real_t _t30 = _t2 - _t6;
+    const trailer_real_t _t31 = _t4 - _t8;
+    const trailer_real_t _t32 = _t15*_t30;
+    const trailer_real_t _t33 = _t15*_t31;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t32 = -K_theta_cart_x_tractor*_t6 + K_theta_cart_x_tractor_2*_t7;
-    const trailer_real_t _t33 = -K_theta_cart_x_tractor*_t7 - K_theta_cart_x_tractor_2*_t6;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t34 = -K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t4;
     const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t34 = J_theta_cart_left*_t28*_t28 + J_theta_cart_right*_t27*_t27
-            + J_theta_left*_t3*_t3 + J_theta_right*_t2*_t2 + J_x_tractor;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t35 = J_theta_cart*_t26*_t26 + TRAILER_LIT(2.0)*_t26*_t32 + _t34;
-    const trailer_real_t _t36 = J_theta_cart_left*_t28*_t31 + J_theta_cart_right*_t27*_t30
-            + J_theta_left*_t23*_t3 + J_theta_right*_t2*_t22;
+    const trailer_real_t _t36 = J_x_tractor + _t34*_t5;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t37 = K_theta_tractor_x_tractor_2 + _t36;
-    const trailer_real_t _t38 = J_theta_cart*_t26*_t29 - TRAILER_LIT(0.3)*_t26*_t33 + _t29*_t32
-            + _t37;
-    const trailer_real_t _t39 = J_theta_cart_left*_t31*_t31 + J_theta_cart_right*_t30*_t30
-            + J_theta_left*_t23*_t23 + J_theta_right*_t22*_t22;
+    const trailer_real_t _t37 = K_theta_tractor_x_tractor_2 + _t34*_t7;
     const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t40 = J_theta_tractor + _t39;
-    const trailer_real_t _t41 = J_theta_cart*_t29*_t29 - TRAILER_LIT(0.6)*_t29*_t33 + _t40;
-    const trailer_real_t _t42 = _t14*_t38 + _t16*_t35;
-    const trailer_real_t _t43 = _t15*_t38 + _t17*_t35;
-    const trailer_real_t _t44 = _t14*_t41 + _t16*_t38;
-    const trailer_real_t _t45 = _t15*_t41 + _t17*_t38;
-    const trailer_real_t _t46 = _t14*_t44 + _t16*_t42;
-    const trailer_real_t _t47 = _t14*_t45 + _t16*_t43;
-    const trailer_real_t _t48 = _t15*_t45 + _t17*_t43;
+    const trailer_real_t _t38 = J_theta_tractor + _t35*_t7;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t39 = J_theta_cart*_t5 + _t34;
+    const trailer_real_t _t40 = J_theta_cart*_t7 + _t35;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t41 = J_theta_cart_right*_t28;
+    const trailer_real_t _t42 = J_theta_cart_right*_t29;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t43 = J_theta_cart_left*_t32;
+    const trailer_real_t _t44 = J_theta_cart_left*_t33;
+    const trailer_real_t _t45 = _t18*_t22 + _t20*_t24 + _t28*_t41 + _t32*_t43 + _t36 + _t39*_t5;
+    const trailer_real_t _t46 = _t18*_t23 + _t20*_t25 + _t28*_t42 + _t32*_t44 + _t37 + _t40*_t5;
+    const trailer_real_t _t47 = _t19*_t23 + _t21*_t25 + _t29*_t42 + _t33*_t44 + _t38 + _t40*_t7;
+    const trailer_real_t _t48 = _t12*_t46 + _t16*_t45;
+    const trailer_real_t _t49 = _t13*_t46 + _t17*_t45;
+    const trailer_real_t _t50 = _t12*_t47 + _t16*_t46;
+    const trailer_real_t _t51 = _t13*_t47 + _t17*_t46;
+    const trailer_real_t _t52 = _t12*_t50 + _t16*_t48;
+    const trailer_real_t _t53 = _t12*_t51 + _t16*_t49;
+    const trailer_real_t _t54 = _t13*_t51 + _t17*_t49;
     const trailer_real_t up0 = u_prev[0];
     const trailer_real_t up1 = u_prev[1];
-    H1hat[0] = -_t12*_t46 - _t13*_t47 + up0;
-    H1hat[1] = -_t12*_t47 - _t13*_t48 + up1;
+    H1hat[0] = -_t10*_t52 - _t11*_t53 + up0;
+    H1hat[1] = -_t10*_t53 - _t11*_t54 + up1;
 }
 
 /* trailer_minimal_tde_mhat: documented in trailer_laws.h.
@@ -128,7 +130,7 @@ void trailer_minimal_tde_mhat(const trailer_params_t *p, const trailer_real_t *m
 }
 
 /* trailer_minimal_minv_norm: documented in trailer_laws.h.
-   operations after CSE: 36 add, 93 mul, 3 div, 2 sin/cos, 1 sqrt, 1 fabs */
+   operations after CSE: 37 add, 68 mul, 5 div, 2 sin/cos, 1 sqrt, 1 fabs */
 void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *norm)
 {
@@ -137,70 +139,72 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t _t0 = theta_cart - theta_tractor;
     const trailer_real_t _t1 = TRAILER_SIN_BOUNDED(_t0);
     const trailer_real_t _t2 = TRAILER_COS_BOUNDED(_t0);
-    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t3 = radius_left*radius_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/_t3;
-    const trailer_real_t _t5 = _t4*radius_left;
-    const trailer_real_t _t6 = _t4*radius_right;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t9 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t10 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t12 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t13 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t14 = TRAILER_LIT(1.0)/radius_left;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t7 = radius_cart_left*radius_cart_right;
-    const trailer_real_t _t8 = -TRAILER_LIT(0.6)*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(1.0)/_t8;
-    const trailer_real_t _t10 = _t7*_t9;
-    const trailer_real_t _t11 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t12 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t13 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t15 = _t1*_t10;
+    const trailer_real_t _t15 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t16 = _t2 + _t6;
+    const trailer_real_t _t17 = _t15*_t16;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t18 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t19 = _t2 - _t6;
+    const trailer_real_t _t20 = _t18*_t19;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t16 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t17 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t18 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t19 = _t9*(_t1*_t17 + _t18*_t2);
-    const trailer_real_t _t20 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t21 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t22 = _t9*(_t1*_t20 + _t2*_t21);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t21 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
     const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t23 = J_theta_cart_left*_t22*_t22 + J_theta_cart_right*_t19*_t19
-            + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor;
+    const trailer_real_t _t22 = J_x_tractor + _t21*_t5;
     const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t24 = J_theta_cart*_t15*_t15 + TRAILER_LIT(2.0)*_t15*_t16 + _t23;
-    const trailer_real_t _t25 = -TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t26 = -_t10*_t25;
-    const trailer_real_t _t27 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t28 = TRAILER_LIT(0.207)*_t5;
-    const trailer_real_t _t29 = -TRAILER_LIT(0.207)*_t6;
-    const trailer_real_t _t30 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t31 = _t9*(-_t17*_t25 - _t18*_t30);
-    const trailer_real_t _t32 = _t9*(-_t20*_t25 - _t21*_t30);
-    const trailer_real_t _t33 = J_theta_cart_left*_t22*_t32 + J_theta_cart_right*_t19*_t31
-            + J_theta_left*_t29*_t6 + J_theta_right*_t28*_t5;
+    const trailer_real_t _t23 = J_theta_cart*_t5 + _t21;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t24 = J_theta_right*_t13;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t25 = J_theta_left*_t14;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t26 = J_theta_cart_right*_t17;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t27 = J_theta_cart_left*_t20;
+    const trailer_real_t _t28 = _t13*_t24 + _t14*_t25 + _t17*_t26 + _t20*_t27 + _t22 + _t23*_t5;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t34 = K_theta_tractor_x_tractor_2 + _t33;
-    const trailer_real_t _t35 = J_theta_cart*_t15*_t26 - TRAILER_LIT(0.3)*_t15*_t27 + _t16*_t26
-            + _t34;
-    const trailer_real_t _t36 = _t13*_t35 + _t14*_t24;
-    const trailer_real_t _t37 = J_theta_cart_left*_t32*_t32 + J_theta_cart_right*_t31*_t31
-            + J_theta_left*_t29*_t29 + J_theta_right*_t28*_t28;
+    const trailer_real_t _t29 = K_theta_tractor_x_tractor_2 + _t21*_t7;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
+    const trailer_real_t _t31 = J_theta_cart*_t7 + _t30;
+    const trailer_real_t _t32 = TRAILER_LIT(0.207)*_t13;
+    const trailer_real_t _t33 = J_theta_right*_t32;
+    const trailer_real_t _t34 = -TRAILER_LIT(0.207)*_t14;
+    const trailer_real_t _t35 = J_theta_left*_t34;
+    const trailer_real_t _t36 = -_t4 + _t8;
+    const trailer_real_t _t37 = _t15*_t36;
+    const trailer_real_t _t38 = J_theta_cart_right*_t37;
+    const trailer_real_t _t39 = -_t4 - _t8;
+    const trailer_real_t _t40 = _t18*_t39;
+    const trailer_real_t _t41 = J_theta_cart_left*_t40;
+    const trailer_real_t _t42 = _t13*_t33 + _t14*_t35 + _t17*_t38 + _t20*_t41 + _t29 + _t31*_t5;
+    const trailer_real_t _t43 = _t11*_t42 + _t12*_t28;
     const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t38 = J_theta_tractor + _t37;
-    const trailer_real_t _t39 = J_theta_cart*_t26*_t26 - TRAILER_LIT(0.6)*_t26*_t27 + _t38;
-    const trailer_real_t _t40 = _t13*_t39 + _t14*_t35;
-    const trailer_real_t _t41 = _t11*_t40 + _t12*_t36;
-    const trailer_real_t _t42 = _t41*_t41;
-    const trailer_real_t _t43 = _t11*_t35 + _t12*_t24;
-    const trailer_real_t _t44 = _t11*_t39 + _t12*_t35;
-    const trailer_real_t _t45 = _t11*_t44 + _t12*_t43;
-    const trailer_real_t _t46 = _t13*_t40 + _t14*_t36;
-    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t42 + _t45*_t45
-            + _t46*_t46)*(TRAILER_LIT(1.0)/TRAILER_FABS(_t42 - _t45*_t46));
+    const trailer_real_t _t44 = J_theta_tractor + _t30*_t7;
+    const trailer_real_t _t45 = _t31*_t7 + _t32*_t33 + _t34*_t35 + _t37*_t38 + _t40*_t41 + _t44;
+    const trailer_real_t _t46 = _t11*_t45 + _t12*_t42;
+    const trailer_real_t _t47 = _t10*_t43 + _t46*_t9;
+    const trailer_real_t _t48 = _t47*_t47;
+    const trailer_real_t _t49 = _t10*_t28 + _t42*_t9;
+    const trailer_real_t _t50 = _t10*_t42 + _t45*_t9;
+    const trailer_real_t _t51 = _t10*_t49 + _t50*_t9;
+    const trailer_real_t _t52 = _t11*_t46 + _t12*_t43;
+    norm[0] = TRAILER_SQRT(TRAILER_LIT(2.0)*_t48 + _t51*_t51
+            + _t52*_t52)*(TRAILER_LIT(1.0)/TRAILER_FABS(_t48 - _t51*_t52));
 }
 
 /* trailer_minimal_minv_norm_mhat: documented in trailer_laws.h.
@@ -283,7 +287,7 @@ void trailer_minimal_omega_difference(const trailer_real_t *newer, const trailer
 }
 
 /* trailer_minimal_tdc_law: documented in trailer_laws.h.
-   operations after CSE: 41 add, 95 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 42 add, 70 mul, 4 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -296,83 +300,85 @@ void trailer_minimal_tdc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t0 = theta_cart - theta_tractor;
     const trailer_real_t _t1 = TRAILER_SIN_BOUNDED(_t0);
     const trailer_real_t _t2 = TRAILER_COS_BOUNDED(_t0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t3 = radius_left*radius_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/_t3;
-    const trailer_real_t _t5 = _t4*radius_left;
-    const trailer_real_t _t6 = _t4*radius_right;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t7 = radius_cart_left*radius_cart_right;
-    const trailer_real_t _t8 = -TRAILER_LIT(0.6)*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(1.0)/_t8;
-    const trailer_real_t _t10 = _t7*_t9;
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t11 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t9 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t12 = e1*k1_1 + edot1*k2_1 + qdd_des1;
-    const trailer_real_t _t13 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t14 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t16 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t17 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t18 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t19 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t20 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t21 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t22 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t23 = _t1*_t10;
-    const trailer_real_t _t24 = _t9*(_t1*_t19 + _t2*_t20);
-    const trailer_real_t _t25 = _t9*(_t1*_t21 + _t2*_t22);
-    const trailer_real_t _t26 = TRAILER_LIT(0.207)*_t5;
-    const trailer_real_t _t27 = -TRAILER_LIT(0.207)*_t6;
-    const trailer_real_t _t28 = -_t10*_t15;
-    const trailer_real_t _t29 = _t9*(-_t15*_t19 - _t16*_t20);
-    const trailer_real_t _t30 = _t9*(-_t15*_t21 - _t16*_t22);
+    const trailer_real_t _t10 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t11 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t12 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t13 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t14 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t15 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t16 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t17 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t18 = TRAILER_LIT(0.207)*_t17;
+    const trailer_real_t _t19 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t20 = -TRAILER_LIT(0.207)*_t19;
+    const trailer_real_t _t21 = _t2 + _t6;
+    const trailer_real_t _t22 = -_t4 + _t8;
+    const trailer_real_t _t23 = _t13*_t21;
+    const trailer_real_t _t24 = _t13*_t22;
+    const trailer_real_t _t25 = _t2 - _t6;
+    const trailer_real_t _t26 = -_t4 - _t8;
+    const trailer_real_t _t27 = _t14*_t25;
+    const trailer_real_t _t28 = _t14*_t26;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t31 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t32 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t29 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t30 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
     const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t33 = J_theta_cart_left*_t25*_t25 + J_theta_cart_right*_t24*_t24
-            + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t34 = J_theta_cart*_t23*_t23 + TRAILER_LIT(2.0)*_t23*_t31 + _t33;
-    const trailer_real_t _t35 = J_theta_cart_left*_t25*_t30 + J_theta_cart_right*_t24*_t29
-            + J_theta_left*_t27*_t6 + J_theta_right*_t26*_t5;
+    const trailer_real_t _t31 = J_x_tractor + _t29*_t5;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t36 = K_theta_tractor_x_tractor_2 + _t35;
-    const trailer_real_t _t37 = J_theta_cart*_t23*_t28 - TRAILER_LIT(0.3)*_t23*_t32 + _t28*_t31
-            + _t36;
-    const trailer_real_t _t38 = J_theta_cart_left*_t30*_t30 + J_theta_cart_right*_t29*_t29
-            + J_theta_left*_t27*_t27 + J_theta_right*_t26*_t26;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2 + _t29*_t7;
     const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t39 = J_theta_tractor + _t38;
-    const trailer_real_t _t40 = J_theta_cart*_t28*_t28 - TRAILER_LIT(0.6)*_t28*_t32 + _t39;
-    const trailer_real_t _t41 = _t13*_t37 + _t17*_t34;
-    const trailer_real_t _t42 = _t14*_t37 + _t18*_t34;
-    const trailer_real_t _t43 = _t13*_t40 + _t17*_t37;
-    const trailer_real_t _t44 = _t14*_t40 + _t18*_t37;
-    const trailer_real_t _t45 = _t13*_t43 + _t17*_t41;
-    const trailer_real_t _t46 = _t13*_t44 + _t17*_t42;
-    const trailer_real_t _t47 = _t14*_t44 + _t18*_t42;
+    const trailer_real_t _t33 = J_theta_tractor + _t30*_t7;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t34 = J_theta_cart*_t5 + _t29;
+    const trailer_real_t _t35 = J_theta_cart*_t7 + _t30;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t36 = J_theta_right*_t17;
+    const trailer_real_t _t37 = J_theta_right*_t18;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t38 = J_theta_left*_t19;
+    const trailer_real_t _t39 = J_theta_left*_t20;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t40 = J_theta_cart_right*_t23;
+    const trailer_real_t _t41 = J_theta_cart_right*_t24;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t42 = J_theta_cart_left*_t27;
+    const trailer_real_t _t43 = J_theta_cart_left*_t28;
+    const trailer_real_t _t44 = _t17*_t36 + _t19*_t38 + _t23*_t40 + _t27*_t42 + _t31 + _t34*_t5;
+    const trailer_real_t _t45 = _t17*_t37 + _t19*_t39 + _t23*_t41 + _t27*_t43 + _t32 + _t35*_t5;
+    const trailer_real_t _t46 = _t18*_t37 + _t20*_t39 + _t24*_t41 + _t28*_t43 + _t33 + _t35*_t7;
+    const trailer_real_t _t47 = _t11*_t45 + _t15*_t44;
+    const trailer_real_t _t48 = _t12*_t45 + _t16*_t44;
+    const trailer_real_t _t49 = _t11*_t46 + _t15*_t45;
+    const trailer_real_t _t50 = _t12*_t46 + _t16*_t45;
+    const trailer_real_t _t51 = _t11*_t49 + _t15*_t47;
+    const trailer_real_t _t52 = _t11*_t50 + _t15*_t48;
+    const trailer_real_t _t53 = _t12*_t50 + _t16*_t48;
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
-    u[0] = H1hat0 + _t11*_t45 + _t12*_t46;
-    u[1] = H1hat1 + _t11*_t46 + _t12*_t47;
+    u[0] = H1hat0 + _t10*_t52 + _t51*_t9;
+    u[1] = H1hat1 + _t10*_t53 + _t52*_t9;
 }
 
 /* trailer_minimal_tdc_law_mhat: documented in trailer_laws.h.
@@ -386,7 +392,7 @@ void trailer_minimal_tdc_law_mhat(const trailer_params_t *p, const trailer_real_
 }
 
 /* trailer_minimal_tdroc_law: documented in trailer_laws.h.
-   operations after CSE: 48 add, 109 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 49 add, 84 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
     const trailer_real_t *k1, const trailer_real_t *k2, const trailer_real_t *p12,
@@ -398,98 +404,100 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
     const trailer_real_t _t0 = theta_cart - theta_tractor;
     const trailer_real_t _t1 = TRAILER_SIN_BOUNDED(_t0);
     const trailer_real_t _t2 = TRAILER_COS_BOUNDED(_t0);
-    const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t3 = radius_left*radius_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/_t3;
-    const trailer_real_t _t5 = _t4*radius_left;
-    const trailer_real_t _t6 = _t4*radius_right;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t7 = radius_cart_left*radius_cart_right;
-    const trailer_real_t _t8 = -TRAILER_LIT(0.6)*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(1.0)/_t8;
-    const trailer_real_t _t10 = _t7*_t9;
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t e0 = e[0];
     const trailer_real_t edot0 = edot[0];
     const trailer_real_t qdd_des0 = qddot_des[0];
     const trailer_real_t k1_0 = k1[0];
     const trailer_real_t k2_0 = k2[0];
-    const trailer_real_t _t11 = e0*k1_0 + edot0*k2_0 + qdd_des0;
+    const trailer_real_t _t9 = e0*k1_0 + edot0*k2_0 + qdd_des0;
     const trailer_real_t e1 = e[1];
     const trailer_real_t edot1 = edot[1];
     const trailer_real_t qdd_des1 = qddot_des[1];
     const trailer_real_t k1_1 = k1[1];
     const trailer_real_t k2_1 = k2[1];
-    const trailer_real_t _t12 = e1*k1_1 + edot1*k2_1 + qdd_des1;
+    const trailer_real_t _t10 = e1*k1_1 + edot1*k2_1 + qdd_des1;
     const trailer_real_t p12_0 = p12[0];
     const trailer_real_t p22_0 = p22[0];
-    const trailer_real_t _t13 = e0*p12_0 + edot0*p22_0;
+    const trailer_real_t _t11 = e0*p12_0 + edot0*p22_0;
     const trailer_real_t p12_1 = p12[1];
     const trailer_real_t p22_1 = p22[1];
-    const trailer_real_t _t14 = e1*p12_1 + edot1*p22_1;
-    const trailer_real_t _t15 = trailer_norm2(_t13, _t14);
+    const trailer_real_t _t12 = e1*p12_1 + edot1*p22_1;
+    const trailer_real_t _t13 = trailer_norm2(_t11, _t12);
     const trailer_real_t eps_1 = eps[0];
-    const trailer_real_t _t16 = TRAILER_LIT(1.0)/(TRAILER_FMAX(_t15, eps_1));
-    const trailer_real_t _t17 = _t13*_t16;
-    const trailer_real_t _t18 = _t14*_t16;
-    const trailer_real_t _t19 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t20 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t21 = -TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t22 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t23 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t24 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t25 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t26 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t27 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t28 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t29 = _t1*_t10;
-    const trailer_real_t _t30 = _t9*(_t1*_t25 + _t2*_t26);
-    const trailer_real_t _t31 = _t9*(_t1*_t27 + _t2*_t28);
-    const trailer_real_t _t32 = TRAILER_LIT(0.207)*_t5;
-    const trailer_real_t _t33 = -TRAILER_LIT(0.207)*_t6;
-    const trailer_real_t _t34 = -_t10*_t21;
-    const trailer_real_t _t35 = _t9*(-_t21*_t25 - _t22*_t26);
-    const trailer_real_t _t36 = _t9*(-_t21*_t27 - _t22*_t28);
+    const trailer_real_t _t14 = TRAILER_LIT(1.0)/(TRAILER_FMAX(_t13, eps_1));
+    const trailer_real_t _t15 = _t11*_t14;
+    const trailer_real_t _t16 = _t12*_t14;
+    const trailer_real_t radius_right = p->radius_right;
+    const trailer_real_t _t17 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t18 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t19 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t20 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t21 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t22 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t23 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t24 = TRAILER_LIT(0.207)*_t23;
+    const trailer_real_t _t25 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t26 = -TRAILER_LIT(0.207)*_t25;
+    const trailer_real_t _t27 = _t2 + _t6;
+    const trailer_real_t _t28 = -_t4 + _t8;
+    const trailer_real_t _t29 = _t19*_t27;
+    const trailer_real_t _t30 = _t19*_t28;
+    const trailer_real_t _t31 = _t2 - _t6;
+    const trailer_real_t _t32 = -_t4 - _t8;
+    const trailer_real_t _t33 = _t20*_t31;
+    const trailer_real_t _t34 = _t20*_t32;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t37 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t38 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t35 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t36 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
     const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t39 = J_theta_cart_left*_t31*_t31 + J_theta_cart_right*_t30*_t30
-            + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t40 = J_theta_cart*_t29*_t29 + TRAILER_LIT(2.0)*_t29*_t37 + _t39;
-    const trailer_real_t _t41 = J_theta_cart_left*_t31*_t36 + J_theta_cart_right*_t30*_t35
-            + J_theta_left*_t33*_t6 + J_theta_right*_t32*_t5;
+    const trailer_real_t _t37 = J_x_tractor + _t35*_t5;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t42 = K_theta_tractor_x_tractor_2 + _t41;
-    const trailer_real_t _t43 = J_theta_cart*_t29*_t34 - TRAILER_LIT(0.3)*_t29*_t38 + _t34*_t37
-            + _t42;
-    const trailer_real_t _t44 = J_theta_cart_left*_t36*_t36 + J_theta_cart_right*_t35*_t35
-            + J_theta_left*_t33*_t33 + J_theta_right*_t32*_t32;
+    const trailer_real_t _t38 = K_theta_tractor_x_tractor_2 + _t35*_t7;
     const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t45 = J_theta_tractor + _t44;
-    const trailer_real_t _t46 = J_theta_cart*_t34*_t34 - TRAILER_LIT(0.6)*_t34*_t38 + _t45;
-    const trailer_real_t _t47 = _t19*_t43 + _t23*_t40;
-    const trailer_real_t _t48 = _t20*_t43 + _t24*_t40;
-    const trailer_real_t _t49 = _t19*_t46 + _t23*_t43;
-    const trailer_real_t _t50 = _t20*_t46 + _t24*_t43;
-    const trailer_real_t _t51 = _t19*_t49 + _t23*_t47;
-    const trailer_real_t _t52 = _t19*_t50 + _t23*_t48;
-    const trailer_real_t _t53 = _t20*_t50 + _t24*_t48;
+    const trailer_real_t _t39 = J_theta_tractor + _t36*_t7;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t40 = J_theta_cart*_t5 + _t35;
+    const trailer_real_t _t41 = J_theta_cart*_t7 + _t36;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t42 = J_theta_right*_t23;
+    const trailer_real_t _t43 = J_theta_right*_t24;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t44 = J_theta_left*_t25;
+    const trailer_real_t _t45 = J_theta_left*_t26;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t46 = J_theta_cart_right*_t29;
+    const trailer_real_t _t47 = J_theta_cart_right*_t30;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t48 = J_theta_cart_left*_t33;
+    const trailer_real_t _t49 = J_theta_cart_left*_t34;
+    const trailer_real_t _t50 = _t23*_t42 + _t25*_t44 + _t29*_t46 + _t33*_t48 + _t37 + _t40*_t5;
+    const trailer_real_t _t51 = _t23*_t43 + _t25*_t45 + _t29*_t47 + _t33*_t49 + _t38 + _t41*_t5;
+    const trailer_real_t _t52 = _t24*_t43 + _t26*_t45 + _t30*_t47 + _t34*_t49 + _t39 + _t41*_t7;
+    const trailer_real_t _t53 = _t17*_t51 + _t21*_t50;
+    const trailer_real_t _t54 = _t18*_t51 + _t22*_t50;
+    const trailer_real_t _t55 = _t17*_t52 + _t21*_t51;
+    const trailer_real_t _t56 = _t18*_t52 + _t22*_t51;
+    const trailer_real_t _t57 = _t17*_t55 + _t21*_t53;
+    const trailer_real_t _t58 = _t17*_t56 + _t21*_t54;
+    const trailer_real_t _t59 = _t18*_t56 + _t22*_t54;
     const trailer_real_t H1hat0 = H1hat[0];
     const trailer_real_t H1hat1 = H1hat[1];
     const trailer_real_t gain_1 = gain[0];
-    u[0] = H1hat0 + _t11*_t51 + _t12*_t52 + gain_1*(_t17*_t51 + _t18*_t52);
-    u[1] = H1hat1 + _t11*_t52 + _t12*_t53 + gain_1*(_t17*_t52 + _t18*_t53);
-    s[0] = _t13;
-    s[1] = _t14;
-    s_norm[0] = _t15;
+    u[0] = H1hat0 + _t10*_t58 + _t57*_t9 + gain_1*(_t15*_t57 + _t16*_t58);
+    u[1] = H1hat1 + _t10*_t59 + _t58*_t9 + gain_1*(_t15*_t58 + _t16*_t59);
+    s[0] = _t11;
+    s[1] = _t12;
+    s_norm[0] = _t13;
 }
 
 /* trailer_minimal_tdroc_law_mhat: documented in trailer_laws.h.
@@ -505,7 +513,7 @@ void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_rea
 }
 
 /* trailer_minimal_roc_law: documented in trailer_laws.h.
-   operations after CSE: 79 add, 168 mul, 4 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
+   operations after CSE: 84 add, 141 mul, 6 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -513,14 +521,14 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm,
     trailer_real_t *gain)
 {
-    trailer_real_t kept[22];
+    trailer_real_t kept[18];
     trailer_k_minimal_roc_law_keep(p, kept);
     trailer_k_minimal_roc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, bounds, eps, u,
             s, s_norm, gain);
 }
 
 /* trailer_minimal_asmc_law: documented in trailer_laws.h.
-   operations after CSE: 75 add, 165 mul, 3 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
+   operations after CSE: 80 add, 138 mul, 5 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
@@ -528,7 +536,7 @@ void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q
     const trailer_real_t *eps, const trailer_real_t *adapt, trailer_real_t *u, trailer_real_t *s,
     trailer_real_t *s_norm, trailer_real_t *gain_next)
 {
-    trailer_real_t kept[22];
+    trailer_real_t kept[18];
     trailer_k_minimal_roc_law_keep(p, kept);
     trailer_k_minimal_asmc_law(kept, q, qdot, e, edot, qddot_des, k1, k2, p12, p22, gain, eps,
             adapt, u, s, s_norm, gain_next);

@@ -9,7 +9,7 @@
 /* trailer_staged_quantities: The quantities minimal_bias_forces, minimal_forward_dynamics,
    linearization, wheel_contact_forces all read.
    Each caller's documented operations include these:
-   operations after CSE: 31 add, 83 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 35 add, 68 mul, 2 div, 2 sin/cos, 0 sqrt */
 static void trailer_staged_quantities(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *shared_quantities)
 {
@@ -18,122 +18,128 @@ static void trailer_staged_quantities(const trailer_params_t *p, const trailer_r
     const trailer_real_t _t0 = theta_cart - theta_tractor;
     const trailer_real_t _t1 = TRAILER_SIN(_t0);
     const trailer_real_t _t2 = TRAILER_COS(_t0);
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t3 = radius_cart_left*radius_cart_right;
-    const trailer_real_t _t4 = -TRAILER_LIT(0.6)*_t3;
-    const trailer_real_t _t5 = TRAILER_LIT(1.0)/_t4;
-    const trailer_real_t _t6 = _t3*_t5;
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t9 = K_theta_cart_x_tractor*_t2;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t7 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t10 = TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t8 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t9 = _t7*thetadot_right + _t8*thetadot_left;
-    const trailer_real_t _t10 = _t1*_t6;
-    const trailer_real_t _t11 = -TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t12 = -_t11*_t6;
-    const trailer_real_t _t13 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t14 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t15 = _t13*thetadot_right + _t14*thetadot_left;
-    const trailer_real_t _t16 = _t10*_t9 + _t12*_t15;
-    const trailer_real_t _t17 = _t16*_t9;
-    const trailer_real_t _t18 = -TRAILER_LIT(0.3)*_t15;
-    const trailer_real_t _t19 = _t16*_t18;
-    const trailer_real_t _t20 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t21 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t22 = _t15*_t15;
-    const trailer_real_t _t23 = TRAILER_LIT(0.3)*_t22;
-    const trailer_real_t _t24 = radius_left*radius_right;
-    const trailer_real_t _t25 = TRAILER_LIT(1.0)/_t24;
-    const trailer_real_t _t26 = -_t15*_t9;
-    const trailer_real_t _t27 = -_t24*_t25*_t26;
-    const trailer_real_t _t28 = -_t1*_t19 - _t17*_t2;
-    const trailer_real_t _t29 = _t1*_t23 - _t2*_t27 - _t28;
-    const trailer_real_t _t30 = _t1*_t17 - _t19*_t2;
-    const trailer_real_t _t31 = _t1*_t27 + _t2*_t23 - _t30;
-    const trailer_real_t _t32 = _t5*(_t20*_t29 + _t21*_t31);
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t _t33 = J_theta_cart_left*_t32;
-    const trailer_real_t _t34 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t35 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t36 = _t5*(_t29*_t34 + _t31*_t35);
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t _t37 = J_theta_cart_right*_t36;
-    const trailer_real_t _t38 = _t29*_t6;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t39 = J_theta_cart*_t38;
-    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t _t12 = _t10*thetadot_right + _t11*thetadot_left;
+    const trailer_real_t _t13 = _t12*_t12;
+    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t15 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t16 = _t14*thetadot_right + _t15*thetadot_left;
+    const trailer_real_t _t17 = _t12*_t7 + _t16*_t5;
+    const trailer_real_t _t18 = _t17*_t17;
+    const trailer_real_t _t19 = K_theta_cart_x_tractor*_t4;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t40 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t41 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t _t42 = _t23*_t40 + _t27*_t41;
-    const trailer_real_t _t43 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t44 = _t5*(_t1*_t34 + _t2*_t35);
-    const trailer_real_t _t45 = _t5*(_t1*_t20 + _t2*_t21);
-    const trailer_real_t _t46 = _t5*(-_t11*_t34 - _t35*_t43);
-    const trailer_real_t _t47 = _t5*(-_t11*_t20 - _t21*_t43);
-    const trailer_real_t _t48 = _t16*_t16;
-    const trailer_real_t _t49 = _t33*_t45 + _t37*_t44;
+    const trailer_real_t _t20 = K_theta_cart_x_tractor_2*_t3;
+    const trailer_real_t _t21 = TRAILER_LIT(1.6666666666666667)*_t2;
+    const trailer_real_t _t22 = TRAILER_LIT(0.2)*_t21;
+    const trailer_real_t _t23 = -TRAILER_LIT(1.6666666666666667)*_t4;
+    const trailer_real_t _t24 = TRAILER_LIT(0.2)*_t23;
+    const trailer_real_t _t25 = _t12*_t16;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t26 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t27 = _t1 - _t22;
+    const trailer_real_t _t28 = _t26*_t27;
+    const trailer_real_t _t29 = -_t24 + _t3;
+    const trailer_real_t _t30 = _t26*_t29;
+    const trailer_real_t _t31 = -_t16*_t17 + _t25;
+    const trailer_real_t _t32 = -_t12*_t17 + _t13;
+    const trailer_real_t _t33 = _t28*_t31 + _t30*_t32;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t34 = J_theta_cart_left*_t33;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t35 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t36 = _t1 + _t22;
+    const trailer_real_t _t37 = _t35*_t36;
+    const trailer_real_t _t38 = _t24 + _t3;
+    const trailer_real_t _t39 = _t35*_t38;
+    const trailer_real_t _t40 = _t31*_t37 + _t32*_t39;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t41 = J_theta_cart_right*_t40;
+    const trailer_real_t _t42 = K_theta_cart_x_tractor_2*_t1 - _t9;
+    const trailer_real_t _t43 = _t13*_t19 + _t13*_t20;
+    const trailer_real_t _t44 = _t21*_t31 + _t23*_t32;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t45 = J_theta_cart*_t44 + _t25*_t42 + _t43;
+    const trailer_real_t _t46 = _t2 + _t6;
+    const trailer_real_t _t47 = -_t4 + _t8;
+    const trailer_real_t _t48 = _t35*_t46;
+    const trailer_real_t _t49 = _t35*_t47;
+    const trailer_real_t _t50 = _t2 - _t6;
+    const trailer_real_t _t51 = -_t4 - _t8;
+    const trailer_real_t _t52 = _t26*_t50;
+    const trailer_real_t _t53 = _t26*_t51;
+    const trailer_real_t _t54 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
     const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const trailer_real_t _t50 = K_theta_tractor_x_tractor*_t22 + _t49;
-    const trailer_real_t _t51 = _t10*_t39 + _t10*_t42 + _t38*_t40 - _t41*_t48 + _t50;
-    const trailer_real_t _t52 = _t33*_t47 + _t37*_t46;
-    const trailer_real_t _t53 = -K_theta_tractor_x_tractor*_t27 + _t52;
-    const trailer_real_t _t54 = _t12*_t39 + _t12*_t42 - TRAILER_LIT(0.3)*_t38*_t41
-            - TRAILER_LIT(0.3)*_t40*_t48 + _t53;
-    shared_quantities[0] = _t13;
-    shared_quantities[1] = _t14;
-    shared_quantities[2] = -_t1;
-    shared_quantities[3] = _t2;
-    shared_quantities[4] = _t11;
-    shared_quantities[5] = _t43;
-    shared_quantities[6] = _t7;
-    shared_quantities[7] = _t8;
-    shared_quantities[8] = _t24;
-    shared_quantities[9] = _t25;
-    shared_quantities[10] = _t3;
-    shared_quantities[11] = _t34;
-    shared_quantities[12] = _t35;
-    shared_quantities[13] = _t20;
-    shared_quantities[14] = _t21;
-    shared_quantities[15] = _t4;
-    shared_quantities[16] = _t5;
-    shared_quantities[17] = _t10;
-    shared_quantities[18] = _t44;
-    shared_quantities[19] = _t45;
-    shared_quantities[20] = _t12;
-    shared_quantities[21] = _t46;
-    shared_quantities[22] = _t47;
-    shared_quantities[23] = _t9;
-    shared_quantities[24] = _t15;
-    shared_quantities[25] = _t16;
-    shared_quantities[26] = _t22;
-    shared_quantities[27] = _t48;
-    shared_quantities[28] = _t23;
-    shared_quantities[29] = _t18;
-    shared_quantities[30] = _t26;
-    shared_quantities[31] = _t27;
-    shared_quantities[32] = _t28;
-    shared_quantities[33] = _t30;
-    shared_quantities[34] = _t29;
-    shared_quantities[35] = _t31;
-    shared_quantities[36] = _t38;
-    shared_quantities[37] = _t36;
-    shared_quantities[38] = _t32;
-    shared_quantities[39] = _t40;
-    shared_quantities[40] = _t41;
-    shared_quantities[41] = _t49;
-    shared_quantities[42] = _t50;
-    shared_quantities[43] = _t51;
-    shared_quantities[44] = _t52;
-    shared_quantities[45] = _t53;
-    shared_quantities[46] = _t54;
+    const trailer_real_t _t56 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13
+            + _t18*_t9;
+    const trailer_real_t _t57 = -_t18*_t19 - _t18*_t20;
+    const trailer_real_t _t58 = _t34*_t52 + _t41*_t48 + _t44*_t54 + _t45*_t5 + _t56;
+    const trailer_real_t _t59 = -K_theta_tractor_x_tractor*_t25 + _t34*_t53 + _t41*_t49 + _t44*_t55
+            + _t45*_t7 + _t57;
+    shared_quantities[0] = _t10;
+    shared_quantities[1] = _t11;
+    shared_quantities[2] = _t35;
+    shared_quantities[3] = _t26;
+    shared_quantities[4] = -_t1;
+    shared_quantities[5] = _t2;
+    shared_quantities[6] = -_t3;
+    shared_quantities[7] = _t4;
+    shared_quantities[8] = _t14;
+    shared_quantities[9] = _t15;
+    shared_quantities[10] = _t5;
+    shared_quantities[11] = _t7;
+    shared_quantities[12] = _t46;
+    shared_quantities[13] = _t47;
+    shared_quantities[14] = _t48;
+    shared_quantities[15] = _t49;
+    shared_quantities[16] = _t50;
+    shared_quantities[17] = _t51;
+    shared_quantities[18] = _t52;
+    shared_quantities[19] = _t53;
+    shared_quantities[20] = _t16;
+    shared_quantities[21] = _t12;
+    shared_quantities[22] = _t17;
+    shared_quantities[23] = _t54;
+    shared_quantities[24] = _t42;
+    shared_quantities[25] = _t55;
+    shared_quantities[26] = _t56;
+    shared_quantities[27] = _t57;
+    shared_quantities[28] = _t43;
+    shared_quantities[29] = _t21;
+    shared_quantities[30] = _t23;
+    shared_quantities[31] = _t36;
+    shared_quantities[32] = _t37;
+    shared_quantities[33] = _t38;
+    shared_quantities[34] = _t39;
+    shared_quantities[35] = _t27;
+    shared_quantities[36] = _t28;
+    shared_quantities[37] = _t29;
+    shared_quantities[38] = _t30;
+    shared_quantities[39] = _t31;
+    shared_quantities[40] = _t32;
+    shared_quantities[41] = _t44;
+    shared_quantities[42] = _t40;
+    shared_quantities[43] = _t33;
+    shared_quantities[44] = _t25;
+    shared_quantities[45] = _t58;
+    shared_quantities[46] = _t59;
 }
 
 /* trailer_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 67 add, 146 mul, 3 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 72 add, 119 mul, 5 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *tau, trailer_real_t *qddot)
 {
@@ -158,7 +164,7 @@ trailer_status_t trailer_forward_dynamics(const trailer_params_t *p, const trail
 }
 
 /* trailer_model_prepare: documented in trailer_model.h.
-   operations after CSE: 4 add, 29 mul, 2 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 3 add, 16 mul, 4 div, 0 sin/cos, 0 sqrt */
 trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     trailer_model_prepared_t *prepared)
 {
@@ -188,28 +194,23 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
             | trailer_exp_carry(radius_right)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t0 = radius_left*radius_right;
-    const trailer_real_t _t1 = TRAILER_LIT(1.0)/_t0;
-    const trailer_real_t _t2 = _t1*radius_left;
-    const trailer_real_t _t3 = _t1*radius_right;
-    const trailer_real_t _t4 = radius_cart_left*radius_cart_right;
-    const trailer_real_t _t5 = -TRAILER_LIT(0.6)*_t4;
-    const trailer_real_t _t6 = TRAILER_LIT(1.0)/_t5;
-    const trailer_real_t _t7 = _t4*_t6;
-    const trailer_real_t _t8 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t9 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t10 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t11 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t12 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t13 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t14 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t16 = _t0*_t1;
-    const trailer_real_t _t17 = J_theta_left*_t3*_t3 + J_theta_right*_t2*_t2 + J_x_tractor;
-    const trailer_real_t _t18 = TRAILER_LIT(0.207)*_t2;
-    const trailer_real_t _t19 = -TRAILER_LIT(0.207)*_t3;
-    const trailer_real_t _t20 = J_theta_left*_t19*_t3 + J_theta_right*_t18*_t2;
-    const trailer_real_t _t21 = J_theta_left*_t19*_t19 + J_theta_right*_t18*_t18;
+    const trailer_real_t _t0 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t1 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t _t2 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t3 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t6 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t7 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t8 = J_theta_right*_t6;
+    const trailer_real_t _t9 = J_theta_left*_t7;
+    const trailer_real_t _t10 = _t6*_t8 + _t7*_t9;
+    const trailer_real_t _t11 = TRAILER_LIT(0.207)*_t6;
+    const trailer_real_t _t12 = J_theta_right*_t11;
+    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t7;
+    const trailer_real_t _t14 = J_theta_left*_t13;
+    const trailer_real_t _t15 = _t12*_t6 + _t14*_t7;
+    const trailer_real_t _t16 = _t11*_t12 + _t13*_t14;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -248,33 +249,29 @@ trailer_status_t trailer_model_prepare(const trailer_params_t *p,
     prepared->forward_dynamics[1] = J_theta_cart_left;
     prepared->forward_dynamics[2] = J_theta_cart_right;
     prepared->forward_dynamics[3] = J_theta_tractor;
-    prepared->forward_dynamics[4] = K_theta_cart_x_tractor;
-    prepared->forward_dynamics[5] = K_theta_cart_x_tractor_2;
-    prepared->forward_dynamics[6] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[7] = K_theta_tractor_x_tractor_2;
-    prepared->forward_dynamics[8] = _t2;
-    prepared->forward_dynamics[9] = _t3;
-    prepared->forward_dynamics[10] = _t6;
-    prepared->forward_dynamics[11] = _t7;
-    prepared->forward_dynamics[12] = _t8;
-    prepared->forward_dynamics[13] = _t9;
-    prepared->forward_dynamics[14] = _t10;
-    prepared->forward_dynamics[15] = _t11;
-    prepared->forward_dynamics[16] = _t12;
-    prepared->forward_dynamics[17] = _t13;
-    prepared->forward_dynamics[18] = _t14;
-    prepared->forward_dynamics[19] = _t15;
-    prepared->forward_dynamics[20] = _t16;
-    prepared->forward_dynamics[21] = _t17;
-    prepared->forward_dynamics[22] = _t18;
-    prepared->forward_dynamics[23] = _t19;
-    prepared->forward_dynamics[24] = _t20;
-    prepared->forward_dynamics[25] = _t21;
+    prepared->forward_dynamics[4] = J_x_tractor;
+    prepared->forward_dynamics[5] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[6] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[7] = K_theta_tractor_x_tractor;
+    prepared->forward_dynamics[8] = K_theta_tractor_x_tractor_2;
+    prepared->forward_dynamics[9] = _t0;
+    prepared->forward_dynamics[10] = _t1;
+    prepared->forward_dynamics[11] = _t2;
+    prepared->forward_dynamics[12] = _t3;
+    prepared->forward_dynamics[13] = _t4;
+    prepared->forward_dynamics[14] = _t5;
+    prepared->forward_dynamics[15] = _t6;
+    prepared->forward_dynamics[16] = _t7;
+    prepared->forward_dynamics[17] = _t10;
+    prepared->forward_dynamics[18] = _t11;
+    prepared->forward_dynamics[19] = _t13;
+    prepared->forward_dynamics[20] = _t15;
+    prepared->forward_dynamics[21] = _t16;
     return TRAILER_OK;
 }
 
 /* trailer_forward_dynamics_prepared: documented in trailer_model.h.
-   operations after CSE: 63 add, 117 mul, 1 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 69 add, 103 mul, 1 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_t *prepared,
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *tau,
     trailer_real_t *qddot)
@@ -286,8 +283,8 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
     if (((trailer_exp_carry(theta_tractor)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t59 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t60 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t68 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t69 = TRAILER_SIN(theta_tractor);
     const trailer_real_t theta_cart = q[3];
     const trailer_real_t thetadot_right = qdot[4];
     const trailer_real_t thetadot_left = qdot[5];
@@ -298,110 +295,121 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    const trailer_real_t _t22 = theta_cart - theta_tractor;
-    const trailer_real_t _t23 = TRAILER_SIN(_t22);
-    const trailer_real_t _t24 = TRAILER_COS(_t22);
-    const trailer_real_t _t8 = prepared->forward_dynamics[12];
-    const trailer_real_t _t9 = prepared->forward_dynamics[13];
-    const trailer_real_t _t25 = _t8*thetadot_right + _t9*thetadot_left;
-    const trailer_real_t _t7 = prepared->forward_dynamics[11];
-    const trailer_real_t _t26 = _t23*_t7;
-    const trailer_real_t _t27 = -TRAILER_LIT(0.3)*_t24;
-    const trailer_real_t _t28 = -_t27*_t7;
-    const trailer_real_t _t10 = prepared->forward_dynamics[14];
-    const trailer_real_t _t11 = prepared->forward_dynamics[15];
-    const trailer_real_t _t29 = _t10*thetadot_right + _t11*thetadot_left;
-    const trailer_real_t _t30 = _t25*_t26 + _t28*_t29;
-    const trailer_real_t _t31 = _t25*_t30;
-    const trailer_real_t _t32 = -TRAILER_LIT(0.3)*_t29;
-    const trailer_real_t _t33 = _t30*_t32;
-    const trailer_real_t _t6 = prepared->forward_dynamics[10];
-    const trailer_real_t _t12 = prepared->forward_dynamics[16];
-    const trailer_real_t _t13 = prepared->forward_dynamics[17];
-    const trailer_real_t _t34 = _t6*(_t12*_t23 + _t13*_t24);
-    const trailer_real_t J_theta_cart_left = prepared->forward_dynamics[1];
-    const trailer_real_t _t35 = J_theta_cart_left*_t34;
-    const trailer_real_t _t14 = prepared->forward_dynamics[18];
-    const trailer_real_t _t15 = prepared->forward_dynamics[19];
-    const trailer_real_t _t36 = _t6*(_t14*_t23 + _t15*_t24);
+    const trailer_real_t _t17 = theta_cart - theta_tractor;
+    const trailer_real_t _t18 = TRAILER_SIN(_t17);
+    const trailer_real_t _t19 = TRAILER_COS(_t17);
+    const trailer_real_t _t20 = TRAILER_LIT(0.3)*_t19;
+    const trailer_real_t _t21 = TRAILER_LIT(0.3)*_t18;
+    const trailer_real_t _t22 = -TRAILER_LIT(1.6666666666666667)*_t18;
+    const trailer_real_t _t23 = TRAILER_LIT(0.2)*_t22;
+    const trailer_real_t _t24 = -TRAILER_LIT(1.6666666666666667)*_t20;
+    const trailer_real_t _t25 = TRAILER_LIT(0.2)*_t24;
+    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[5];
+    const trailer_real_t _t26 = K_theta_cart_x_tractor*_t19;
+    const trailer_real_t _t0 = prepared->forward_dynamics[9];
+    const trailer_real_t _t1 = prepared->forward_dynamics[10];
+    const trailer_real_t _t27 = _t0*thetadot_right + _t1*thetadot_left;
+    const trailer_real_t _t28 = _t27*_t27;
+    const trailer_real_t _t2 = prepared->forward_dynamics[11];
+    const trailer_real_t _t3 = prepared->forward_dynamics[12];
+    const trailer_real_t _t29 = _t2*thetadot_right + _t3*thetadot_left;
+    const trailer_real_t _t30 = _t22*_t29 + _t24*_t27;
+    const trailer_real_t _t31 = _t30*_t30;
+    const trailer_real_t _t32 = K_theta_cart_x_tractor*_t21;
+    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[6];
+    const trailer_real_t _t33 = K_theta_cart_x_tractor_2*_t20;
+    const trailer_real_t _t34 = TRAILER_LIT(1.6666666666666667)*_t19;
+    const trailer_real_t _t35 = TRAILER_LIT(0.2)*_t34;
+    const trailer_real_t _t36 = -TRAILER_LIT(1.6666666666666667)*_t21;
+    const trailer_real_t _t37 = TRAILER_LIT(0.2)*_t36;
+    const trailer_real_t _t38 = _t27*_t29;
+    const trailer_real_t _t39 = _t19 + _t23;
+    const trailer_real_t _t4 = prepared->forward_dynamics[13];
+    const trailer_real_t _t40 = _t39*_t4;
     const trailer_real_t J_theta_cart_right = prepared->forward_dynamics[2];
-    const trailer_real_t _t37 = J_theta_cart_right*_t36;
-    const trailer_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[4];
-    const trailer_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[5];
-    const trailer_real_t _t38 = -K_theta_cart_x_tractor*_t24 + K_theta_cart_x_tractor_2*_t23;
-    const trailer_real_t _t39 = TRAILER_LIT(0.3)*_t38;
+    const trailer_real_t _t41 = J_theta_cart_right*_t40;
+    const trailer_real_t _t42 = -_t21 + _t25;
+    const trailer_real_t _t43 = _t4*_t42;
+    const trailer_real_t _t44 = J_theta_cart_right*_t43;
+    const trailer_real_t _t45 = _t19 - _t23;
+    const trailer_real_t _t5 = prepared->forward_dynamics[14];
+    const trailer_real_t _t46 = _t45*_t5;
+    const trailer_real_t J_theta_cart_left = prepared->forward_dynamics[1];
+    const trailer_real_t _t47 = J_theta_cart_left*_t46;
+    const trailer_real_t _t48 = -_t21 - _t25;
+    const trailer_real_t _t49 = _t48*_t5;
+    const trailer_real_t _t50 = J_theta_cart_left*_t49;
+    const trailer_real_t _t51 = K_theta_cart_x_tractor_2*_t18 - _t26;
+    const trailer_real_t _t52 = _t28*(_t32 + _t33);
+    const trailer_real_t _t53 = -_t29*_t30 + _t38;
+    const trailer_real_t _t54 = -_t27*_t30 + _t28;
+    const trailer_real_t _t55 = _t34*_t53 + _t36*_t54;
     const trailer_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const trailer_real_t _t40 = J_theta_cart*_t26;
-    const trailer_real_t _t41 = _t29*_t29;
-    const trailer_real_t _t42 = TRAILER_LIT(0.3)*_t41;
-    const trailer_real_t _t43 = -_t25*_t29;
-    const trailer_real_t _t16 = prepared->forward_dynamics[20];
-    const trailer_real_t _t44 = -_t16*_t43;
-    const trailer_real_t _t45 = K_theta_cart_x_tractor*_t23 + K_theta_cart_x_tractor_2*_t24;
-    const trailer_real_t _t46 = _t38*_t44 + _t42*_t45;
-    const trailer_real_t _t17 = prepared->forward_dynamics[21];
-    const trailer_real_t _t47 = J_theta_cart_left*_t34*_t34 + J_theta_cart_right*_t36*_t36 + _t17;
-    const trailer_real_t _t48 = J_theta_cart*_t26*_t26 + TRAILER_LIT(2.0)*_t26*_t45 + _t47;
-    const trailer_real_t _t49 = TRAILER_LIT(0.3)*_t23;
-    const trailer_real_t _t50 = _t6*(-_t14*_t27 - _t15*_t49);
-    const trailer_real_t _t51 = _t6*(-_t12*_t27 - _t13*_t49);
-    const trailer_real_t _t20 = prepared->forward_dynamics[24];
-    const trailer_real_t _t52 = _t20 + _t35*_t51 + _t37*_t50;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[7];
-    const trailer_real_t _t53 = K_theta_tractor_x_tractor_2 + _t52;
-    const trailer_real_t _t54 = -_t26*_t39 + _t28*(_t40 + _t45) + _t53;
-    const trailer_real_t _t21 = prepared->forward_dynamics[25];
-    const trailer_real_t _t55 = J_theta_cart_left*_t51*_t51 + J_theta_cart_right*_t50*_t50 + _t21;
+    const trailer_real_t _t56 = J_theta_cart*_t55 + _t38*_t51 + _t52;
+    const trailer_real_t _t57 = K_theta_cart_x_tractor*_t18 + K_theta_cart_x_tractor_2*_t19;
+    const trailer_real_t J_x_tractor = prepared->forward_dynamics[4];
+    const trailer_real_t _t58 = J_x_tractor + _t22*_t57;
+    const trailer_real_t _t59 = J_theta_cart*_t22 + _t57;
+    const trailer_real_t _t10 = prepared->forward_dynamics[17];
+    const trailer_real_t _t60 = _t10 + _t22*_t59 + _t40*_t41 + _t46*_t47 + _t58;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[8];
+    const trailer_real_t _t61 = K_theta_tractor_x_tractor_2 + _t24*_t57;
+    const trailer_real_t _t62 = K_theta_cart_x_tractor*_t20 - K_theta_cart_x_tractor_2*_t21;
+    const trailer_real_t _t63 = J_theta_cart*_t24 + _t62;
+    const trailer_real_t _t15 = prepared->forward_dynamics[20];
+    const trailer_real_t _t64 = _t15 + _t22*_t63 + _t40*_t44 + _t46*_t50 + _t61;
     const trailer_real_t J_theta_tractor = prepared->forward_dynamics[3];
-    const trailer_real_t _t56 = J_theta_tractor + _t55;
-    const trailer_real_t _t57 = J_theta_cart*_t28*_t28 - TRAILER_LIT(0.6)*_t28*_t38 + _t56;
-    const trailer_real_t _t58 = _t48*_t57 - _t54*_t54;
-    const trailer_real_t _t61 = _t30*_t30;
-    const trailer_real_t _t62 = -_t23*_t33 - _t24*_t31;
-    const trailer_real_t _t63 = _t23*_t31 - _t24*_t33;
-    const trailer_real_t _t64 = _t23*_t42 - _t24*_t44 - _t62;
-    const trailer_real_t _t65 = _t23*_t44 + _t24*_t42 - _t63;
-    const trailer_real_t _t66 = _t64*_t7;
-    const trailer_real_t _t67 = _t6*(_t14*_t64 + _t15*_t65);
-    const trailer_real_t _t68 = _t6*(_t12*_t64 + _t13*_t65);
-    const trailer_real_t _t69 = _t35*_t68 + _t37*_t67;
-    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[6];
-    const trailer_real_t _t70 = K_theta_tractor_x_tractor*_t41 + _t69;
-    const trailer_real_t _t71 = _t26*_t46 - _t38*_t61 + _t66*(_t40 + _t45) + _t70;
-    const trailer_real_t _t72 = J_theta_cart_left*_t51*_t68 + J_theta_cart_right*_t50*_t67;
-    const trailer_real_t _t73 = -K_theta_tractor_x_tractor*_t44 + _t72;
-    const trailer_real_t _t74 = _t28*(J_theta_cart*_t66 + _t46) - _t39*_t66
-            - TRAILER_LIT(0.3)*_t45*_t61 + _t73;
-    const trailer_real_t _t2 = prepared->forward_dynamics[8];
-    const trailer_real_t _t3 = prepared->forward_dynamics[9];
-    const trailer_real_t _t75 = _t2*tau_right + _t3*tau_left - _t71;
-    const trailer_real_t _t18 = prepared->forward_dynamics[22];
-    const trailer_real_t _t19 = prepared->forward_dynamics[23];
-    const trailer_real_t _t76 = _t18*tau_right + _t19*tau_left - _t74;
-    const trailer_real_t _t77 = TRAILER_LIT(1.0)/_t58;
-    const trailer_real_t _t78 = _t77*(-_t54*_t76 + _t57*_t75);
-    const trailer_real_t _t79 = _t77*(_t48*_t76 - _t54*_t75);
-    const trailer_real_t _t80 = _t26*_t78 + _t28*_t79 + _t66;
-    const trailer_real_t _t81 = _t18*_t79 + _t2*_t78;
-    const trailer_real_t _t82 = _t19*_t79 + _t3*_t78;
-    const trailer_real_t _t83 = _t36*_t78 + _t50*_t79 + _t67;
-    const trailer_real_t _t84 = _t34*_t78 + _t51*_t79 + _t68;
-    const trailer_real_t _t85 = -_t44*_t60 + _t59*_t78;
-    const trailer_real_t _t86 = _t44*_t59 + _t60*_t78;
-    if (!(_t48 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const trailer_real_t _t65 = J_theta_tractor + _t24*_t62;
+    const trailer_real_t _t16 = prepared->forward_dynamics[21];
+    const trailer_real_t _t66 = _t16 + _t24*_t63 + _t43*_t44 + _t49*_t50 + _t65;
+    const trailer_real_t _t67 = _t60*_t66 - _t64*_t64;
+    const trailer_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[7];
+    const trailer_real_t _t70 = K_theta_tractor_x_tractor*_t28
+            + _t31*(-K_theta_cart_x_tractor_2*_t18 + _t26);
+    const trailer_real_t _t71 = _t31*(-_t32 - _t33);
+    const trailer_real_t _t72 = _t18 + _t35;
+    const trailer_real_t _t73 = _t4*_t72;
+    const trailer_real_t _t74 = _t20 + _t37;
+    const trailer_real_t _t75 = _t4*_t74;
+    const trailer_real_t _t76 = _t18 - _t35;
+    const trailer_real_t _t77 = _t5*_t76;
+    const trailer_real_t _t78 = _t20 - _t37;
+    const trailer_real_t _t79 = _t5*_t78;
+    const trailer_real_t _t80 = _t53*_t73 + _t54*_t75;
+    const trailer_real_t _t81 = _t53*_t77 + _t54*_t79;
+    const trailer_real_t _t82 = _t22*_t56 + _t41*_t80 + _t47*_t81 + _t55*_t57 + _t70;
+    const trailer_real_t _t83 = -K_theta_tractor_x_tractor*_t38 + _t24*_t56 + _t44*_t80 + _t50*_t81
+            + _t55*_t62 + _t71;
+    const trailer_real_t _t6 = prepared->forward_dynamics[15];
+    const trailer_real_t _t7 = prepared->forward_dynamics[16];
+    const trailer_real_t _t84 = _t6*tau_right + _t7*tau_left - _t82;
+    const trailer_real_t _t11 = prepared->forward_dynamics[18];
+    const trailer_real_t _t13 = prepared->forward_dynamics[19];
+    const trailer_real_t _t85 = _t11*tau_right + _t13*tau_left - _t83;
+    const trailer_real_t _t86 = TRAILER_LIT(1.0)/_t67;
+    const trailer_real_t _t87 = _t86*(-_t64*_t85 + _t66*_t84);
+    const trailer_real_t _t88 = _t86*(_t60*_t85 - _t64*_t84);
+    const trailer_real_t _t89 = _t22*_t87 + _t24*_t88 + _t55;
+    const trailer_real_t _t90 = _t11*_t88 + _t6*_t87;
+    const trailer_real_t _t91 = _t13*_t88 + _t7*_t87;
+    const trailer_real_t _t92 = _t40*_t87 + _t43*_t88 + _t80;
+    const trailer_real_t _t93 = _t46*_t87 + _t49*_t88 + _t81;
+    const trailer_real_t _t94 = -_t38*_t69 + _t68*_t87;
+    const trailer_real_t _t95 = _t38*_t68 + _t69*_t87;
+    if (!(_t60 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t58 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t67 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t85;
-    const trailer_real_t r_1 = _t86;
-    const trailer_real_t r_2 = _t79;
-    const trailer_real_t r_3 = _t80;
-    const trailer_real_t r_4 = _t81;
-    const trailer_real_t r_5 = _t82;
-    const trailer_real_t r_6 = _t83;
-    const trailer_real_t r_7 = _t84;
+    const trailer_real_t r_0 = _t94;
+    const trailer_real_t r_1 = _t95;
+    const trailer_real_t r_2 = _t88;
+    const trailer_real_t r_3 = _t89;
+    const trailer_real_t r_4 = _t90;
+    const trailer_real_t r_5 = _t91;
+    const trailer_real_t r_6 = _t92;
+    const trailer_real_t r_7 = _t93;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3) | trailer_exp_carry(r_4) | trailer_exp_carry(r_5)
             | trailer_exp_carry(r_6) | trailer_exp_carry(r_7)) & TRAILER_EXP_CARRY_TOP) != 0u) {
@@ -419,7 +427,7 @@ trailer_status_t trailer_forward_dynamics_prepared(const trailer_model_prepared_
 }
 
 /* trailer_kinematics: documented in trailer_model.h.
-   operations after CSE: 10 add, 39 mul, 1 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 10 add, 26 mul, 2 div, 4 sin/cos, 0 sqrt */
 void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *pose_rates)
 {
@@ -428,37 +436,37 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t _t0 = theta_cart - theta_tractor;
     const trailer_real_t _t1 = TRAILER_SIN(_t0);
     const trailer_real_t _t2 = TRAILER_COS(_t0);
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
-    const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t3 = radius_cart_left*radius_cart_right;
-    const trailer_real_t _t4 = -TRAILER_LIT(0.6)*_t3;
-    const trailer_real_t _t5 = TRAILER_LIT(1.0)/_t4;
-    const trailer_real_t _t6 = _t3*_t5;
+    const trailer_real_t _t3 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t4 = TRAILER_LIT(0.2)*_t3;
+    const trailer_real_t _t5 = -TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t6 = TRAILER_LIT(1.6666666666666667)*_t5;
+    const trailer_real_t _t7 = TRAILER_LIT(0.2)*_t6;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t7 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t _t8 = TRAILER_LIT(2.4154589371980677)*radius_right;
     const trailer_real_t radius_left = p->radius_left;
-    const trailer_real_t _t8 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t9 = -TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t10 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t11 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t12 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t13 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t14 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t15 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t16 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t17 = _t1*_t6;
-    const trailer_real_t _t18 = _t5*(_t1*_t13 + _t14*_t2);
-    const trailer_real_t _t19 = _t5*(_t1*_t15 + _t16*_t2);
-    const trailer_real_t _t20 = -_t6*_t9;
-    const trailer_real_t _t21 = _t5*(-_t10*_t14 - _t13*_t9);
-    const trailer_real_t _t22 = _t5*(-_t10*_t16 - _t15*_t9);
+    const trailer_real_t _t9 = -TRAILER_LIT(2.4154589371980677)*radius_left;
+    const trailer_real_t radius_cart_right = p->radius_cart_right;
+    const trailer_real_t _t10 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t11 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t12 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t13 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t15 = _t2 + _t4;
+    const trailer_real_t _t16 = -_t12 + _t7;
+    const trailer_real_t _t17 = _t10*_t15;
+    const trailer_real_t _t18 = _t10*_t16;
+    const trailer_real_t _t19 = _t2 - _t4;
+    const trailer_real_t _t20 = -_t12 - _t7;
+    const trailer_real_t _t21 = _t11*_t19;
+    const trailer_real_t _t22 = _t11*_t20;
     const trailer_real_t thetadot_right = wheel_rates[0];
     const trailer_real_t thetadot_left = wheel_rates[1];
-    const trailer_real_t _t23 = _t11*thetadot_right + _t12*thetadot_left;
-    const trailer_real_t _t24 = _t7*thetadot_right + _t8*thetadot_left;
-    const trailer_real_t _t25 = _t17*_t23 + _t20*_t24;
-    const trailer_real_t _t26 = _t18*_t23 + _t21*_t24;
-    const trailer_real_t _t27 = _t19*_t23 + _t22*_t24;
+    const trailer_real_t _t23 = _t13*thetadot_right + _t14*thetadot_left;
+    const trailer_real_t _t24 = _t8*thetadot_right + _t9*thetadot_left;
+    const trailer_real_t _t25 = _t23*_t3 + _t24*_t6;
+    const trailer_real_t _t26 = _t17*_t23 + _t18*_t24;
+    const trailer_real_t _t27 = _t21*_t23 + _t22*_t24;
     const trailer_real_t _t28 = _t23*TRAILER_COS(theta_tractor);
     const trailer_real_t _t29 = _t23*TRAILER_SIN(theta_tractor);
     pose_rates[0] = _t28;
@@ -470,7 +478,7 @@ void trailer_kinematics(const trailer_params_t *p, const trailer_real_t *q,
 }
 
 /* trailer_minimal_mass_matrix: documented in trailer_model.h.
-   operations after CSE: 33 add, 87 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t *q,
     trailer_real_t *M)
 {
@@ -479,75 +487,77 @@ void trailer_minimal_mass_matrix(const trailer_params_t *p, const trailer_real_t
     const trailer_real_t _t0 = theta_cart - theta_tractor;
     const trailer_real_t _t1 = TRAILER_SIN(_t0);
     const trailer_real_t _t2 = TRAILER_COS(_t0);
-    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t3 = TRAILER_LIT(0.3)*_t2;
+    const trailer_real_t _t4 = TRAILER_LIT(0.3)*_t1;
+    const trailer_real_t _t5 = -TRAILER_LIT(1.6666666666666667)*_t1;
+    const trailer_real_t _t6 = TRAILER_LIT(0.2)*_t5;
+    const trailer_real_t _t7 = -TRAILER_LIT(1.6666666666666667)*_t3;
+    const trailer_real_t _t8 = TRAILER_LIT(0.2)*_t7;
     const trailer_real_t radius_right = p->radius_right;
-    const trailer_real_t _t3 = radius_left*radius_right;
-    const trailer_real_t _t4 = TRAILER_LIT(1.0)/_t3;
-    const trailer_real_t _t5 = _t4*radius_left;
-    const trailer_real_t _t6 = _t4*radius_right;
-    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t9 = TRAILER_LIT(2.4154589371980677)*radius_right;
+    const trailer_real_t radius_left = p->radius_left;
+    const trailer_real_t _t10 = -TRAILER_LIT(2.4154589371980677)*radius_left;
     const trailer_real_t radius_cart_right = p->radius_cart_right;
-    const trailer_real_t _t7 = radius_cart_left*radius_cart_right;
-    const trailer_real_t _t8 = -TRAILER_LIT(0.6)*_t7;
-    const trailer_real_t _t9 = TRAILER_LIT(1.0)/_t8;
-    const trailer_real_t _t10 = _t7*_t9;
-    const trailer_real_t _t11 = TRAILER_LIT(2.4154589371980677)*radius_right;
-    const trailer_real_t _t12 = -TRAILER_LIT(2.4154589371980677)*radius_left;
-    const trailer_real_t _t13 = -TRAILER_LIT(0.3)*_t2;
-    const trailer_real_t _t14 = TRAILER_LIT(0.3)*_t1;
-    const trailer_real_t _t15 = TRAILER_LIT(0.5)*radius_right;
-    const trailer_real_t _t16 = TRAILER_LIT(0.5)*radius_left;
-    const trailer_real_t _t17 = TRAILER_LIT(0.2)*radius_cart_left;
-    const trailer_real_t _t18 = -TRAILER_LIT(0.6)*radius_cart_left;
-    const trailer_real_t _t19 = -TRAILER_LIT(0.2)*radius_cart_right;
-    const trailer_real_t _t20 = -TRAILER_LIT(0.6)*radius_cart_right;
-    const trailer_real_t _t21 = _t1*_t10;
-    const trailer_real_t _t22 = _t9*(_t1*_t17 + _t18*_t2);
-    const trailer_real_t _t23 = _t9*(_t1*_t19 + _t2*_t20);
-    const trailer_real_t _t24 = TRAILER_LIT(0.207)*_t5;
-    const trailer_real_t _t25 = -TRAILER_LIT(0.207)*_t6;
-    const trailer_real_t _t26 = -_t10*_t13;
-    const trailer_real_t _t27 = _t9*(-_t13*_t17 - _t14*_t18);
-    const trailer_real_t _t28 = _t9*(-_t13*_t19 - _t14*_t20);
+    const trailer_real_t _t11 = TRAILER_LIT(1.0)/radius_cart_right;
+    const trailer_real_t radius_cart_left = p->radius_cart_left;
+    const trailer_real_t _t12 = TRAILER_LIT(1.0)/radius_cart_left;
+    const trailer_real_t _t13 = TRAILER_LIT(0.5)*radius_right;
+    const trailer_real_t _t14 = TRAILER_LIT(0.5)*radius_left;
+    const trailer_real_t _t15 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t16 = TRAILER_LIT(0.207)*_t15;
+    const trailer_real_t _t17 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t18 = -TRAILER_LIT(0.207)*_t17;
+    const trailer_real_t _t19 = _t2 + _t6;
+    const trailer_real_t _t20 = -_t4 + _t8;
+    const trailer_real_t _t21 = _t11*_t19;
+    const trailer_real_t _t22 = _t11*_t20;
+    const trailer_real_t _t23 = _t2 - _t6;
+    const trailer_real_t _t24 = -_t4 - _t8;
+    const trailer_real_t _t25 = _t12*_t23;
+    const trailer_real_t _t26 = _t12*_t24;
     const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const trailer_real_t _t29 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
-    const trailer_real_t _t30 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1;
-    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t27 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2;
+    const trailer_real_t _t28 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4;
     const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t31 = J_theta_cart_left*_t23*_t23 + J_theta_cart_right*_t22*_t22
-            + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor;
-    const trailer_real_t J_theta_cart = p->J_theta_cart;
-    const trailer_real_t _t32 = J_theta_cart*_t21*_t21 + TRAILER_LIT(2.0)*_t21*_t29 + _t31;
-    const trailer_real_t _t33 = J_theta_cart_left*_t23*_t28 + J_theta_cart_right*_t22*_t27
-            + J_theta_left*_t25*_t6 + J_theta_right*_t24*_t5;
+    const trailer_real_t _t29 = J_x_tractor + _t27*_t5;
     const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t34 = K_theta_tractor_x_tractor_2 + _t33;
-    const trailer_real_t _t35 = J_theta_cart*_t21*_t26 - TRAILER_LIT(0.3)*_t21*_t30 + _t26*_t29
-            + _t34;
-    const trailer_real_t _t36 = J_theta_cart_left*_t28*_t28 + J_theta_cart_right*_t27*_t27
-            + J_theta_left*_t25*_t25 + J_theta_right*_t24*_t24;
+    const trailer_real_t _t30 = K_theta_tractor_x_tractor_2 + _t27*_t7;
     const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t37 = J_theta_tractor + _t36;
-    const trailer_real_t _t38 = J_theta_cart*_t26*_t26 - TRAILER_LIT(0.6)*_t26*_t30 + _t37;
-    const trailer_real_t _t39 = _t11*_t35 + _t15*_t32;
-    const trailer_real_t _t40 = _t12*_t35 + _t16*_t32;
-    const trailer_real_t _t41 = _t11*_t38 + _t15*_t35;
-    const trailer_real_t _t42 = _t12*_t38 + _t16*_t35;
-    const trailer_real_t _t43 = _t11*_t41 + _t15*_t39;
-    const trailer_real_t _t44 = _t11*_t42 + _t15*_t40;
-    const trailer_real_t _t45 = _t12*_t42 + _t16*_t40;
-    M[0] = _t43;
-    M[1] = _t44;
-    M[2] = _t44;
-    M[3] = _t45;
+    const trailer_real_t _t31 = J_theta_tractor + _t28*_t7;
+    const trailer_real_t J_theta_cart = p->J_theta_cart;
+    const trailer_real_t _t32 = J_theta_cart*_t5 + _t27;
+    const trailer_real_t _t33 = J_theta_cart*_t7 + _t28;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t34 = J_theta_right*_t15;
+    const trailer_real_t _t35 = J_theta_right*_t16;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t36 = J_theta_left*_t17;
+    const trailer_real_t _t37 = J_theta_left*_t18;
+    const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t _t38 = J_theta_cart_right*_t21;
+    const trailer_real_t _t39 = J_theta_cart_right*_t22;
+    const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const trailer_real_t _t40 = J_theta_cart_left*_t25;
+    const trailer_real_t _t41 = J_theta_cart_left*_t26;
+    const trailer_real_t _t42 = _t15*_t34 + _t17*_t36 + _t21*_t38 + _t25*_t40 + _t29 + _t32*_t5;
+    const trailer_real_t _t43 = _t15*_t35 + _t17*_t37 + _t21*_t39 + _t25*_t41 + _t30 + _t33*_t5;
+    const trailer_real_t _t44 = _t16*_t35 + _t18*_t37 + _t22*_t39 + _t26*_t41 + _t31 + _t33*_t7;
+    const trailer_real_t _t45 = _t13*_t42 + _t43*_t9;
+    const trailer_real_t _t46 = _t10*_t43 + _t14*_t42;
+    const trailer_real_t _t47 = _t13*_t43 + _t44*_t9;
+    const trailer_real_t _t48 = _t10*_t44 + _t14*_t43;
+    const trailer_real_t _t49 = _t13*_t45 + _t47*_t9;
+    const trailer_real_t _t50 = _t13*_t46 + _t48*_t9;
+    const trailer_real_t _t51 = _t10*_t48 + _t14*_t46;
+    M[0] = _t49;
+    M[1] = _t50;
+    M[2] = _t50;
+    M[3] = _t51;
 }
 
 /* trailer_minimal_bias_forces: documented in trailer_model.h.
-   operations after CSE: 33 add, 87 mul, 2 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 37 add, 72 mul, 2 div, 2 sin/cos, 0 sqrt */
 void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, trailer_real_t *H)
 {
@@ -555,18 +565,18 @@ void trailer_minimal_bias_forces(const trailer_params_t *p, const trailer_real_t
     trailer_staged_quantities(p, q, wheel_rates, _shared);
     const trailer_real_t _ms12 = _shared[0];
     const trailer_real_t _ms13 = _shared[1];
-    const trailer_real_t _ms34 = _shared[6];
-    const trailer_real_t _ms35 = _shared[7];
-    const trailer_real_t _ms99 = _shared[43];
-    const trailer_real_t _ms102 = _shared[46];
-    const trailer_real_t _t0 = _ms102*_ms12 + _ms34*_ms99;
-    const trailer_real_t _t1 = _ms102*_ms13 + _ms35*_ms99;
+    const trailer_real_t _ms34 = _shared[8];
+    const trailer_real_t _ms35 = _shared[9];
+    const trailer_real_t _ms111 = _shared[45];
+    const trailer_real_t _ms112 = _shared[46];
+    const trailer_real_t _t0 = _ms111*_ms34 + _ms112*_ms12;
+    const trailer_real_t _t1 = _ms111*_ms35 + _ms112*_ms13;
     H[0] = _t0;
     H[1] = _t1;
 }
 
 /* trailer_minimal_forward_dynamics: documented in trailer_model.h.
-   operations after CSE: 59 add, 140 mul, 3 div, 2 sin/cos, 0 sqrt */
+   operations after CSE: 64 add, 114 mul, 5 div, 2 sin/cos, 0 sqrt */
 trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     const trailer_real_t *q, const trailer_real_t *wheel_rates, const trailer_real_t *tau,
     trailer_real_t *wheel_accels)
@@ -615,41 +625,44 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     (void)thetadot_right;
     trailer_real_t _shared[47];
     trailer_staged_quantities(p, q, wheel_rates, _shared);
-    const trailer_real_t _ms49 = _shared[9];
-    const trailer_real_t _ms59 = _shared[17];
+    const trailer_real_t _ms48 = _shared[10];
+    const trailer_real_t _ms49 = _shared[11];
+    const trailer_real_t _ms56 = _shared[14];
+    const trailer_real_t _ms57 = _shared[15];
     const trailer_real_t _ms60 = _shared[18];
     const trailer_real_t _ms61 = _shared[19];
-    const trailer_real_t _ms64 = _shared[20];
-    const trailer_real_t _ms65 = _shared[21];
-    const trailer_real_t _ms66 = _shared[22];
-    const trailer_real_t _ms87 = _shared[39];
-    const trailer_real_t _ms88 = _shared[40];
-    const trailer_real_t _ms99 = _shared[43];
-    const trailer_real_t _ms102 = _shared[46];
-    const trailer_real_t _t0 = _ms49*radius_left;
-    const trailer_real_t _t1 = _ms49*radius_right;
-    const trailer_real_t _t2 = J_theta_cart_left*_ms61*_ms61 + J_theta_cart_right*_ms60*_ms60
-            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
-    const trailer_real_t _t3 = J_theta_cart*_ms59*_ms59 + TRAILER_LIT(2.0)*_ms59*_ms87 + _t2;
-    const trailer_real_t _t4 = TRAILER_LIT(0.207)*_t0;
-    const trailer_real_t _t5 = -TRAILER_LIT(0.207)*_t1;
-    const trailer_real_t _t6 = J_theta_cart_left*_ms61*_ms66 + J_theta_cart_right*_ms60*_ms65
-            + J_theta_left*_t1*_t5 + J_theta_right*_t0*_t4;
-    const trailer_real_t _t7 = K_theta_tractor_x_tractor_2 + _t6;
-    const trailer_real_t _t8 = J_theta_cart*_ms59*_ms64 - TRAILER_LIT(0.3)*_ms59*_ms88 + _ms64*_ms87
-            + _t7;
-    const trailer_real_t _t9 = J_theta_cart_left*_ms66*_ms66 + J_theta_cart_right*_ms65*_ms65
-            + J_theta_left*_t5*_t5 + J_theta_right*_t4*_t4;
-    const trailer_real_t _t10 = J_theta_tractor + _t9;
-    const trailer_real_t _t11 = J_theta_cart*_ms64*_ms64 - TRAILER_LIT(0.6)*_ms64*_ms88 + _t10;
-    const trailer_real_t _t12 = _t11*_t3 - _t8*_t8;
-    const trailer_real_t _t13 = -_ms99 + _t0*tau_right + _t1*tau_left;
-    const trailer_real_t _t14 = -_ms102 + _t4*tau_right + _t5*tau_left;
-    const trailer_real_t _t15 = TRAILER_LIT(1.0)/_t12;
-    const trailer_real_t _t16 = _t15*(_t11*_t13 - _t14*_t8);
-    const trailer_real_t _t17 = _t15*(-_t13*_t8 + _t14*_t3);
-    const trailer_real_t _t18 = _t0*_t16 + _t17*_t4;
-    const trailer_real_t _t19 = _t1*_t16 + _t17*_t5;
+    const trailer_real_t _ms69 = _shared[23];
+    const trailer_real_t _ms71 = _shared[25];
+    const trailer_real_t _ms111 = _shared[45];
+    const trailer_real_t _ms112 = _shared[46];
+    const trailer_real_t _t0 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t1 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t2 = J_x_tractor + _ms48*_ms69;
+    const trailer_real_t _t3 = J_theta_cart*_ms48 + _ms69;
+    const trailer_real_t _t4 = J_theta_right*_t0;
+    const trailer_real_t _t5 = J_theta_left*_t1;
+    const trailer_real_t _t6 = J_theta_cart_right*_ms56;
+    const trailer_real_t _t7 = J_theta_cart_left*_ms60;
+    const trailer_real_t _t8 = _ms48*_t3 + _ms56*_t6 + _ms60*_t7 + _t0*_t4 + _t1*_t5 + _t2;
+    const trailer_real_t _t9 = K_theta_tractor_x_tractor_2 + _ms49*_ms69;
+    const trailer_real_t _t10 = J_theta_cart*_ms49 + _ms71;
+    const trailer_real_t _t11 = TRAILER_LIT(0.207)*_t0;
+    const trailer_real_t _t12 = J_theta_right*_t11;
+    const trailer_real_t _t13 = -TRAILER_LIT(0.207)*_t1;
+    const trailer_real_t _t14 = J_theta_left*_t13;
+    const trailer_real_t _t15 = J_theta_cart_right*_ms57;
+    const trailer_real_t _t16 = J_theta_cart_left*_ms61;
+    const trailer_real_t _t17 = _ms48*_t10 + _ms56*_t15 + _ms60*_t16 + _t0*_t12 + _t1*_t14 + _t9;
+    const trailer_real_t _t18 = J_theta_tractor + _ms49*_ms71;
+    const trailer_real_t _t19 = _ms49*_t10 + _ms57*_t15 + _ms61*_t16 + _t11*_t12 + _t13*_t14 + _t18;
+    const trailer_real_t _t20 = -_t17*_t17 + _t19*_t8;
+    const trailer_real_t _t21 = -_ms111 + _t0*tau_right + _t1*tau_left;
+    const trailer_real_t _t22 = -_ms112 + _t11*tau_right + _t13*tau_left;
+    const trailer_real_t _t23 = TRAILER_LIT(1.0)/_t20;
+    const trailer_real_t _t24 = _t23*(-_t17*_t22 + _t19*_t21);
+    const trailer_real_t _t25 = _t23*(-_t17*_t21 + _t22*_t8);
+    const trailer_real_t _t26 = _t0*_t24 + _t11*_t25;
+    const trailer_real_t _t27 = _t1*_t24 + _t13*_t25;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -683,14 +696,14 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t3 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t8 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t12 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t20 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t18;
-    const trailer_real_t r_1 = _t19;
+    const trailer_real_t r_0 = _t26;
+    const trailer_real_t r_1 = _t27;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;
     }
@@ -700,7 +713,7 @@ trailer_status_t trailer_minimal_forward_dynamics(const trailer_params_t *p,
 }
 
 /* trailer_linearization: documented in trailer_model.h.
-   operations after CSE: 200 add, 398 mul, 3 div, 6 sin/cos, 0 sqrt */
+   operations after CSE: 204 add, 349 mul, 5 div, 6 sin/cos, 0 sqrt */
 void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *A,
     trailer_real_t *B)
@@ -708,6 +721,8 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
     const trailer_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const trailer_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const trailer_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
     const trailer_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
@@ -717,240 +732,220 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     trailer_staged_quantities(p, q, wheel_rates, _shared);
     const trailer_real_t _ms12 = _shared[0];
     const trailer_real_t _ms13 = _shared[1];
-    const trailer_real_t _ms30 = _shared[2];
-    const trailer_real_t _ms31 = _shared[3];
-    const trailer_real_t _ms32 = _shared[4];
-    const trailer_real_t _ms33 = _shared[5];
-    const trailer_real_t _ms34 = _shared[6];
-    const trailer_real_t _ms35 = _shared[7];
-    const trailer_real_t _ms48 = _shared[8];
-    const trailer_real_t _ms49 = _shared[9];
-    const trailer_real_t _ms52 = _shared[10];
-    const trailer_real_t _ms53 = _shared[11];
-    const trailer_real_t _ms54 = _shared[12];
-    const trailer_real_t _ms55 = _shared[13];
+    const trailer_real_t _ms34 = _shared[8];
+    const trailer_real_t _ms35 = _shared[9];
+    const trailer_real_t _ms48 = _shared[10];
+    const trailer_real_t _ms49 = _shared[11];
     const trailer_real_t _ms56 = _shared[14];
-    const trailer_real_t _ms58 = _shared[16];
-    const trailer_real_t _ms59 = _shared[17];
+    const trailer_real_t _ms57 = _shared[15];
     const trailer_real_t _ms60 = _shared[18];
     const trailer_real_t _ms61 = _shared[19];
-    const trailer_real_t _ms64 = _shared[20];
-    const trailer_real_t _ms65 = _shared[21];
-    const trailer_real_t _ms66 = _shared[22];
-    const trailer_real_t _ms67 = _shared[23];
-    const trailer_real_t _ms68 = _shared[24];
-    const trailer_real_t _ms69 = _shared[25];
-    const trailer_real_t _ms75 = _shared[27];
-    const trailer_real_t _ms76 = _shared[28];
-    const trailer_real_t _ms77 = _shared[29];
-    const trailer_real_t _ms79 = _shared[31];
-    const trailer_real_t _ms84 = _shared[36];
-    const trailer_real_t _ms85 = _shared[37];
-    const trailer_real_t _ms86 = _shared[38];
-    const trailer_real_t _ms87 = _shared[39];
-    const trailer_real_t _ms88 = _shared[40];
-    const trailer_real_t _ms99 = _shared[43];
-    const trailer_real_t _ms102 = _shared[46];
-    const trailer_real_t _t0 = _ms49*radius_left;
-    const trailer_real_t _t1 = _ms49*radius_right;
-    const trailer_real_t _t2 = TRAILER_LIT(2.0)*_ms87;
-    const trailer_real_t _t3 = J_theta_cart_left*_ms61;
-    const trailer_real_t _t4 = J_theta_cart_right*_ms60;
-    const trailer_real_t _t5 = _ms64*_ms87;
-    const trailer_real_t _t6 = TRAILER_LIT(0.3)*_ms88;
-    const trailer_real_t _t7 = J_theta_cart*_ms59;
-    const trailer_real_t _t8 = _ms64*_ms88;
-    const trailer_real_t _t9 = TRAILER_COS(theta_tractor);
-    const trailer_real_t _t10 = TRAILER_SIN(theta_tractor);
-    const trailer_real_t _t11 = _ms52*_ms58;
-    const trailer_real_t _t12 = _ms54*_ms58;
-    const trailer_real_t _t13 = _ms53*_ms58;
-    const trailer_real_t _t14 = _ms56*_ms58;
-    const trailer_real_t _t15 = _ms55*_ms58;
-    const trailer_real_t _t16 = TRAILER_LIT(2.0)*_ms69;
-    const trailer_real_t _t17 = theta_cart - theta_tractor;
-    const trailer_real_t _t18 = TRAILER_COS(_t17);
-    const trailer_real_t _t19 = _ms77*_t18;
-    const trailer_real_t _t20 = TRAILER_SIN(_t17);
-    const trailer_real_t _t21 = _ms67*_t20;
-    const trailer_real_t _t22 = _ms67*_t18;
-    const trailer_real_t _t23 = _ms77*_t20;
-    const trailer_real_t _t24 = -_t22 - _t23;
-    const trailer_real_t _t25 = -_t19 + _t21;
-    const trailer_real_t _t26 = J_theta_cart_left*_ms86;
-    const trailer_real_t _t27 = J_theta_cart_right*_ms85;
-    const trailer_real_t _t28 = _ms87 + _t7;
-    const trailer_real_t _t29 = J_theta_cart*_ms84 + _ms76*_ms87 + _ms79*_ms88;
-    const trailer_real_t _t30 = J_theta_cart_left*_ms66;
-    const trailer_real_t _t31 = J_theta_cart_right*_ms65;
-    const trailer_real_t _t32 = TRAILER_LIT(0.3)*_ms87;
-    const trailer_real_t _t33 = J_theta_cart*_ms64;
-    const trailer_real_t _t34 = _t33 - _t6;
-    const trailer_real_t _t35 = _ms59*_ms88;
+    const trailer_real_t _ms62 = _shared[20];
+    const trailer_real_t _ms63 = _shared[21];
+    const trailer_real_t _ms64 = _shared[22];
+    const trailer_real_t _ms69 = _shared[23];
+    const trailer_real_t _ms70 = _shared[24];
+    const trailer_real_t _ms71 = _shared[25];
+    const trailer_real_t _ms75 = _shared[28];
+    const trailer_real_t _ms76 = _shared[29];
+    const trailer_real_t _ms77 = _shared[30];
+    const trailer_real_t _ms79 = _shared[32];
+    const trailer_real_t _ms81 = _shared[34];
+    const trailer_real_t _ms83 = _shared[36];
+    const trailer_real_t _ms85 = _shared[38];
+    const trailer_real_t _ms86 = _shared[39];
+    const trailer_real_t _ms87 = _shared[40];
+    const trailer_real_t _ms88 = _shared[41];
+    const trailer_real_t _ms89 = _shared[42];
+    const trailer_real_t _ms90 = _shared[43];
+    const trailer_real_t _ms91 = _shared[44];
+    const trailer_real_t _ms111 = _shared[45];
+    const trailer_real_t _ms112 = _shared[46];
+    const trailer_real_t _t0 = _ms48*_ms69;
+    const trailer_real_t _t1 = _ms49*_ms69;
+    const trailer_real_t _t2 = J_theta_cart*_ms48 + _ms69;
+    const trailer_real_t _t3 = J_theta_cart*_ms49 + _ms71;
+    const trailer_real_t _t4 = J_theta_cart_right*_ms56;
+    const trailer_real_t _t5 = J_theta_cart_right*_ms57;
+    const trailer_real_t _t6 = J_theta_cart_left*_ms60;
+    const trailer_real_t _t7 = J_theta_cart_left*_ms61;
+    const trailer_real_t _t8 = TRAILER_COS(theta_tractor);
+    const trailer_real_t _t9 = TRAILER_SIN(theta_tractor);
+    const trailer_real_t _t10 = J_theta_cart_right*_ms81;
+    const trailer_real_t _t11 = J_theta_cart_left*_ms85;
+    const trailer_real_t _t12 = theta_cart - theta_tractor;
+    const trailer_real_t _t13 = TRAILER_SIN(_t12);
+    const trailer_real_t _t14 = K_theta_cart_x_tractor*_t13;
+    const trailer_real_t _t15 = TRAILER_COS(_t12);
+    const trailer_real_t _t16 = K_theta_cart_x_tractor_2*_t15;
+    const trailer_real_t _t17 = _ms64*_ms64;
+    const trailer_real_t _t18 = TRAILER_LIT(2.0)*_ms64;
+    const trailer_real_t _t19 = K_theta_cart_x_tractor*_t15;
+    const trailer_real_t _t20 = K_theta_cart_x_tractor_2*_t13;
+    const trailer_real_t _t21 = _t18*_t19 - _t18*_t20;
+    const trailer_real_t _t22 = _ms63*_ms63;
+    const trailer_real_t _t23 = J_theta_cart_left*_ms83;
+    const trailer_real_t _t24 = J_theta_cart_right*_ms79;
+    const trailer_real_t _t25 = J_theta_cart*_ms88 + _ms70*_ms91 + _ms75;
+    const trailer_real_t _t26 = TRAILER_LIT(0.3)*_t17;
+    const trailer_real_t _t27 = TRAILER_LIT(0.6)*_ms64;
+    const trailer_real_t _t28 = -_t14*_t27 - _t16*_t27;
+    const trailer_real_t _t29 = _ms48*_ms70;
+    const trailer_real_t _t30 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t31 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const trailer_real_t _t32 = K_theta_tractor_x_tractor_2 + _t1;
+    const trailer_real_t _t33 = TRAILER_LIT(0.207)*_t30;
+    const trailer_real_t J_theta_right = p->J_theta_right;
+    const trailer_real_t _t34 = J_theta_right*_t33;
+    const trailer_real_t _t35 = -TRAILER_LIT(0.207)*_t31;
+    const trailer_real_t J_theta_left = p->J_theta_left;
+    const trailer_real_t _t36 = J_theta_left*_t35;
+    const trailer_real_t _t37 = _ms48*_t3 + _ms56*_t5 + _ms60*_t7 + _t30*_t34 + _t31*_t36 + _t32;
+    const trailer_real_t J_x_tractor = p->J_x_tractor;
+    const trailer_real_t _t38 = J_x_tractor + _t0;
+    const trailer_real_t _t39 = J_theta_right*_t30;
+    const trailer_real_t _t40 = J_theta_left*_t31;
+    const trailer_real_t _t41 = _ms48*_t2 + _ms56*_t4 + _ms60*_t6 + _t30*_t39 + _t31*_t40 + _t38;
+    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
+    const trailer_real_t _t42 = J_theta_tractor + _ms49*_ms71;
+    const trailer_real_t _t43 = _ms49*_t3 + _ms57*_t5 + _ms61*_t7 + _t33*_t34 + _t35*_t36 + _t42;
+    const trailer_real_t _t44 = -_t37*_t37 + _t41*_t43;
+    const trailer_real_t _t45 = TRAILER_LIT(1.0)/_t44;
+    const trailer_real_t _t46 = _t45;
+    const trailer_real_t _t47 = _t37*_t46;
     const trailer_real_t tau_right = tau[0];
     const trailer_real_t tau_left = tau[1];
-    const trailer_real_t _t36 = -_ms99 + _t0*tau_right + _t1*tau_left;
-    const trailer_real_t J_theta_left = p->J_theta_left;
-    const trailer_real_t J_theta_right = p->J_theta_right;
-    const trailer_real_t J_x_tractor = p->J_x_tractor;
-    const trailer_real_t _t37 = J_theta_cart_left*_ms61*_ms61 + J_theta_cart_right*_ms60*_ms60
-            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
-    const trailer_real_t _t38 = J_theta_cart*_ms59*_ms59 + _ms59*_t2 + _t37;
-    const trailer_real_t _t39 = TRAILER_LIT(0.207)*_t0;
-    const trailer_real_t _t40 = -TRAILER_LIT(0.207)*_t1;
-    const trailer_real_t _t41 = J_theta_left*_t1*_t40 + J_theta_right*_t0*_t39 + _ms65*_t4
-            + _ms66*_t3;
-    const trailer_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const trailer_real_t _t42 = K_theta_tractor_x_tractor_2 + _t41;
-    const trailer_real_t _t43 = -_ms59*_t6 + _ms64*_t7 + _t42 + _t5;
-    const trailer_real_t _t44 = J_theta_cart_left*_ms66*_ms66 + J_theta_cart_right*_ms65*_ms65
-            + J_theta_left*_t40*_t40 + J_theta_right*_t39*_t39;
-    const trailer_real_t J_theta_tractor = p->J_theta_tractor;
-    const trailer_real_t _t45 = J_theta_tractor + _t44;
-    const trailer_real_t _t46 = J_theta_cart*_ms64*_ms64 + _t45 - TRAILER_LIT(0.6)*_t8;
-    const trailer_real_t _t47 = _t38*_t46 - _t43*_t43;
-    const trailer_real_t _t48 = TRAILER_LIT(1.0)/_t47;
-    const trailer_real_t _t49 = _t48;
-    const trailer_real_t _t50 = _t36*_t49;
-    const trailer_real_t _t51 = _t43*_t49;
-    const trailer_real_t _t52 = -_ms102 + _t39*tau_right + _t40*tau_left;
-    const trailer_real_t _t53 = _t49*_t52;
-    const trailer_real_t _t54 = _t46*_t49;
-    const trailer_real_t _t55 = _t38*_t49;
-    const trailer_real_t _t56 = TRAILER_LIT(2.0)*_ms68;
-    const trailer_real_t _t57 = _ms48*_ms49;
-    const trailer_real_t _t58 = _ms69*_t20;
-    const trailer_real_t _t59 = _ms69*_t18;
-    const trailer_real_t _t60 = _ms59*_ms87;
-    const trailer_real_t _t61 = _ms12*_t39 + _ms34*_t0;
-    const trailer_real_t _t62 = _ms12*_t40 + _ms34*_t1;
-    const trailer_real_t _t63 = _ms13*_t39 + _ms35*_t0;
-    const trailer_real_t _t64 = _ms13*_t40 + _ms35*_t1;
-    const trailer_real_t _t65 = _ms67*_t9;
-    const trailer_real_t _t66 = _ms67*_t10;
-    const trailer_real_t _t67 = _ms34*_t9;
-    const trailer_real_t _t68 = _ms35*_t9;
-    const trailer_real_t _t69 = _ms34*_t10;
-    const trailer_real_t _t70 = _ms35*_t10;
-    const trailer_real_t _t71 = -_ms31*_t11;
-    const trailer_real_t _t72 = _ms33*_t11;
-    const trailer_real_t _t73 = _ms67*_t71 + _ms68*_t72;
-    const trailer_real_t _t74 = _ms12*_ms64 + _ms34*_ms59;
-    const trailer_real_t _t75 = _ms13*_ms64 + _ms35*_ms59;
-    const trailer_real_t _t76 = -_ms30*_t12 - _ms31*_t13;
-    const trailer_real_t _t77 = -_ms32*_t12 + _ms33*_ms53*_ms58;
-    const trailer_real_t _t78 = _ms67*_t76 + _ms68*_t77;
-    const trailer_real_t _t79 = _ms12*_ms65 + _ms34*_ms60;
-    const trailer_real_t _t80 = _ms13*_ms65 + _ms35*_ms60;
-    const trailer_real_t _t81 = -_ms30*_t14 - _ms31*_t15;
-    const trailer_real_t _t82 = -_ms32*_t14 + _ms33*_ms55*_ms58;
-    const trailer_real_t _t83 = _ms67*_t81 + _ms68*_t82;
-    const trailer_real_t _t84 = _ms12*_ms66 + _ms34*_ms61;
-    const trailer_real_t _t85 = _ms13*_ms66 + _ms35*_ms61;
-    const trailer_real_t _t86 = _t16*_t73;
-    const trailer_real_t _t87 = _ms69*_t19 - _ms69*_t21 + _t24*_t73;
-    const trailer_real_t _t88 = -_ms76*_t18 - _ms79*_t20 - _t87;
-    const trailer_real_t _t89 = _t11*_t88;
-    const trailer_real_t _t90 = -_ms69*_t22 - _ms69*_t23 + _t25*_t73;
-    const trailer_real_t _t91 = _ms76*_t20 - _ms79*_t18 - _t90;
-    const trailer_real_t _t92 = _t12*_t91 + _t13*_t88;
-    const trailer_real_t _t93 = _t14*_t91 + _t15*_t88;
-    const trailer_real_t _t94 = _t26*_t81 + _t27*_t76 + _t3*_t93 + _t4*_t92;
-    const trailer_real_t _t95 = -_ms87*(_ms59*_ms79 - _ms75) - _ms88*_t86
-            + _ms88*(_ms59*_ms76 + _ms84) + _t28*_t89 + _t29*_t71 + _t94;
-    const trailer_real_t _t96 = _t26*_t82 + _t27*_t77 + _t30*_t93 + _t31*_t92;
-    const trailer_real_t _t97 = -_ms87*(_ms64*_ms79 - TRAILER_LIT(0.3)*_ms84)
-            + _ms88*(_ms64*_ms76 - TRAILER_LIT(0.3)*_ms75) + _t29*_t72 - _t32*_t86 + _t34*_t89
-            + _t96;
-    const trailer_real_t _t98 = TRAILER_LIT(2.0)*_t3*_t81 + TRAILER_LIT(2.0)*_t4*_t76;
-    const trailer_real_t _t99 = TRAILER_LIT(2.0)*_t35 + _t71*(_t2 + TRAILER_LIT(2.0)*_t7) + _t98;
-    const trailer_real_t _t100 = _t3*_t82 + _t30*_t81 + _t31*_t76 + _t4*_t77;
-    const trailer_real_t _t101 = _ms59*_t32 + _t100 + _t28*_t72 + _t34*_t71 + _t8;
-    const trailer_real_t _t102 = TRAILER_LIT(2.0)*_t30*_t82 + TRAILER_LIT(2.0)*_t31*_t77;
-    const trailer_real_t _t103 = _t102 + TRAILER_LIT(0.6)*_t5 + _t72*(-TRAILER_LIT(0.6)*_ms88
-            + TRAILER_LIT(2.0)*_t33);
-    const trailer_real_t _t104 = -TRAILER_LIT(2.0)*_t101*_t43 + _t103*_t38 + _t46*_t99;
-    const trailer_real_t _t105 = -_t104*_t48*_t48;
-    const trailer_real_t _t106 = -_t101*_t53 + _t103*_t50 + _t105*(_t36*_t46 - _t43*_t52)
-            + _t51*_t97 - _t54*_t95;
-    const trailer_real_t _t107 = -_t101*_t50 + _t105*(-_t36*_t43 + _t38*_t52) + _t51*_t95
-            + _t53*_t99 - _t55*_t97;
-    const trailer_real_t _t108 = _t0*_t106 + _t107*_t39;
-    const trailer_real_t _t109 = _t16*_t74;
-    const trailer_real_t _t110 = _ms12*_t56;
-    const trailer_real_t _t111 = TRAILER_LIT(0.3)*_t110;
-    const trailer_real_t _t112 = -_ms12*_ms67 - _ms34*_ms68;
-    const trailer_real_t _t113 = -_t112*_t57;
-    const trailer_real_t _t114 = -TRAILER_LIT(0.3)*_ms12;
-    const trailer_real_t _t115 = -_ms34*_t59 - _t114*_t58 + _t24*_t74;
-    const trailer_real_t _t116 = _t111*_t20 - _t113*_t18 - _t115;
-    const trailer_real_t _t117 = _t11*_t116;
-    const trailer_real_t _t118 = _ms34*_t58 - _t114*_t59 + _t25*_t74;
-    const trailer_real_t _t119 = _t111*_t18 + _t113*_t20 - _t118;
-    const trailer_real_t _t120 = _t116*_t13 + _t119*_t12;
-    const trailer_real_t _t121 = _t116*_t15 + _t119*_t14;
-    const trailer_real_t _t122 = _t120*_t4 + _t121*_t3;
-    const trailer_real_t _t123 = K_theta_tractor_x_tractor*_t110 + _t122;
-    const trailer_real_t _t124 = -_ms88*_t109 + _t111*_t60 + _t113*_t35 + _t117*_t28 + _t123;
-    const trailer_real_t _t125 = _t120*_t31 + _t121*_t30;
-    const trailer_real_t _t126 = -K_theta_tractor_x_tractor*_t113 + _t125;
-    const trailer_real_t _t127 = -_t109*_t32 + _t111*_t5 + _t113*_t8 + _t117*_t34 + _t126;
-    const trailer_real_t _t128 = -_t124*_t54 + _t127*_t43*_t49;
-    const trailer_real_t _t129 = _t124*_t51 - _t127*_t55;
-    const trailer_real_t _t130 = _t0*_t128 + _t129*_t39;
-    const trailer_real_t _t131 = _t16*_t75;
-    const trailer_real_t _t132 = _ms13*_t56;
-    const trailer_real_t _t133 = TRAILER_LIT(0.3)*_t132;
-    const trailer_real_t _t134 = -_ms13*_ms67 - _ms35*_ms68;
-    const trailer_real_t _t135 = -_t134*_t57;
-    const trailer_real_t _t136 = -TRAILER_LIT(0.3)*_ms13;
-    const trailer_real_t _t137 = -_ms35*_t59 - _t136*_t58 + _t24*_t75;
-    const trailer_real_t _t138 = _t133*_t20 - _t135*_t18 - _t137;
-    const trailer_real_t _t139 = _t11*_t138;
-    const trailer_real_t _t140 = _ms35*_t58 - _t136*_t59 + _t25*_t75;
-    const trailer_real_t _t141 = _t133*_t18 + _t135*_t20 - _t140;
-    const trailer_real_t _t142 = _t12*_t141 + _t13*_t138;
-    const trailer_real_t _t143 = _t138*_t15 + _t14*_t141;
-    const trailer_real_t _t144 = _t142*_t4 + _t143*_t3;
-    const trailer_real_t _t145 = K_theta_tractor_x_tractor*_t132 + _t144;
-    const trailer_real_t _t146 = -_ms88*_t131 + _t133*_t60 + _t135*_t35 + _t139*_t28 + _t145;
-    const trailer_real_t _t147 = _t142*_t31 + _t143*_t30;
-    const trailer_real_t _t148 = -K_theta_tractor_x_tractor*_t135 + _t147;
-    const trailer_real_t _t149 = -_t131*_t32 + _t133*_t5 + _t135*_t8 + _t139*_t34 + _t148;
-    const trailer_real_t _t150 = -_t146*_t54 + _t149*_t43*_t49;
-    const trailer_real_t _t151 = _t146*_t51 - _t149*_t55;
-    const trailer_real_t _t152 = _t0*_t150 + _t151*_t39;
-    const trailer_real_t _t153 = _t1*_t106 + _t107*_t40;
-    const trailer_real_t _t154 = _t1*_t128 + _t129*_t40;
-    const trailer_real_t _t155 = _t1*_t150 + _t151*_t40;
-    const trailer_real_t _t156 = _t0*_t54 - _t39*_t51;
-    const trailer_real_t _t157 = -_t0*_t51 + _t38*_t39*_t49;
-    const trailer_real_t _t158 = _t0*_t156 + _t157*_t39;
-    const trailer_real_t _t159 = _t1*_t54 - _t40*_t51;
-    const trailer_real_t _t160 = -_t1*_t51 + _t38*_t40*_t49;
-    const trailer_real_t _t161 = _t0*_t159 + _t160*_t39;
-    const trailer_real_t _t162 = _t1*_t156 + _t157*_t40;
-    const trailer_real_t _t163 = _t1*_t159 + _t160*_t40;
+    const trailer_real_t _t48 = -_ms111 + _t30*tau_right + _t31*tau_left;
+    const trailer_real_t _t49 = _t46*_t48;
+    const trailer_real_t _t50 = _t43*_t46;
+    const trailer_real_t _t51 = -_ms112 + _t33*tau_right + _t35*tau_left;
+    const trailer_real_t _t52 = _t46*_t51;
+    const trailer_real_t _t53 = _t41*_t46;
+    const trailer_real_t _t54 = TRAILER_LIT(2.0)*_ms63;
+    const trailer_real_t _t55 = K_theta_tractor_x_tractor*_t54;
+    const trailer_real_t _t56 = TRAILER_LIT(0.6)*_ms63;
+    const trailer_real_t _t57 = _t14*_t56 + _t16*_t56;
+    const trailer_real_t _t58 = _ms12*_ms62;
+    const trailer_real_t _t59 = -_ms64;
+    const trailer_real_t _t60 = _ms63 + _t59;
+    const trailer_real_t _t61 = _t54 + _t59;
+    const trailer_real_t _t62 = -K_theta_tractor_x_tractor + _ms49*_ms70;
+    const trailer_real_t _t63 = _ms13*_ms62;
+    const trailer_real_t _t64 = _ms12*_t33 + _ms34*_t30;
+    const trailer_real_t _t65 = _ms12*_t35 + _ms34*_t31;
+    const trailer_real_t _t66 = _ms13*_t33 + _ms35*_t30;
+    const trailer_real_t _t67 = _ms13*_t35 + _ms35*_t31;
+    const trailer_real_t _t68 = _ms62*_t8;
+    const trailer_real_t _t69 = _ms62*_t9;
+    const trailer_real_t _t70 = _ms34*_t8;
+    const trailer_real_t _t71 = _ms35*_t8;
+    const trailer_real_t _t72 = _ms34*_t9;
+    const trailer_real_t _t73 = _ms35*_t9;
+    const trailer_real_t _t74 = _ms62*_ms76 + _ms63*_ms77;
+    const trailer_real_t _t75 = _ms12*_ms49 + _ms34*_ms48;
+    const trailer_real_t _t76 = _ms13*_ms49 + _ms35*_ms48;
+    const trailer_real_t _t77 = _ms62*_ms79 + _ms63*_ms81;
+    const trailer_real_t _t78 = _ms12*_ms57 + _ms34*_ms56;
+    const trailer_real_t _t79 = _ms13*_ms57 + _ms35*_ms56;
+    const trailer_real_t _t80 = _ms62*_ms83 + _ms63*_ms85;
+    const trailer_real_t _t81 = _ms12*_ms61 + _ms34*_ms60;
+    const trailer_real_t _t82 = _ms13*_ms61 + _ms35*_ms60;
+    const trailer_real_t _t83 = _ms49*_ms70 + _ms69*_ms77;
+    const trailer_real_t _t84 = TRAILER_LIT(0.3)*_t14 + TRAILER_LIT(0.3)*_t16;
+    const trailer_real_t _t85 = J_theta_cart*_ms77 + _t84;
+    const trailer_real_t _t86 = _ms48*_t85 + _ms56*_t10 + _ms60*_t11 + _ms76*_t3 + _ms79*_t5
+            + _ms83*_t7 + _t83;
+    const trailer_real_t _t87 = _ms49*_t84 + _ms71*_ms77;
+    const trailer_real_t _t88 = _ms49*_t85 + _ms57*_t10 + _ms61*_t11 + _ms77*_t3 + _ms81*_t5
+            + _ms85*_t7 + _t87;
+    const trailer_real_t _t89 = _t14*_t17 + _t16*_t17 + _t21*_t74;
+    const trailer_real_t _t90 = TRAILER_LIT(0.3)*K_theta_cart_x_tractor_2*_t13*_t22
+            - TRAILER_LIT(0.3)*_t19*_t22;
+    const trailer_real_t _t91 = -_ms62*_t74;
+    const trailer_real_t _t92 = -_ms63*_t74;
+    const trailer_real_t _t93 = -_ms48*_ms86 - _ms49*_ms87 + _ms76*_t91 + _ms77*_t92;
+    const trailer_real_t _t94 = -_ms56*_ms86 - _ms57*_ms87 + _ms79*_t91 + _ms81*_t92;
+    const trailer_real_t _t95 = -_ms60*_ms86 - _ms61*_ms87 + _ms83*_t91 + _ms85*_t92;
+    const trailer_real_t _t96 = _ms48*_t90 + _ms70*_ms88 + _ms76*_t25 + _ms89*_t24 + _ms90*_t23
+            - _ms91*_t0 + _t2*_t93 + _t4*_t94 + _t6*_t95 + _t89;
+    const trailer_real_t _t97 = _t19*_t26 - _t20*_t26 + _t28*_t74;
+    const trailer_real_t _t98 = _ms49*_t90 + _ms77*_t25 + _ms88*_t84 + _ms89*_t10 + _ms90*_t11
+            - _ms91*_t1 + _t3*_t93 + _t5*_t94 + _t7*_t95 + _t97;
+    const trailer_real_t _t99 = _ms69*_ms76 + _t29;
+    const trailer_real_t _t100 = J_theta_cart*_ms76 + _ms70;
+    const trailer_real_t _t101 = _ms48*_t100 + _ms56*_t24 + _ms60*_t23 + _ms76*_t2 + _ms79*_t4
+            + _ms83*_t6 + _t99;
+    const trailer_real_t _t102 = _t101*_t43 - TRAILER_LIT(2.0)*_t37*_t86 + _t41*_t88;
+    const trailer_real_t _t103 = -_t102*_t45*_t45;
+    const trailer_real_t _t104 = _t103*(-_t37*_t51 + _t43*_t48) + _t47*_t98 + _t49*_t88 - _t50*_t96
+            - _t52*_t86;
+    const trailer_real_t _t105 = _t101*_t52 + _t103*(-_t37*_t48 + _t41*_t51) + _t47*_t96 - _t49*_t86
+            - _t53*_t98;
+    const trailer_real_t _t106 = _t104*_t30 + _t105*_t33;
+    const trailer_real_t _t107 = _ms12*_t55 + _t21*_t75;
+    const trailer_real_t _t108 = _ms12*_t57;
+    const trailer_real_t _t109 = _ms34*_t60 - _ms62*_t75 + _t58;
+    const trailer_real_t _t110 = _ms12*_t61 - _ms63*_t75;
+    const trailer_real_t _t111 = _ms76*_t109 + _ms77*_t110;
+    const trailer_real_t _t112 = _ms79*_t109 + _ms81*_t110;
+    const trailer_real_t _t113 = _ms83*_t109 + _ms85*_t110;
+    const trailer_real_t _t114 = _ms34*_ms63 + _t58;
+    const trailer_real_t _t115 = _ms48*_t108 + _t107 + _t111*_t2 + _t112*_t4 + _t113*_t6
+            + _t114*_t29;
+    const trailer_real_t _t116 = _t28*_t75;
+    const trailer_real_t _t117 = _ms49*_t108 + _t111*_t3 + _t112*_t5 + _t113*_t7 + _t114*_t62
+            + _t116;
+    const trailer_real_t _t118 = -_t115*_t50 + _t117*_t47;
+    const trailer_real_t _t119 = _t115*_t37*_t46 - _t117*_t53;
+    const trailer_real_t _t120 = _t118*_t30 + _t119*_t33;
+    const trailer_real_t _t121 = _ms13*_t55 + _t21*_t76;
+    const trailer_real_t _t122 = _ms13*_t57;
+    const trailer_real_t _t123 = _ms35*_t60 - _ms62*_t76 + _t63;
+    const trailer_real_t _t124 = _ms13*_t61 - _ms63*_t76;
+    const trailer_real_t _t125 = _ms76*_t123 + _ms77*_t124;
+    const trailer_real_t _t126 = _ms79*_t123 + _ms81*_t124;
+    const trailer_real_t _t127 = _ms83*_t123 + _ms85*_t124;
+    const trailer_real_t _t128 = _ms35*_ms63 + _t63;
+    const trailer_real_t _t129 = _ms48*_t122 + _t121 + _t125*_t2 + _t126*_t4 + _t127*_t6
+            + _t128*_t29;
+    const trailer_real_t _t130 = _t28*_t76;
+    const trailer_real_t _t131 = _ms49*_t122 + _t125*_t3 + _t126*_t5 + _t127*_t7 + _t128*_t62
+            + _t130;
+    const trailer_real_t _t132 = -_t129*_t50 + _t131*_t47;
+    const trailer_real_t _t133 = _t129*_t37*_t46 - _t131*_t53;
+    const trailer_real_t _t134 = _t132*_t30 + _t133*_t33;
+    const trailer_real_t _t135 = _t104*_t31 + _t105*_t35;
+    const trailer_real_t _t136 = _t118*_t31 + _t119*_t35;
+    const trailer_real_t _t137 = _t132*_t31 + _t133*_t35;
+    const trailer_real_t _t138 = _t30*_t43*_t46 - _t33*_t47;
+    const trailer_real_t _t139 = -_t30*_t47 + _t33*_t53;
+    const trailer_real_t _t140 = _t138*_t30 + _t139*_t33;
+    const trailer_real_t _t141 = _t31*_t43*_t46 - _t35*_t47;
+    const trailer_real_t _t142 = -_t31*_t47 + _t35*_t53;
+    const trailer_real_t _t143 = _t141*_t30 + _t142*_t33;
+    const trailer_real_t _t144 = _t138*_t31 + _t139*_t35;
+    const trailer_real_t _t145 = _t141*_t31 + _t142*_t35;
     A[0] = TRAILER_LIT(0.0);
     A[1] = TRAILER_LIT(0.0);
-    A[2] = -_t66;
+    A[2] = -_t69;
     A[3] = TRAILER_LIT(0.0);
     A[4] = TRAILER_LIT(0.0);
     A[5] = TRAILER_LIT(0.0);
     A[6] = TRAILER_LIT(0.0);
     A[7] = TRAILER_LIT(0.0);
-    A[8] = _t67;
-    A[9] = _t68;
+    A[8] = _t70;
+    A[9] = _t71;
     A[10] = TRAILER_LIT(0.0);
     A[11] = TRAILER_LIT(0.0);
-    A[12] = _t65;
+    A[12] = _t68;
     A[13] = TRAILER_LIT(0.0);
     A[14] = TRAILER_LIT(0.0);
     A[15] = TRAILER_LIT(0.0);
     A[16] = TRAILER_LIT(0.0);
     A[17] = TRAILER_LIT(0.0);
-    A[18] = _t69;
-    A[19] = _t70;
+    A[18] = _t72;
+    A[19] = _t73;
     A[20] = TRAILER_LIT(0.0);
     A[21] = TRAILER_LIT(0.0);
     A[22] = TRAILER_LIT(0.0);
@@ -963,14 +958,14 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[29] = _ms13;
     A[30] = TRAILER_LIT(0.0);
     A[31] = TRAILER_LIT(0.0);
-    A[32] = _t73;
-    A[33] = -_t73;
+    A[32] = _t74;
+    A[33] = -_t74;
     A[34] = TRAILER_LIT(0.0);
     A[35] = TRAILER_LIT(0.0);
     A[36] = TRAILER_LIT(0.0);
     A[37] = TRAILER_LIT(0.0);
-    A[38] = _t74;
-    A[39] = _t75;
+    A[38] = _t75;
+    A[39] = _t76;
     A[40] = TRAILER_LIT(0.0);
     A[41] = TRAILER_LIT(0.0);
     A[42] = TRAILER_LIT(0.0);
@@ -979,8 +974,8 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[45] = TRAILER_LIT(0.0);
     A[46] = TRAILER_LIT(0.0);
     A[47] = TRAILER_LIT(0.0);
-    A[48] = _t61;
-    A[49] = _t63;
+    A[48] = _t64;
+    A[49] = _t66;
     A[50] = TRAILER_LIT(0.0);
     A[51] = TRAILER_LIT(0.0);
     A[52] = TRAILER_LIT(0.0);
@@ -989,48 +984,48 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     A[55] = TRAILER_LIT(0.0);
     A[56] = TRAILER_LIT(0.0);
     A[57] = TRAILER_LIT(0.0);
-    A[58] = _t62;
-    A[59] = _t64;
+    A[58] = _t65;
+    A[59] = _t67;
     A[60] = TRAILER_LIT(0.0);
     A[61] = TRAILER_LIT(0.0);
-    A[62] = _t78;
-    A[63] = -_t78;
+    A[62] = _t77;
+    A[63] = -_t77;
     A[64] = TRAILER_LIT(0.0);
     A[65] = TRAILER_LIT(0.0);
     A[66] = TRAILER_LIT(0.0);
     A[67] = TRAILER_LIT(0.0);
-    A[68] = _t79;
-    A[69] = _t80;
+    A[68] = _t78;
+    A[69] = _t79;
     A[70] = TRAILER_LIT(0.0);
     A[71] = TRAILER_LIT(0.0);
-    A[72] = _t83;
-    A[73] = -_t83;
+    A[72] = _t80;
+    A[73] = -_t80;
     A[74] = TRAILER_LIT(0.0);
     A[75] = TRAILER_LIT(0.0);
     A[76] = TRAILER_LIT(0.0);
     A[77] = TRAILER_LIT(0.0);
-    A[78] = _t84;
-    A[79] = _t85;
+    A[78] = _t81;
+    A[79] = _t82;
     A[80] = TRAILER_LIT(0.0);
     A[81] = TRAILER_LIT(0.0);
-    A[82] = _t108;
-    A[83] = -_t108;
+    A[82] = _t106;
+    A[83] = -_t106;
     A[84] = TRAILER_LIT(0.0);
     A[85] = TRAILER_LIT(0.0);
     A[86] = TRAILER_LIT(0.0);
     A[87] = TRAILER_LIT(0.0);
-    A[88] = _t130;
-    A[89] = _t152;
+    A[88] = _t120;
+    A[89] = _t134;
     A[90] = TRAILER_LIT(0.0);
     A[91] = TRAILER_LIT(0.0);
-    A[92] = _t153;
-    A[93] = -_t153;
+    A[92] = _t135;
+    A[93] = -_t135;
     A[94] = TRAILER_LIT(0.0);
     A[95] = TRAILER_LIT(0.0);
     A[96] = TRAILER_LIT(0.0);
     A[97] = TRAILER_LIT(0.0);
-    A[98] = _t154;
-    A[99] = _t155;
+    A[98] = _t136;
+    A[99] = _t137;
     B[0] = TRAILER_LIT(0.0);
     B[1] = TRAILER_LIT(0.0);
     B[2] = TRAILER_LIT(0.0);
@@ -1047,14 +1042,14 @@ void trailer_linearization(const trailer_params_t *p, const trailer_real_t *q,
     B[13] = TRAILER_LIT(0.0);
     B[14] = TRAILER_LIT(0.0);
     B[15] = TRAILER_LIT(0.0);
-    B[16] = _t158;
-    B[17] = _t161;
-    B[18] = _t162;
-    B[19] = _t163;
+    B[16] = _t140;
+    B[17] = _t143;
+    B[18] = _t144;
+    B[19] = _t145;
 }
 
 /* trailer_wheel_contact_forces: documented in trailer_model.h.
-   operations after CSE: 92 add, 182 mul, 5 div, 4 sin/cos, 0 sqrt */
+   operations after CSE: 98 add, 155 mul, 5 div, 4 sin/cos, 0 sqrt */
 trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *wheel_rates, const trailer_real_t *tau, trailer_real_t *longitudinal,
     trailer_real_t *lateral)
@@ -1094,86 +1089,91 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
             | trailer_exp_carry(tau_left)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_INPUT;
     }
-    (void)K_theta_cart_x_tractor;
-    (void)K_theta_cart_x_tractor_2;
     (void)thetadot_left;
     (void)thetadot_right;
     trailer_real_t _shared[47];
     trailer_staged_quantities(p, q, wheel_rates, _shared);
-    const trailer_real_t _ms49 = _shared[9];
-    const trailer_real_t _ms59 = _shared[17];
+    const trailer_real_t _ms22 = _shared[2];
+    const trailer_real_t _ms27 = _shared[3];
+    const trailer_real_t _ms48 = _shared[10];
+    const trailer_real_t _ms49 = _shared[11];
+    const trailer_real_t _ms56 = _shared[14];
+    const trailer_real_t _ms57 = _shared[15];
     const trailer_real_t _ms60 = _shared[18];
     const trailer_real_t _ms61 = _shared[19];
-    const trailer_real_t _ms64 = _shared[20];
-    const trailer_real_t _ms65 = _shared[21];
-    const trailer_real_t _ms66 = _shared[22];
-    const trailer_real_t _ms74 = _shared[26];
-    const trailer_real_t _ms75 = _shared[27];
-    const trailer_real_t _ms79 = _shared[31];
-    const trailer_real_t _ms84 = _shared[36];
-    const trailer_real_t _ms85 = _shared[37];
-    const trailer_real_t _ms86 = _shared[38];
-    const trailer_real_t _ms87 = _shared[39];
-    const trailer_real_t _ms88 = _shared[40];
-    const trailer_real_t _ms99 = _shared[43];
-    const trailer_real_t _ms102 = _shared[46];
-    const trailer_real_t _t0 = _ms49*radius_left;
-    const trailer_real_t _t1 = _ms49*radius_right;
-    const trailer_real_t _t2 = J_theta_cart_left*_ms61*_ms61 + J_theta_cart_right*_ms60*_ms60
-            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
-    const trailer_real_t _t3 = J_theta_cart*_ms59*_ms59 + TRAILER_LIT(2.0)*_ms59*_ms87 + _t2;
-    const trailer_real_t _t4 = TRAILER_LIT(0.207)*_t0;
-    const trailer_real_t _t5 = -TRAILER_LIT(0.207)*_t1;
-    const trailer_real_t _t6 = J_theta_cart_left*_ms61*_ms66 + J_theta_cart_right*_ms60*_ms65
-            + J_theta_left*_t1*_t5 + J_theta_right*_t0*_t4;
-    const trailer_real_t _t7 = K_theta_tractor_x_tractor_2 + _t6;
-    const trailer_real_t _t8 = J_theta_cart*_ms59*_ms64 - TRAILER_LIT(0.3)*_ms59*_ms88 + _ms64*_ms87
-            + _t7;
-    const trailer_real_t _t9 = J_theta_cart_left*_ms66*_ms66 + J_theta_cart_right*_ms65*_ms65
-            + J_theta_left*_t5*_t5 + J_theta_right*_t4*_t4;
-    const trailer_real_t _t10 = J_theta_tractor + _t9;
-    const trailer_real_t _t11 = J_theta_cart*_ms64*_ms64 - TRAILER_LIT(0.6)*_ms64*_ms88 + _t10;
-    const trailer_real_t _t12 = _t11*_t3 - _t8*_t8;
-    const trailer_real_t _t13 = theta_cart - theta_tractor;
-    const trailer_real_t _t14 = TRAILER_COS(_t13);
-    const trailer_real_t _t15 = TRAILER_SIN(_t13);
-    const trailer_real_t _t16 = -_ms99 + _t0*tau_right + _t1*tau_left;
-    const trailer_real_t _t17 = -_ms102 + _t4*tau_right + _t5*tau_left;
-    const trailer_real_t _t18 = TRAILER_LIT(1.0)/_t12;
-    const trailer_real_t _t19 = _t18*(_t11*_t16 - _t17*_t8);
-    const trailer_real_t _t20 = _t18*(-_t16*_t8 + _t17*_t3);
-    const trailer_real_t _t21 = _ms59*_t19 + _ms64*_t20 + _ms84;
-    const trailer_real_t _t22 = -_ms75*_ms88 + _ms87*_t21;
-    const trailer_real_t _t23 = K_theta_tractor_x_tractor*_ms74 + K_theta_tractor_x_tractor_2*_t20
-            + _t22;
-    const trailer_real_t _t24 = J_x_tractor*_t19 + _t23;
-    const trailer_real_t _t25 = TRAILER_LIT(1.0)/radius_cart_right;
-    const trailer_real_t _t26 = _ms60*_t19 + _ms65*_t20 + _ms85;
-    const trailer_real_t _t27 = J_theta_cart_right*_t26;
-    const trailer_real_t _t28 = -_t25*_t27;
-    const trailer_real_t _t29 = TRAILER_LIT(1.0)/radius_cart_left;
-    const trailer_real_t _t30 = _ms61*_t19 + _ms66*_t20 + _ms86;
-    const trailer_real_t _t31 = J_theta_cart_left*_t30;
-    const trailer_real_t _t32 = -_t29*_t31;
-    const trailer_real_t _t33 = TRAILER_LIT(0.3)*_ms74 + _t19;
-    const trailer_real_t _t34 = _ms79 - TRAILER_LIT(0.3)*_t20;
-    const trailer_real_t _t35 = J_theta_cart*_t21 + _ms87*_t33 + _ms88*_t34;
-    const trailer_real_t _t36 = TRAILER_LIT(0.2)*_t28 - TRAILER_LIT(0.2)*_t32 - _t35;
-    const trailer_real_t _t37 = -TRAILER_LIT(1.6666666666666667)*_t36;
-    const trailer_real_t _t38 = _t14*_t28 + _t14*_t32 + _t15*_t37 - _t24;
-    const trailer_real_t _t39 = TRAILER_LIT(0.5)*_t38;
-    const trailer_real_t _t40 = _ms75*_ms87 + _ms88*_t21;
-    const trailer_real_t _t41 = J_theta_tractor*_t20 - K_theta_tractor_x_tractor*_ms79
-            + K_theta_tractor_x_tractor_2*_t19 - TRAILER_LIT(0.3)*_t40;
-    const trailer_real_t _t42 = TRAILER_LIT(0.3)*_t14*_t37 - TRAILER_LIT(0.3)*_t15*_t28
-            - TRAILER_LIT(0.3)*_t15*_t32 - _t41;
-    const trailer_real_t _t43 = TRAILER_LIT(2.4154589371980677)*_t42;
-    const trailer_real_t _t44 = -K_theta_tractor_x_tractor*_t20 + K_theta_tractor_x_tractor_2*_ms74
-            + _t40;
-    const trailer_real_t _t45 = J_x_tractor*_ms79 + _t44;
-    const trailer_real_t _t46 = -_t39 + _t43;
-    const trailer_real_t _t47 = -_t39 - _t43;
-    const trailer_real_t _t48 = -_t14*_t37 + _t15*_t28 + _t15*_t32 - _t45;
+    const trailer_real_t _ms63 = _shared[21];
+    const trailer_real_t _ms64 = _shared[22];
+    const trailer_real_t _ms69 = _shared[23];
+    const trailer_real_t _ms70 = _shared[24];
+    const trailer_real_t _ms71 = _shared[25];
+    const trailer_real_t _ms72 = _shared[26];
+    const trailer_real_t _ms74 = _shared[27];
+    const trailer_real_t _ms75 = _shared[28];
+    const trailer_real_t _ms88 = _shared[41];
+    const trailer_real_t _ms89 = _shared[42];
+    const trailer_real_t _ms90 = _shared[43];
+    const trailer_real_t _ms91 = _shared[44];
+    const trailer_real_t _ms111 = _shared[45];
+    const trailer_real_t _ms112 = _shared[46];
+    const trailer_real_t _t0 = _ms64*_ms64;
+    const trailer_real_t _t1 = theta_cart - theta_tractor;
+    const trailer_real_t _t2 = TRAILER_SIN(_t1);
+    const trailer_real_t _t3 = TRAILER_COS(_t1);
+    const trailer_real_t _t4 = TRAILER_LIT(1.0)/radius_right;
+    const trailer_real_t _t5 = TRAILER_LIT(1.0)/radius_left;
+    const trailer_real_t _t6 = J_x_tractor + _ms48*_ms69;
+    const trailer_real_t _t7 = J_theta_cart*_ms48 + _ms69;
+    const trailer_real_t _t8 = J_theta_right*_t4;
+    const trailer_real_t _t9 = J_theta_left*_t5;
+    const trailer_real_t _t10 = J_theta_cart_right*_ms56;
+    const trailer_real_t _t11 = J_theta_cart_left*_ms60;
+    const trailer_real_t _t12 = _ms48*_t7 + _ms56*_t10 + _ms60*_t11 + _t4*_t8 + _t5*_t9 + _t6;
+    const trailer_real_t _t13 = K_theta_tractor_x_tractor_2 + _ms49*_ms69;
+    const trailer_real_t _t14 = J_theta_cart*_ms49 + _ms71;
+    const trailer_real_t _t15 = TRAILER_LIT(0.207)*_t4;
+    const trailer_real_t _t16 = J_theta_right*_t15;
+    const trailer_real_t _t17 = -TRAILER_LIT(0.207)*_t5;
+    const trailer_real_t _t18 = J_theta_left*_t17;
+    const trailer_real_t _t19 = J_theta_cart_right*_ms57;
+    const trailer_real_t _t20 = J_theta_cart_left*_ms61;
+    const trailer_real_t _t21 = _ms48*_t14 + _ms56*_t19 + _ms60*_t20 + _t13 + _t16*_t4 + _t18*_t5;
+    const trailer_real_t _t22 = J_theta_tractor + _ms49*_ms71;
+    const trailer_real_t _t23 = _ms49*_t14 + _ms57*_t19 + _ms61*_t20 + _t15*_t16 + _t17*_t18 + _t22;
+    const trailer_real_t _t24 = _t12*_t23 - _t21*_t21;
+    const trailer_real_t _t25 = -_ms111 + _t4*tau_right + _t5*tau_left;
+    const trailer_real_t _t26 = -_ms112 + _t15*tau_right + _t17*tau_left;
+    const trailer_real_t _t27 = TRAILER_LIT(1.0)/_t24;
+    const trailer_real_t _t28 = _t27*(-_t21*_t26 + _t23*_t25);
+    const trailer_real_t _t29 = _t27*(_t12*_t26 - _t21*_t25);
+    const trailer_real_t _t30 = _ms56*_t28 + _ms57*_t29 + _ms89;
+    const trailer_real_t _t31 = -J_theta_cart_right*_t30;
+    const trailer_real_t _t32 = _ms22*_t31;
+    const trailer_real_t _t33 = _t2*_t32;
+    const trailer_real_t _t34 = _ms60*_t28 + _ms61*_t29 + _ms90;
+    const trailer_real_t _t35 = -J_theta_cart_left*_t34;
+    const trailer_real_t _t36 = _ms27*_t35;
+    const trailer_real_t _t37 = _t2*_t36;
+    const trailer_real_t _t38 = _ms48*_t28 + _ms49*_t29 + _ms88;
+    const trailer_real_t _t39 = -J_theta_cart*_t38 - _ms69*_t28 - _ms70*_ms91 - _ms71*_t29 - _ms75;
+    const trailer_real_t _t40 = TRAILER_LIT(0.2)*_t32 - TRAILER_LIT(0.2)*_t36 + _t39;
+    const trailer_real_t _t41 = -TRAILER_LIT(1.6666666666666667)*_t40;
+    const trailer_real_t _t42 = _t3*_t41;
+    const trailer_real_t _t43 = -J_x_tractor*_t28 - K_theta_tractor_x_tractor_2*_t29 - _ms69*_t38
+            - _ms72;
+    const trailer_real_t _t44 = _t2*_t41 + _t3*_t32 + _t3*_t36 + _t43;
+    const trailer_real_t _t45 = TRAILER_LIT(0.5)*_t44;
+    const trailer_real_t _t46 = -J_theta_tractor*_t29 + K_theta_tractor_x_tractor*_ms91
+            - K_theta_tractor_x_tractor_2*_t28 - _ms71*_t38 - _ms74;
+    const trailer_real_t _t47 = -TRAILER_LIT(0.3)*_t33 - TRAILER_LIT(0.3)*_t37
+            + TRAILER_LIT(0.3)*_t42 + _t46;
+    const trailer_real_t _t48 = TRAILER_LIT(2.4154589371980677)*_t47;
+    const trailer_real_t _t49 = K_theta_cart_x_tractor*_t0*_t2 + K_theta_cart_x_tractor_2*_t0*_t3
+            + K_theta_tractor_x_tractor_2*_ms63*_ms63;
+    const trailer_real_t _t50 = -J_x_tractor*_ms91 + K_theta_tractor_x_tractor*_t29 - _ms70*_t38
+            - _t49;
+    const trailer_real_t _t51 = -_t45 + _t48;
+    const trailer_real_t _t52 = -_t45 - _t48;
+    const trailer_real_t _t53 = _t33 + _t37 - _t42 + _t50;
     if (!(radius_cart_left > TRAILER_LIT(0.0))) { /* radius_cart_left > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
@@ -1207,16 +1207,16 @@ trailer_status_t trailer_wheel_contact_forces(const trailer_params_t *p, const t
     if (!(J_x_tractor > TRAILER_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t3 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t12 > TRAILER_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    if (!(_t12 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t24 > TRAILER_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAILER_ERR_BAD_PARAMS;
     }
-    const trailer_real_t r_0 = _t47;
-    const trailer_real_t r_1 = _t46;
-    const trailer_real_t r_2 = -_t48;
-    const trailer_real_t r_3 = -_t37;
+    const trailer_real_t r_0 = _t52;
+    const trailer_real_t r_1 = _t51;
+    const trailer_real_t r_2 = -_t53;
+    const trailer_real_t r_3 = -_t41;
     if (((trailer_exp_carry(r_0) | trailer_exp_carry(r_1) | trailer_exp_carry(r_2)
             | trailer_exp_carry(r_3)) & TRAILER_EXP_CARRY_TOP) != 0u) {
         return TRAILER_ERR_NONFINITE_OUTPUT;

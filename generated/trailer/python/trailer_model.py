@@ -65,7 +65,7 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
     Returns:
         qddot: array of 8 (shape 8x1, row-major)
 
-    operations after CSE: 67 add, 149 mul, 3 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 72 add, 122 mul, 5 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     _, _, _, _, thetadot_right, thetadot_left, _, _ = _flat(qdot, 8, "qdot")
@@ -91,86 +91,96 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         _t0 = theta_cart - theta_tractor
         _t1 = math.sin(_t0)
         _t2 = math.cos(_t0)
-        _t3 = radius_left*radius_right
-        _t4 = 1.0/_t3
-        _t5 = _t4*radius_left
-        _t6 = _t4*radius_right
-        _t7 = radius_cart_left*radius_cart_right
-        _t8 = -0.6*_t7
-        _t9 = 1.0/_t8
-        _t10 = _t7*_t9
-        _t11 = 0.5*radius_right
-        _t12 = 0.5*radius_left
-        _t13 = _t11*thetadot_right + _t12*thetadot_left
-        _t14 = _t1*_t10
-        _t15 = -0.3*_t2
-        _t16 = -_t10*_t15
-        _t17 = 2.4154589371980677*radius_right
-        _t18 = -2.4154589371980677*radius_left
-        _t19 = _t17*thetadot_right + _t18*thetadot_left
-        _t20 = _t13*_t14 + _t16*_t19
-        _t21 = _t13*_t20
-        _t22 = -0.3*_t19
-        _t23 = _t20*_t22
-        _t24 = -0.2*radius_cart_right
-        _t25 = -0.6*radius_cart_right
-        _t26 = _t9*(_t1*_t24 + _t2*_t25)
-        _t27 = J_theta_cart_left*_t26
-        _t28 = 0.2*radius_cart_left
-        _t29 = -0.6*radius_cart_left
-        _t30 = _t9*(_t1*_t28 + _t2*_t29)
-        _t31 = J_theta_cart_right*_t30
-        _t32 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-        _t33 = 0.3*_t32
-        _t34 = J_theta_cart*_t14
-        _t35 = _t19*_t19
-        _t36 = 0.3*_t35
-        _t37 = -_t13*_t19
-        _t38 = -_t3*_t37*_t4
-        _t39 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t40 = _t32*_t38 + _t36*_t39
-        _t41 = J_theta_cart_left*_t26*_t26 + J_theta_cart_right*_t30*_t30 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
-        _t42 = J_theta_cart*_t14*_t14 + 2.0*_t14*_t39 + _t41
-        _t43 = 0.207*_t5
-        _t44 = -0.207*_t6
-        _t45 = 0.3*_t1
-        _t46 = _t9*(-_t15*_t28 - _t29*_t45)
-        _t47 = _t9*(-_t15*_t24 - _t25*_t45)
-        _t48 = J_theta_left*_t44*_t6 + J_theta_right*_t43*_t5 + _t27*_t47 + _t31*_t46
-        _t49 = K_theta_tractor_x_tractor_2 + _t48
-        _t50 = -_t14*_t33 + _t16*_t34 + _t16*_t39 + _t49
-        _t51 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t46*_t46 + J_theta_left*_t44*_t44 + J_theta_right*_t43*_t43
-        _t52 = J_theta_tractor + _t51
-        _t53 = J_theta_cart*_t16*_t16 - 0.6*_t16*_t32 + _t52
-        _t54 = _t42*_t53 - _t50*_t50
-        _t55 = math.cos(theta_tractor)
-        _t56 = math.sin(theta_tractor)
-        _t57 = _t20*_t20
-        _t58 = -_t1*_t23 - _t2*_t21
-        _t59 = _t1*_t21 - _t2*_t23
-        _t60 = _t1*_t36 - _t2*_t38 - _t58
-        _t61 = _t1*_t38 + _t2*_t36 - _t59
-        _t62 = _t10*_t60
-        _t63 = _t9*(_t28*_t60 + _t29*_t61)
-        _t64 = _t9*(_t24*_t60 + _t25*_t61)
-        _t65 = _t27*_t64 + _t31*_t63
-        _t66 = K_theta_tractor_x_tractor*_t35 + _t65
-        _t67 = _t14*_t40 - _t32*_t57 + _t34*_t62 + _t39*_t62 + _t66
-        _t68 = J_theta_cart_left*_t47*_t64 + J_theta_cart_right*_t46*_t63
-        _t69 = -K_theta_tractor_x_tractor*_t38 + _t68
-        _t70 = J_theta_cart*_t16*_t62 + _t16*_t40 - _t33*_t62 - 0.3*_t39*_t57 + _t69
-        _t71 = _t5*tau_right + _t6*tau_left - _t67
-        _t72 = _t43*tau_right + _t44*tau_left - _t70
-        _t73 = 1.0/_t54
-        _t74 = _t73*(-_t50*_t72 + _t53*_t71)
-        _t75 = _t73*(_t42*_t72 - _t50*_t71)
-        _t76 = _t14*_t74 + _t16*_t75 + _t62
-        _t77 = _t43*_t75 + _t5*_t74
-        _t78 = _t44*_t75 + _t6*_t74
-        _t79 = _t30*_t74 + _t46*_t75 + _t63
-        _t80 = _t26*_t74 + _t47*_t75 + _t64
-        _t81 = -_t38*_t56 + _t55*_t74
-        _t82 = _t38*_t55 + _t56*_t74
+        _t3 = 0.3*_t2
+        _t4 = 0.3*_t1
+        _t5 = -1.6666666666666667*_t1
+        _t6 = 0.2*_t5
+        _t7 = -1.6666666666666667*_t3
+        _t8 = 0.2*_t7
+        _t9 = K_theta_cart_x_tractor*_t2
+        _t10 = 2.4154589371980677*radius_right
+        _t11 = -2.4154589371980677*radius_left
+        _t12 = _t10*thetadot_right + _t11*thetadot_left
+        _t13 = _t12*_t12
+        _t14 = 0.5*radius_right
+        _t15 = 0.5*radius_left
+        _t16 = _t14*thetadot_right + _t15*thetadot_left
+        _t17 = _t12*_t7 + _t16*_t5
+        _t18 = _t17*_t17
+        _t19 = K_theta_cart_x_tractor*_t4
+        _t20 = K_theta_cart_x_tractor_2*_t3
+        _t21 = 1.6666666666666667*_t2
+        _t22 = 0.2*_t21
+        _t23 = -1.6666666666666667*_t4
+        _t24 = 0.2*_t23
+        _t25 = _t12*_t16
+        _t26 = 1.0/radius_cart_right
+        _t27 = _t2 + _t6
+        _t28 = _t26*_t27
+        _t29 = J_theta_cart_right*_t28
+        _t30 = -_t4 + _t8
+        _t31 = _t26*_t30
+        _t32 = J_theta_cart_right*_t31
+        _t33 = 1.0/radius_cart_left
+        _t34 = _t2 - _t6
+        _t35 = _t33*_t34
+        _t36 = J_theta_cart_left*_t35
+        _t37 = -_t4 - _t8
+        _t38 = _t33*_t37
+        _t39 = J_theta_cart_left*_t38
+        _t40 = K_theta_cart_x_tractor_2*_t1 - _t9
+        _t41 = _t13*_t19 + _t13*_t20
+        _t42 = -_t16*_t17 + _t25
+        _t43 = -_t12*_t17 + _t13
+        _t44 = _t21*_t42 + _t23*_t43
+        _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
+        _t46 = 1.0/radius_right
+        _t47 = 1.0/radius_left
+        _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+        _t49 = J_x_tractor + _t48*_t5
+        _t50 = J_theta_cart*_t5 + _t48
+        _t51 = J_theta_right*_t46
+        _t52 = J_theta_left*_t47
+        _t53 = _t28*_t29 + _t35*_t36 + _t46*_t51 + _t47*_t52 + _t49 + _t5*_t50
+        _t54 = K_theta_tractor_x_tractor_2 + _t48*_t7
+        _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+        _t56 = J_theta_cart*_t7 + _t55
+        _t57 = 0.207*_t46
+        _t58 = J_theta_right*_t57
+        _t59 = -0.207*_t47
+        _t60 = J_theta_left*_t59
+        _t61 = _t28*_t32 + _t35*_t39 + _t46*_t58 + _t47*_t60 + _t5*_t56 + _t54
+        _t62 = J_theta_tractor + _t55*_t7
+        _t63 = _t31*_t32 + _t38*_t39 + _t56*_t7 + _t57*_t58 + _t59*_t60 + _t62
+        _t64 = _t53*_t63 - _t61*_t61
+        _t65 = math.cos(theta_tractor)
+        _t66 = math.sin(theta_tractor)
+        _t67 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+        _t68 = -_t18*_t19 - _t18*_t20
+        _t69 = _t1 + _t22
+        _t70 = _t26*_t69
+        _t71 = _t24 + _t3
+        _t72 = _t26*_t71
+        _t73 = _t1 - _t22
+        _t74 = _t33*_t73
+        _t75 = -_t24 + _t3
+        _t76 = _t33*_t75
+        _t77 = _t42*_t70 + _t43*_t72
+        _t78 = _t42*_t74 + _t43*_t76
+        _t79 = _t29*_t77 + _t36*_t78 + _t44*_t48 + _t45*_t5 + _t67
+        _t80 = -K_theta_tractor_x_tractor*_t25 + _t32*_t77 + _t39*_t78 + _t44*_t55 + _t45*_t7 + _t68
+        _t81 = _t46*tau_right + _t47*tau_left - _t79
+        _t82 = _t57*tau_right + _t59*tau_left - _t80
+        _t83 = 1.0/_t64
+        _t84 = _t83*(-_t61*_t82 + _t63*_t81)
+        _t85 = _t83*(_t53*_t82 - _t61*_t81)
+        _t86 = _t44 + _t5*_t84 + _t7*_t85
+        _t87 = _t46*_t84 + _t57*_t85
+        _t88 = _t47*_t84 + _t59*_t85
+        _t89 = _t28*_t84 + _t31*_t85 + _t77
+        _t90 = _t35*_t84 + _t38*_t85 + _t78
+        _t91 = -_t25*_t66 + _t65*_t84
+        _t92 = _t25*_t65 + _t66*_t84
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -195,11 +205,11 @@ def forward_dynamics(q: ArrayLike, qdot: ArrayLike, tau: ArrayLike, p: Any) -> N
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires J_x_tractor > 0")
-    if not (_t42 > 0.0):
+    if not (_t53 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t54 > 0.0):
+    if not (_t64 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    qddot = np.array([_t81, _t82, _t75, _t76, _t77, _t78, _t79, _t80])
+    qddot = np.array([_t91, _t92, _t85, _t86, _t87, _t88, _t89, _t90])
     if not np.all(np.isfinite(qddot)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of forward_dynamics is not finite")
     return qddot
@@ -218,7 +228,7 @@ def kinematics(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray[np.float
     Returns:
         pose_rates: array of 6 (shape 6x1, row-major)
 
-    operations after CSE: 10 add, 39 mul, 1 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 10 add, 26 mul, 2 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -229,31 +239,31 @@ def kinematics(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray[np.float
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = radius_cart_left*radius_cart_right
-    _t4 = -0.6*_t3
-    _t5 = 1.0/_t4
-    _t6 = _t3*_t5
-    _t7 = 2.4154589371980677*radius_right
-    _t8 = -2.4154589371980677*radius_left
-    _t9 = -0.3*_t2
-    _t10 = 0.3*_t1
-    _t11 = 0.5*radius_right
-    _t12 = 0.5*radius_left
-    _t13 = 0.2*radius_cart_left
-    _t14 = -0.6*radius_cart_left
-    _t15 = -0.2*radius_cart_right
-    _t16 = -0.6*radius_cart_right
-    _t17 = _t1*_t6
-    _t18 = _t5*(_t1*_t13 + _t14*_t2)
-    _t19 = _t5*(_t1*_t15 + _t16*_t2)
-    _t20 = -_t6*_t9
-    _t21 = _t5*(-_t10*_t14 - _t13*_t9)
-    _t22 = _t5*(-_t10*_t16 - _t15*_t9)
-    _t23 = _t11*thetadot_right + _t12*thetadot_left
-    _t24 = _t7*thetadot_right + _t8*thetadot_left
-    _t25 = _t17*_t23 + _t20*_t24
-    _t26 = _t18*_t23 + _t21*_t24
-    _t27 = _t19*_t23 + _t22*_t24
+    _t3 = -1.6666666666666667*_t1
+    _t4 = 0.2*_t3
+    _t5 = -0.3*_t2
+    _t6 = 1.6666666666666667*_t5
+    _t7 = 0.2*_t6
+    _t8 = 2.4154589371980677*radius_right
+    _t9 = -2.4154589371980677*radius_left
+    _t10 = 1.0/radius_cart_right
+    _t11 = 1.0/radius_cart_left
+    _t12 = 0.3*_t1
+    _t13 = 0.5*radius_right
+    _t14 = 0.5*radius_left
+    _t15 = _t2 + _t4
+    _t16 = -_t12 + _t7
+    _t17 = _t10*_t15
+    _t18 = _t10*_t16
+    _t19 = _t2 - _t4
+    _t20 = -_t12 - _t7
+    _t21 = _t11*_t19
+    _t22 = _t11*_t20
+    _t23 = _t13*thetadot_right + _t14*thetadot_left
+    _t24 = _t8*thetadot_right + _t9*thetadot_left
+    _t25 = _t23*_t3 + _t24*_t6
+    _t26 = _t17*_t23 + _t18*_t24
+    _t27 = _t21*_t23 + _t22*_t24
     _t28 = _t23*math.cos(theta_tractor)
     _t29 = _t23*math.sin(theta_tractor)
     pose_rates = np.array([_t28, _t29, _t24, _t25, _t26, _t27])
@@ -272,7 +282,7 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     Returns:
         M: array of 4 (shape 2x2, row-major). 2x2 row-major
 
-    operations after CSE: 33 add, 87 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 34 add, 62 mul, 4 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     J_theta_cart = float(_field(p, "J_theta_cart"))
@@ -292,52 +302,58 @@ def minimal_mass_matrix(q: ArrayLike, p: Any) -> NDArray[np.float64]:
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = radius_left*radius_right
-    _t4 = 1.0/_t3
-    _t5 = _t4*radius_left
-    _t6 = _t4*radius_right
-    _t7 = radius_cart_left*radius_cart_right
-    _t8 = -0.6*_t7
-    _t9 = 1.0/_t8
-    _t10 = _t7*_t9
-    _t11 = 2.4154589371980677*radius_right
-    _t12 = -2.4154589371980677*radius_left
-    _t13 = -0.3*_t2
-    _t14 = 0.3*_t1
-    _t15 = 0.5*radius_right
-    _t16 = 0.5*radius_left
-    _t17 = 0.2*radius_cart_left
-    _t18 = -0.6*radius_cart_left
-    _t19 = -0.2*radius_cart_right
-    _t20 = -0.6*radius_cart_right
-    _t21 = _t1*_t10
-    _t22 = _t9*(_t1*_t17 + _t18*_t2)
-    _t23 = _t9*(_t1*_t19 + _t2*_t20)
-    _t24 = 0.207*_t5
-    _t25 = -0.207*_t6
-    _t26 = -_t10*_t13
-    _t27 = _t9*(-_t13*_t17 - _t14*_t18)
-    _t28 = _t9*(-_t13*_t19 - _t14*_t20)
-    _t29 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t30 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t31 = J_theta_cart_left*_t23*_t23 + J_theta_cart_right*_t22*_t22 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
-    _t32 = J_theta_cart*_t21*_t21 + 2.0*_t21*_t29 + _t31
-    _t33 = J_theta_cart_left*_t23*_t28 + J_theta_cart_right*_t22*_t27 + J_theta_left*_t25*_t6 + J_theta_right*_t24*_t5
-    _t34 = K_theta_tractor_x_tractor_2 + _t33
-    _t35 = J_theta_cart*_t21*_t26 - 0.3*_t21*_t30 + _t26*_t29 + _t34
-    _t36 = J_theta_cart_left*_t28*_t28 + J_theta_cart_right*_t27*_t27 + J_theta_left*_t25*_t25 + J_theta_right*_t24*_t24
-    _t37 = J_theta_tractor + _t36
-    _t38 = J_theta_cart*_t26*_t26 - 0.6*_t26*_t30 + _t37
-    _t39 = _t11*_t35 + _t15*_t32
-    _t40 = _t12*_t35 + _t16*_t32
-    _t41 = _t11*_t38 + _t15*_t35
-    _t42 = _t12*_t38 + _t16*_t35
-    _t43 = _t11*_t41 + _t15*_t39
-    _t44 = _t11*_t42 + _t15*_t40
-    _t45 = _t12*_t42 + _t16*_t40
+    _t3 = 0.3*_t2
+    _t4 = 0.3*_t1
+    _t5 = -1.6666666666666667*_t1
+    _t6 = 0.2*_t5
+    _t7 = -1.6666666666666667*_t3
+    _t8 = 0.2*_t7
+    _t9 = 2.4154589371980677*radius_right
+    _t10 = -2.4154589371980677*radius_left
+    _t11 = 1.0/radius_cart_right
+    _t12 = 1.0/radius_cart_left
+    _t13 = 0.5*radius_right
+    _t14 = 0.5*radius_left
+    _t15 = 1.0/radius_right
+    _t16 = 0.207*_t15
+    _t17 = 1.0/radius_left
+    _t18 = -0.207*_t17
+    _t19 = _t2 + _t6
+    _t20 = -_t4 + _t8
+    _t21 = _t11*_t19
+    _t22 = _t11*_t20
+    _t23 = _t2 - _t6
+    _t24 = -_t4 - _t8
+    _t25 = _t12*_t23
+    _t26 = _t12*_t24
+    _t27 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t28 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t29 = J_x_tractor + _t27*_t5
+    _t30 = K_theta_tractor_x_tractor_2 + _t27*_t7
+    _t31 = J_theta_tractor + _t28*_t7
+    _t32 = J_theta_cart*_t5 + _t27
+    _t33 = J_theta_cart*_t7 + _t28
+    _t34 = J_theta_right*_t15
+    _t35 = J_theta_right*_t16
+    _t36 = J_theta_left*_t17
+    _t37 = J_theta_left*_t18
+    _t38 = J_theta_cart_right*_t21
+    _t39 = J_theta_cart_right*_t22
+    _t40 = J_theta_cart_left*_t25
+    _t41 = J_theta_cart_left*_t26
+    _t42 = _t15*_t34 + _t17*_t36 + _t21*_t38 + _t25*_t40 + _t29 + _t32*_t5
+    _t43 = _t15*_t35 + _t17*_t37 + _t21*_t39 + _t25*_t41 + _t30 + _t33*_t5
+    _t44 = _t16*_t35 + _t18*_t37 + _t22*_t39 + _t26*_t41 + _t31 + _t33*_t7
+    _t45 = _t13*_t42 + _t43*_t9
+    _t46 = _t10*_t43 + _t14*_t42
+    _t47 = _t13*_t43 + _t44*_t9
+    _t48 = _t10*_t44 + _t14*_t43
+    _t49 = _t13*_t45 + _t47*_t9
+    _t50 = _t13*_t46 + _t48*_t9
+    _t51 = _t10*_t48 + _t14*_t46
     M = np.array([
-        [_t43, _t44],
-        [_t44, _t45],
+        [_t49, _t50],
+        [_t50, _t51],
     ])
     return M
 
@@ -355,7 +371,7 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     Returns:
         H: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 33 add, 87 mul, 2 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 37 add, 72 mul, 2 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -372,61 +388,66 @@ def minimal_bias_forces(q: ArrayLike, wheel_rates: ArrayLike, p: Any) -> NDArray
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = radius_cart_left*radius_cart_right
-    _t4 = -0.6*_t3
-    _t5 = 1.0/_t4
-    _t6 = _t3*_t5
-    _t7 = 0.5*radius_right
-    _t8 = 0.5*radius_left
-    _t9 = _t7*thetadot_right + _t8*thetadot_left
-    _t10 = _t1*_t6
-    _t11 = -0.3*_t2
-    _t12 = -_t11*_t6
-    _t13 = 2.4154589371980677*radius_right
-    _t14 = -2.4154589371980677*radius_left
-    _t15 = _t13*thetadot_right + _t14*thetadot_left
-    _t16 = _t10*_t9 + _t12*_t15
-    _t17 = _t16*_t9
-    _t18 = -0.3*_t15
-    _t19 = _t16*_t18
-    _t20 = -0.2*radius_cart_right
-    _t21 = -0.6*radius_cart_right
-    _t22 = _t15*_t15
-    _t23 = 0.3*_t22
-    _t24 = radius_left*radius_right
-    _t25 = 1.0/_t24
-    _t26 = -_t15*_t9
-    _t27 = -_t24*_t25*_t26
-    _t28 = -_t1*_t19 - _t17*_t2
-    _t29 = _t1*_t23 - _t2*_t27 - _t28
-    _t30 = _t1*_t17 - _t19*_t2
-    _t31 = _t1*_t27 + _t2*_t23 - _t30
-    _t32 = _t5*(_t20*_t29 + _t21*_t31)
-    _t33 = J_theta_cart_left*_t32
-    _t34 = 0.2*radius_cart_left
-    _t35 = -0.6*radius_cart_left
-    _t36 = _t5*(_t29*_t34 + _t31*_t35)
-    _t37 = J_theta_cart_right*_t36
-    _t38 = _t29*_t6
-    _t39 = J_theta_cart*_t38
-    _t40 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t41 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t42 = _t23*_t40 + _t27*_t41
-    _t43 = 0.3*_t1
-    _t44 = _t5*(_t1*_t34 + _t2*_t35)
-    _t45 = _t5*(_t1*_t20 + _t2*_t21)
-    _t46 = _t5*(-_t11*_t34 - _t35*_t43)
-    _t47 = _t5*(-_t11*_t20 - _t21*_t43)
-    _t48 = _t16*_t16
-    _t49 = _t33*_t45 + _t37*_t44
-    _t50 = K_theta_tractor_x_tractor*_t22 + _t49
-    _t51 = _t10*_t39 + _t10*_t42 + _t38*_t40 - _t41*_t48 + _t50
-    _t52 = _t33*_t47 + _t37*_t46
-    _t53 = -K_theta_tractor_x_tractor*_t27 + _t52
-    _t54 = _t12*_t39 + _t12*_t42 - 0.3*_t38*_t41 - 0.3*_t40*_t48 + _t53
-    _t55 = _t13*_t54 + _t51*_t7
-    _t56 = _t14*_t54 + _t51*_t8
-    H = np.array([_t55, _t56])
+    _t3 = 0.3*_t2
+    _t4 = 0.3*_t1
+    _t5 = -1.6666666666666667*_t1
+    _t6 = 0.2*_t5
+    _t7 = -1.6666666666666667*_t3
+    _t8 = 0.2*_t7
+    _t9 = K_theta_cart_x_tractor*_t2
+    _t10 = 2.4154589371980677*radius_right
+    _t11 = -2.4154589371980677*radius_left
+    _t12 = _t10*thetadot_right + _t11*thetadot_left
+    _t13 = _t12*_t12
+    _t14 = 0.5*radius_right
+    _t15 = 0.5*radius_left
+    _t16 = _t14*thetadot_right + _t15*thetadot_left
+    _t17 = _t12*_t7 + _t16*_t5
+    _t18 = _t17*_t17
+    _t19 = K_theta_cart_x_tractor*_t4
+    _t20 = K_theta_cart_x_tractor_2*_t3
+    _t21 = 1.6666666666666667*_t2
+    _t22 = 0.2*_t21
+    _t23 = -1.6666666666666667*_t4
+    _t24 = 0.2*_t23
+    _t25 = _t12*_t16
+    _t26 = 1.0/radius_cart_left
+    _t27 = _t1 - _t22
+    _t28 = _t26*_t27
+    _t29 = -_t24 + _t3
+    _t30 = _t26*_t29
+    _t31 = -_t16*_t17 + _t25
+    _t32 = -_t12*_t17 + _t13
+    _t33 = _t28*_t31 + _t30*_t32
+    _t34 = J_theta_cart_left*_t33
+    _t35 = 1.0/radius_cart_right
+    _t36 = _t1 + _t22
+    _t37 = _t35*_t36
+    _t38 = _t24 + _t3
+    _t39 = _t35*_t38
+    _t40 = _t31*_t37 + _t32*_t39
+    _t41 = J_theta_cart_right*_t40
+    _t42 = K_theta_cart_x_tractor_2*_t1 - _t9
+    _t43 = _t13*_t19 + _t13*_t20
+    _t44 = _t21*_t31 + _t23*_t32
+    _t45 = J_theta_cart*_t44 + _t25*_t42 + _t43
+    _t46 = _t2 + _t6
+    _t47 = -_t4 + _t8
+    _t48 = _t35*_t46
+    _t49 = _t35*_t47
+    _t50 = _t2 - _t6
+    _t51 = -_t4 - _t8
+    _t52 = _t26*_t50
+    _t53 = _t26*_t51
+    _t54 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+    _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+    _t56 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+    _t57 = -_t18*_t19 - _t18*_t20
+    _t58 = _t34*_t52 + _t41*_t48 + _t44*_t54 + _t45*_t5 + _t56
+    _t59 = -K_theta_tractor_x_tractor*_t25 + _t34*_t53 + _t41*_t49 + _t44*_t55 + _t45*_t7 + _t57
+    _t60 = _t10*_t59 + _t14*_t58
+    _t61 = _t11*_t59 + _t15*_t58
+    H = np.array([_t60, _t61])
     return H
 
 
@@ -444,7 +465,7 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
     Returns:
         wheel_accels: array of 2 (shape 2x1, row-major)
 
-    operations after CSE: 59 add, 139 mul, 3 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 64 add, 112 mul, 5 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -470,79 +491,89 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         _t0 = theta_cart - theta_tractor
         _t1 = math.sin(_t0)
         _t2 = math.cos(_t0)
-        _t3 = radius_left*radius_right
-        _t4 = 1.0/_t3
-        _t5 = _t4*radius_left
-        _t6 = _t4*radius_right
-        _t7 = radius_cart_left*radius_cart_right
-        _t8 = -0.6*_t7
-        _t9 = 1.0/_t8
-        _t10 = _t7*_t9
-        _t11 = 0.5*radius_right
-        _t12 = 0.5*radius_left
-        _t13 = _t11*thetadot_right + _t12*thetadot_left
-        _t14 = _t1*_t10
-        _t15 = -0.3*_t2
-        _t16 = -_t10*_t15
-        _t17 = 2.4154589371980677*radius_right
-        _t18 = -2.4154589371980677*radius_left
-        _t19 = _t17*thetadot_right + _t18*thetadot_left
-        _t20 = _t13*_t14 + _t16*_t19
-        _t21 = _t13*_t20
-        _t22 = -0.3*_t19
-        _t23 = _t20*_t22
-        _t24 = -0.2*radius_cart_right
-        _t25 = -0.6*radius_cart_right
-        _t26 = _t9*(_t1*_t24 + _t2*_t25)
-        _t27 = J_theta_cart_left*_t26
-        _t28 = 0.2*radius_cart_left
-        _t29 = -0.6*radius_cart_left
-        _t30 = _t9*(_t1*_t28 + _t2*_t29)
-        _t31 = J_theta_cart_right*_t30
-        _t32 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-        _t33 = 0.3*_t32
-        _t34 = J_theta_cart*_t14
-        _t35 = _t19*_t19
-        _t36 = 0.3*_t35
-        _t37 = -_t13*_t19
-        _t38 = -_t3*_t37*_t4
-        _t39 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t40 = _t32*_t38 + _t36*_t39
-        _t41 = J_theta_cart_left*_t26*_t26 + J_theta_cart_right*_t30*_t30 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
-        _t42 = J_theta_cart*_t14*_t14 + 2.0*_t14*_t39 + _t41
-        _t43 = 0.207*_t5
-        _t44 = -0.207*_t6
-        _t45 = 0.3*_t1
-        _t46 = _t9*(-_t15*_t28 - _t29*_t45)
-        _t47 = _t9*(-_t15*_t24 - _t25*_t45)
-        _t48 = J_theta_left*_t44*_t6 + J_theta_right*_t43*_t5 + _t27*_t47 + _t31*_t46
-        _t49 = K_theta_tractor_x_tractor_2 + _t48
-        _t50 = -_t14*_t33 + _t16*_t34 + _t16*_t39 + _t49
-        _t51 = J_theta_cart_left*_t47*_t47 + J_theta_cart_right*_t46*_t46 + J_theta_left*_t44*_t44 + J_theta_right*_t43*_t43
-        _t52 = J_theta_tractor + _t51
-        _t53 = J_theta_cart*_t16*_t16 - 0.6*_t16*_t32 + _t52
-        _t54 = _t42*_t53 - _t50*_t50
-        _t55 = _t20*_t20
-        _t56 = -_t1*_t23 - _t2*_t21
-        _t57 = _t1*_t21 - _t2*_t23
-        _t58 = _t1*_t36 - _t2*_t38 - _t56
-        _t59 = _t1*_t38 + _t2*_t36 - _t57
-        _t60 = _t10*_t58
-        _t61 = _t9*(_t28*_t58 + _t29*_t59)
-        _t62 = _t9*(_t24*_t58 + _t25*_t59)
-        _t63 = _t27*_t62 + _t31*_t61
-        _t64 = K_theta_tractor_x_tractor*_t35 + _t63
-        _t65 = _t14*_t40 - _t32*_t55 + _t34*_t60 + _t39*_t60 + _t64
-        _t66 = J_theta_cart_left*_t47*_t62 + J_theta_cart_right*_t46*_t61
-        _t67 = -K_theta_tractor_x_tractor*_t38 + _t66
-        _t68 = J_theta_cart*_t16*_t60 + _t16*_t40 - _t33*_t60 - 0.3*_t39*_t55 + _t67
-        _t69 = _t5*tau_right + _t6*tau_left - _t65
-        _t70 = _t43*tau_right + _t44*tau_left - _t68
-        _t71 = 1.0/_t54
-        _t72 = _t71*(-_t50*_t70 + _t53*_t69)
-        _t73 = _t71*(_t42*_t70 - _t50*_t69)
-        _t74 = _t43*_t73 + _t5*_t72
-        _t75 = _t44*_t73 + _t6*_t72
+        _t3 = 0.3*_t2
+        _t4 = 0.3*_t1
+        _t5 = -1.6666666666666667*_t1
+        _t6 = 0.2*_t5
+        _t7 = -1.6666666666666667*_t3
+        _t8 = 0.2*_t7
+        _t9 = K_theta_cart_x_tractor*_t2
+        _t10 = 2.4154589371980677*radius_right
+        _t11 = -2.4154589371980677*radius_left
+        _t12 = _t10*thetadot_right + _t11*thetadot_left
+        _t13 = _t12*_t12
+        _t14 = 0.5*radius_right
+        _t15 = 0.5*radius_left
+        _t16 = _t14*thetadot_right + _t15*thetadot_left
+        _t17 = _t12*_t7 + _t16*_t5
+        _t18 = _t17*_t17
+        _t19 = K_theta_cart_x_tractor*_t4
+        _t20 = K_theta_cart_x_tractor_2*_t3
+        _t21 = 1.6666666666666667*_t2
+        _t22 = 0.2*_t21
+        _t23 = -1.6666666666666667*_t4
+        _t24 = 0.2*_t23
+        _t25 = _t12*_t16
+        _t26 = 1.0/radius_cart_right
+        _t27 = _t2 + _t6
+        _t28 = _t26*_t27
+        _t29 = J_theta_cart_right*_t28
+        _t30 = -_t4 + _t8
+        _t31 = _t26*_t30
+        _t32 = J_theta_cart_right*_t31
+        _t33 = 1.0/radius_cart_left
+        _t34 = _t2 - _t6
+        _t35 = _t33*_t34
+        _t36 = J_theta_cart_left*_t35
+        _t37 = -_t4 - _t8
+        _t38 = _t33*_t37
+        _t39 = J_theta_cart_left*_t38
+        _t40 = K_theta_cart_x_tractor_2*_t1 - _t9
+        _t41 = _t13*_t19 + _t13*_t20
+        _t42 = -_t16*_t17 + _t25
+        _t43 = -_t12*_t17 + _t13
+        _t44 = _t21*_t42 + _t23*_t43
+        _t45 = J_theta_cart*_t44 + _t25*_t40 + _t41
+        _t46 = 1.0/radius_right
+        _t47 = 1.0/radius_left
+        _t48 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
+        _t49 = J_x_tractor + _t48*_t5
+        _t50 = J_theta_cart*_t5 + _t48
+        _t51 = J_theta_right*_t46
+        _t52 = J_theta_left*_t47
+        _t53 = _t28*_t29 + _t35*_t36 + _t46*_t51 + _t47*_t52 + _t49 + _t5*_t50
+        _t54 = K_theta_tractor_x_tractor_2 + _t48*_t7
+        _t55 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+        _t56 = J_theta_cart*_t7 + _t55
+        _t57 = 0.207*_t46
+        _t58 = J_theta_right*_t57
+        _t59 = -0.207*_t47
+        _t60 = J_theta_left*_t59
+        _t61 = _t28*_t32 + _t35*_t39 + _t46*_t58 + _t47*_t60 + _t5*_t56 + _t54
+        _t62 = J_theta_tractor + _t55*_t7
+        _t63 = _t31*_t32 + _t38*_t39 + _t56*_t7 + _t57*_t58 + _t59*_t60 + _t62
+        _t64 = _t53*_t63 - _t61*_t61
+        _t65 = -K_theta_cart_x_tractor_2*_t1*_t18 + K_theta_tractor_x_tractor*_t13 + _t18*_t9
+        _t66 = -_t18*_t19 - _t18*_t20
+        _t67 = _t1 + _t22
+        _t68 = _t26*_t67
+        _t69 = _t24 + _t3
+        _t70 = _t26*_t69
+        _t71 = _t1 - _t22
+        _t72 = _t33*_t71
+        _t73 = -_t24 + _t3
+        _t74 = _t33*_t73
+        _t75 = _t42*_t68 + _t43*_t70
+        _t76 = _t42*_t72 + _t43*_t74
+        _t77 = _t29*_t75 + _t36*_t76 + _t44*_t48 + _t45*_t5 + _t65
+        _t78 = -K_theta_tractor_x_tractor*_t25 + _t32*_t75 + _t39*_t76 + _t44*_t55 + _t45*_t7 + _t66
+        _t79 = _t46*tau_right + _t47*tau_left - _t77
+        _t80 = _t57*tau_right + _t59*tau_left - _t78
+        _t81 = 1.0/_t64
+        _t82 = _t81*(-_t61*_t80 + _t63*_t79)
+        _t83 = _t81*(_t53*_t80 - _t61*_t79)
+        _t84 = _t46*_t82 + _t57*_t83
+        _t85 = _t47*_t82 + _t59*_t83
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -567,11 +598,11 @@ def minimal_forward_dynamics(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLik
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires J_x_tractor > 0")
-    if not (_t42 > 0.0):
+    if not (_t53 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires (S^T M S)[0][0] > 0")
-    if not (_t54 > 0.0):
+    if not (_t64 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: minimal_forward_dynamics requires det(S^T M S) > 0: a positive-definite model")
-    wheel_accels = np.array([_t74, _t75])
+    wheel_accels = np.array([_t84, _t85])
     if not np.all(np.isfinite(wheel_accels)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of minimal_forward_dynamics is not finite")
     return wheel_accels
@@ -594,7 +625,7 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         A: array of 100 (shape 10x10, row-major). 10x10 row-major
         B: array of 20 (shape 10x2, row-major). 10x2 row-major
 
-    operations after CSE: 195 add, 379 mul, 3 div, 4 sin/cos, 0 sqrt
+    operations after CSE: 201 add, 335 mul, 5 div, 4 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -617,230 +648,212 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
     _t0 = theta_cart - theta_tractor
     _t1 = math.sin(_t0)
     _t2 = math.cos(_t0)
-    _t3 = radius_left*radius_right
-    _t4 = 1.0/_t3
-    _t5 = _t4*radius_left
-    _t6 = _t4*radius_right
-    _t7 = radius_cart_left*radius_cart_right
-    _t8 = -0.6*_t7
-    _t9 = 1.0/_t8
-    _t10 = _t7*_t9
-    _t11 = _t3*_t4
-    _t12 = 0.5*radius_right
-    _t13 = 0.5*radius_left
-    _t14 = _t12*thetadot_right + _t13*thetadot_left
-    _t15 = _t14*_t2
-    _t16 = 2.4154589371980677*radius_right
-    _t17 = -2.4154589371980677*radius_left
-    _t18 = _t16*thetadot_right + _t17*thetadot_left
-    _t19 = -0.3*_t18
-    _t20 = _t1*_t19
-    _t21 = _t1*_t10
-    _t22 = -0.3*_t2
-    _t23 = -_t10*_t22
-    _t24 = _t14*_t21 + _t18*_t23
-    _t25 = _t15*_t24 + _t20*_t24
-    _t26 = _t1*_t14
-    _t27 = _t24*_t26
-    _t28 = _t19*_t2
-    _t29 = _t24*_t28
-    _t30 = _t18*_t18
-    _t31 = 0.3*_t30
-    _t32 = -_t14*_t18
-    _t33 = -_t11*_t32
-    _t34 = -_t1*_t31 + _t2*_t33
-    _t35 = _t1*_t33 + _t2*_t31
-    _t36 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-    _t37 = 2.0*_t36
-    _t38 = -0.2*radius_cart_right
-    _t39 = -0.6*radius_cart_right
-    _t40 = _t9*(_t1*_t38 + _t2*_t39)
-    _t41 = J_theta_cart_left*_t40
-    _t42 = 0.2*radius_cart_left
-    _t43 = -0.6*radius_cart_left
-    _t44 = _t9*(_t1*_t42 + _t2*_t43)
-    _t45 = J_theta_cart_right*_t44
-    _t46 = _t23*_t36
-    _t47 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-    _t48 = 0.3*_t47
-    _t49 = J_theta_cart*_t21
-    _t50 = _t23*_t47
-    _t51 = _t25 - _t34
-    _t52 = _t10*_t51
-    _t53 = J_theta_cart*_t52
-    _t54 = _t31*_t36 + _t33*_t47
-    _t55 = _t27 - _t29
-    _t56 = _t35 - _t55
-    _t57 = _t9*(_t38*_t51 + _t39*_t56)
-    _t58 = J_theta_cart_left*_t57
-    _t59 = _t9*(_t42*_t51 + _t43*_t56)
-    _t60 = J_theta_cart_right*_t59
-    _t61 = _t24*_t24
-    _t62 = 0.3*_t61
-    _t63 = math.cos(theta_tractor)
-    _t64 = math.sin(theta_tractor)
-    _t65 = _t43*_t9
-    _t66 = _t42*_t9
-    _t67 = _t39*_t9
-    _t68 = _t38*_t9
-    _t69 = 2.0*_t24
-    _t70 = -_t15 - _t20
-    _t71 = _t26 - _t28
-    _t72 = _t36 + _t49
-    _t73 = _t53 + _t54
-    _t74 = 0.3*_t1
-    _t75 = _t9*(-_t22*_t38 - _t39*_t74)
-    _t76 = J_theta_cart_left*_t75
-    _t77 = _t9*(-_t22*_t42 - _t43*_t74)
-    _t78 = J_theta_cart_right*_t77
-    _t79 = 0.3*_t36
-    _t80 = J_theta_cart*_t23
-    _t81 = -_t48 + _t80
-    _t82 = _t21*_t47
-    _t83 = _t41*_t57 + _t45*_t59
-    _t84 = K_theta_tractor_x_tractor*_t30 + _t83
-    _t85 = _t21*_t53 + _t21*_t54 + _t36*_t52 - _t47*_t61 + _t84
-    _t86 = _t5*tau_right + _t6*tau_left - _t85
-    _t87 = J_theta_cart_left*_t40*_t40 + J_theta_cart_right*_t44*_t44 + J_theta_left*_t6*_t6 + J_theta_right*_t5*_t5 + J_x_tractor
-    _t88 = J_theta_cart*_t21*_t21 + _t21*_t37 + _t87
-    _t89 = 0.207*_t5
-    _t90 = -0.207*_t6
-    _t91 = J_theta_left*_t6*_t90 + J_theta_right*_t5*_t89 + _t41*_t75 + _t45*_t77
-    _t92 = K_theta_tractor_x_tractor_2 + _t91
-    _t93 = -_t21*_t48 + _t23*_t49 + _t46 + _t92
-    _t94 = J_theta_cart_left*_t75*_t75 + J_theta_cart_right*_t77*_t77 + J_theta_left*_t90*_t90 + J_theta_right*_t89*_t89
-    _t95 = J_theta_tractor + _t94
-    _t96 = J_theta_cart*_t23*_t23 - 0.6*_t50 + _t95
-    _t97 = _t88*_t96 - _t93*_t93
-    _t98 = 1.0/_t97
-    _t99 = _t98
-    _t100 = _t86*_t99
-    _t101 = _t93*_t99
-    _t102 = _t58*_t75 + _t60*_t77
-    _t103 = -K_theta_tractor_x_tractor*_t33 + _t102
-    _t104 = _t103 + _t23*_t53 + _t23*_t54 - _t36*_t62 - _t48*_t52
-    _t105 = -_t104 + _t89*tau_right + _t90*tau_left
-    _t106 = _t105*_t99
-    _t107 = _t96*_t99
-    _t108 = _t88*_t99
-    _t109 = 2.0*_t18
-    _t110 = _t1*_t24
-    _t111 = _t2*_t24
-    _t112 = _t21*_t36
-    _t113 = _t12*_t5 + _t16*_t89
-    _t114 = _t12*_t6 + _t16*_t90
-    _t115 = _t13*_t5 + _t17*_t89
-    _t116 = _t13*_t6 + _t17*_t90
-    _t117 = _t14*_t63
-    _t118 = _t14*_t64
-    _t119 = _t12*_t63
-    _t120 = _t13*_t63
-    _t121 = _t12*_t64
-    _t122 = _t13*_t64
-    _t123 = -_t10*_t2
-    _t124 = _t10*_t74
-    _t125 = _t123*_t14 + _t124*_t18
-    _t126 = _t12*_t21 + _t16*_t23
-    _t127 = _t13*_t21 + _t17*_t23
-    _t128 = _t1*_t65 - _t2*_t66
-    _t129 = -_t22*_t65 + _t42*_t74*_t9
-    _t130 = _t128*_t14 + _t129*_t18
-    _t131 = _t12*_t44 + _t16*_t77
-    _t132 = _t13*_t44 + _t17*_t77
-    _t133 = _t1*_t67 - _t2*_t68
-    _t134 = -_t22*_t67 + _t38*_t74*_t9
-    _t135 = _t133*_t14 + _t134*_t18
-    _t136 = _t12*_t40 + _t16*_t75
-    _t137 = _t13*_t40 + _t17*_t75
-    _t138 = _t125*_t69
-    _t139 = _t125*_t70 - _t27 + _t29
-    _t140 = -_t139 - _t35
-    _t141 = _t10*_t140
-    _t142 = _t125*_t71 - _t25
-    _t143 = -_t142 - _t34
-    _t144 = _t140*_t66 + _t143*_t65
-    _t145 = _t140*_t68 + _t143*_t67
-    _t146 = _t128*_t60 + _t133*_t58 + _t144*_t45 + _t145*_t41
-    _t147 = _t123*_t73 - _t138*_t47 + _t141*_t72 + _t146 - _t36*(_t21*_t33 - _t61) + _t47*(_t21*_t31 + _t52)
-    _t148 = _t129*_t60 + _t134*_t58 + _t144*_t78 + _t145*_t76
-    _t149 = _t124*_t73 - _t138*_t79 + _t141*_t81 + _t148 - _t36*(_t23*_t33 - 0.3*_t52) + _t47*(_t23*_t31 - _t62)
-    _t150 = 2.0*_t128*_t45 + 2.0*_t133*_t41
-    _t151 = _t123*(_t37 + 2.0*_t49) + _t150 + 2.0*_t82
-    _t152 = _t128*_t78 + _t129*_t45 + _t133*_t76 + _t134*_t41
-    _t153 = _t123*_t81 + _t124*_t72 + _t152 + _t21*_t79 + _t50
-    _t154 = 2.0*_t129*_t78 + 2.0*_t134*_t76
-    _t155 = _t124*(-0.6*_t47 + 2.0*_t80) + _t154 + 0.6*_t46
-    _t156 = _t151*_t96 - 2.0*_t153*_t93 + _t155*_t88
-    _t157 = -_t156*_t98*_t98
-    _t158 = _t100*_t155 + _t101*_t149 - _t106*_t153 - _t107*_t147 + _t157*(-_t105*_t93 + _t86*_t96)
-    _t159 = -_t100*_t153 + _t101*_t147 + _t106*_t151 - _t108*_t149 + _t157*(_t105*_t88 - _t86*_t93)
-    _t160 = _t158*_t5 + _t159*_t89
-    _t161 = _t126*_t69
-    _t162 = _t109*_t16
-    _t163 = 0.3*_t162
-    _t164 = -_t12*_t18 - _t14*_t16
-    _t165 = -_t11*_t164
-    _t166 = -0.3*_t16
-    _t167 = -_t110*_t166 - _t111*_t12 + _t126*_t70
-    _t168 = _t1*_t163 - _t165*_t2 - _t167
-    _t169 = _t10*_t168
-    _t170 = _t110*_t12 - _t111*_t166 + _t126*_t71
-    _t171 = _t1*_t165 + _t163*_t2 - _t170
-    _t172 = _t168*_t66 + _t171*_t65
-    _t173 = _t168*_t68 + _t171*_t67
-    _t174 = _t172*_t45 + _t173*_t41
-    _t175 = K_theta_tractor_x_tractor*_t162 + _t174
-    _t176 = _t112*_t163 - _t161*_t47 + _t165*_t82 + _t169*_t72 + _t175
-    _t177 = _t172*_t78 + _t173*_t76
-    _t178 = -K_theta_tractor_x_tractor*_t165 + _t177
-    _t179 = -_t161*_t79 + _t163*_t46 + _t165*_t50 + _t169*_t81 + _t178
-    _t180 = -_t107*_t176 + _t179*_t93*_t99
-    _t181 = _t101*_t176 - _t108*_t179
-    _t182 = _t180*_t5 + _t181*_t89
-    _t183 = _t127*_t69
-    _t184 = _t109*_t17
-    _t185 = 0.3*_t184
-    _t186 = -_t13*_t18 - _t14*_t17
-    _t187 = -_t11*_t186
-    _t188 = -0.3*_t17
-    _t189 = -_t110*_t188 - _t111*_t13 + _t127*_t70
-    _t190 = _t1*_t185 - _t187*_t2 - _t189
-    _t191 = _t10*_t190
-    _t192 = _t110*_t13 - _t111*_t188 + _t127*_t71
-    _t193 = _t1*_t187 + _t185*_t2 - _t192
-    _t194 = _t190*_t66 + _t193*_t65
-    _t195 = _t190*_t68 + _t193*_t67
-    _t196 = _t194*_t45 + _t195*_t41
-    _t197 = K_theta_tractor_x_tractor*_t184 + _t196
-    _t198 = _t112*_t185 - _t183*_t47 + _t187*_t82 + _t191*_t72 + _t197
-    _t199 = _t194*_t78 + _t195*_t76
-    _t200 = -K_theta_tractor_x_tractor*_t187 + _t199
-    _t201 = -_t183*_t79 + _t185*_t46 + _t187*_t50 + _t191*_t81 + _t200
-    _t202 = -_t107*_t198 + _t201*_t93*_t99
-    _t203 = _t101*_t198 - _t108*_t201
-    _t204 = _t202*_t5 + _t203*_t89
-    _t205 = _t158*_t6 + _t159*_t90
-    _t206 = _t180*_t6 + _t181*_t90
-    _t207 = _t202*_t6 + _t203*_t90
-    _t208 = -_t101*_t89 + _t107*_t5
-    _t209 = -_t101*_t5 + _t88*_t89*_t99
-    _t210 = _t208*_t5 + _t209*_t89
-    _t211 = -_t101*_t90 + _t107*_t6
-    _t212 = -_t101*_t6 + _t88*_t90*_t99
-    _t213 = _t211*_t5 + _t212*_t89
-    _t214 = _t208*_t6 + _t209*_t90
-    _t215 = _t211*_t6 + _t212*_t90
+    _t3 = 0.3*_t2
+    _t4 = 0.3*_t1
+    _t5 = -1.6666666666666667*_t1
+    _t6 = 0.2*_t5
+    _t7 = -1.6666666666666667*_t3
+    _t8 = 0.2*_t7
+    _t9 = K_theta_cart_x_tractor*_t1
+    _t10 = K_theta_cart_x_tractor_2*_t2
+    _t11 = K_theta_cart_x_tractor*_t2
+    _t12 = K_theta_cart_x_tractor*_t3
+    _t13 = K_theta_cart_x_tractor_2*_t4
+    _t14 = 2.4154589371980677*radius_right
+    _t15 = -2.4154589371980677*radius_left
+    _t16 = _t14*thetadot_right + _t15*thetadot_left
+    _t17 = _t16*_t16
+    _t18 = 0.5*radius_right
+    _t19 = 0.5*radius_left
+    _t20 = _t18*thetadot_right + _t19*thetadot_left
+    _t21 = _t16*_t7 + _t20*_t5
+    _t22 = _t21*_t21
+    _t23 = K_theta_cart_x_tractor_2*_t1
+    _t24 = K_theta_cart_x_tractor*_t4
+    _t25 = K_theta_cart_x_tractor_2*_t3
+    _t26 = 1.6666666666666667*_t2
+    _t27 = 0.2*_t26
+    _t28 = -1.6666666666666667*_t4
+    _t29 = 0.2*_t28
+    _t30 = _t16*_t20
+    _t31 = _t10 + _t9
+    _t32 = _t31*_t5
+    _t33 = _t31*_t7
+    _t34 = J_theta_cart*_t5 + _t31
+    _t35 = _t12 - _t13
+    _t36 = J_theta_cart*_t7 + _t35
+    _t37 = 1.0/radius_cart_right
+    _t38 = _t2 + _t6
+    _t39 = _t37*_t38
+    _t40 = J_theta_cart_right*_t39
+    _t41 = -_t4 + _t8
+    _t42 = _t37*_t41
+    _t43 = J_theta_cart_right*_t42
+    _t44 = 1.0/radius_cart_left
+    _t45 = _t2 - _t6
+    _t46 = _t44*_t45
+    _t47 = J_theta_cart_left*_t46
+    _t48 = -_t4 - _t8
+    _t49 = _t44*_t48
+    _t50 = J_theta_cart_left*_t49
+    _t51 = K_theta_cart_x_tractor_2*_t1 - _t11
+    _t52 = _t17*_t24 + _t17*_t25
+    _t53 = -_t20*_t21 + _t30
+    _t54 = -_t16*_t21 + _t17
+    _t55 = _t26*_t53 + _t28*_t54
+    _t56 = J_theta_cart*_t55 + _t30*_t51 + _t52
+    _t57 = math.cos(theta_tractor)
+    _t58 = math.sin(theta_tractor)
+    _t59 = _t29 + _t3
+    _t60 = _t37*_t59
+    _t61 = J_theta_cart_right*_t60
+    _t62 = -_t29 + _t3
+    _t63 = _t44*_t62
+    _t64 = J_theta_cart_left*_t63
+    _t65 = 2.0*_t21
+    _t66 = _t11*_t65 - _t23*_t65
+    _t67 = _t1 - _t27
+    _t68 = _t44*_t67
+    _t69 = J_theta_cart_left*_t68
+    _t70 = _t1 + _t27
+    _t71 = _t37*_t70
+    _t72 = J_theta_cart_right*_t71
+    _t73 = 0.6*_t21
+    _t74 = -_t10*_t73 - _t73*_t9
+    _t75 = _t5*_t51
+    _t76 = 1.0/radius_right
+    _t77 = 1.0/radius_left
+    _t78 = K_theta_tractor_x_tractor_2 + _t33
+    _t79 = 0.207*_t76
+    _t80 = J_theta_right*_t79
+    _t81 = -0.207*_t77
+    _t82 = J_theta_left*_t81
+    _t83 = _t36*_t5 + _t39*_t43 + _t46*_t50 + _t76*_t80 + _t77*_t82 + _t78
+    _t84 = J_x_tractor + _t32
+    _t85 = J_theta_right*_t76
+    _t86 = J_theta_left*_t77
+    _t87 = _t34*_t5 + _t39*_t40 + _t46*_t47 + _t76*_t85 + _t77*_t86 + _t84
+    _t88 = J_theta_tractor + _t35*_t7
+    _t89 = _t36*_t7 + _t42*_t43 + _t49*_t50 + _t79*_t80 + _t81*_t82 + _t88
+    _t90 = -_t83*_t83 + _t87*_t89
+    _t91 = 1.0/_t90
+    _t92 = _t91
+    _t93 = _t83*_t92
+    _t94 = K_theta_tractor_x_tractor*_t17 + _t11*_t22 - _t22*_t23
+    _t95 = _t53*_t71 + _t54*_t60
+    _t96 = _t53*_t68 + _t54*_t63
+    _t97 = _t31*_t55 + _t40*_t95 + _t47*_t96 + _t5*_t56 + _t94
+    _t98 = _t76*tau_right + _t77*tau_left - _t97
+    _t99 = _t92*_t98
+    _t100 = _t89*_t92
+    _t101 = -_t22*_t24 - _t22*_t25
+    _t102 = -K_theta_tractor_x_tractor*_t30 + _t101 + _t35*_t55 + _t43*_t95 + _t50*_t96 + _t56*_t7
+    _t103 = -_t102 + _t79*tau_right + _t81*tau_left
+    _t104 = _t103*_t92
+    _t105 = _t87*_t92
+    _t106 = 2.0*_t16
+    _t107 = K_theta_tractor_x_tractor*_t106
+    _t108 = 0.6*_t16
+    _t109 = _t10*_t108 + _t108*_t9
+    _t110 = _t14*_t20
+    _t111 = -_t21
+    _t112 = _t111 + _t16
+    _t113 = _t106 + _t111
+    _t114 = -K_theta_tractor_x_tractor + _t51*_t7
+    _t115 = _t15*_t20
+    _t116 = _t14*_t79 + _t18*_t76
+    _t117 = _t14*_t81 + _t18*_t77
+    _t118 = _t15*_t79 + _t19*_t76
+    _t119 = _t15*_t81 + _t19*_t77
+    _t120 = _t20*_t57
+    _t121 = _t20*_t58
+    _t122 = _t18*_t57
+    _t123 = _t19*_t57
+    _t124 = _t18*_t58
+    _t125 = _t19*_t58
+    _t126 = _t16*_t28 + _t20*_t26
+    _t127 = _t14*_t7 + _t18*_t5
+    _t128 = _t15*_t7 + _t19*_t5
+    _t129 = _t16*_t60 + _t20*_t71
+    _t130 = _t14*_t42 + _t18*_t39
+    _t131 = _t15*_t42 + _t19*_t39
+    _t132 = _t16*_t63 + _t20*_t68
+    _t133 = _t14*_t49 + _t18*_t46
+    _t134 = _t15*_t49 + _t19*_t46
+    _t135 = _t28*_t31 + _t51*_t7
+    _t136 = _t24 + _t25
+    _t137 = J_theta_cart*_t28 + _t136
+    _t138 = _t135 + _t137*_t5 + _t26*_t36 + _t39*_t61 + _t43*_t71 + _t46*_t64 + _t50*_t68
+    _t139 = _t136*_t7 + _t28*_t35
+    _t140 = _t137*_t7 + _t139 + _t28*_t36 + _t42*_t61 + _t43*_t60 + _t49*_t64 + _t50*_t63
+    _t141 = _t10*_t22 + _t126*_t66 + _t22*_t9
+    _t142 = 0.3*K_theta_cart_x_tractor_2*_t1*_t17 - _t12*_t17
+    _t143 = -_t126*_t20
+    _t144 = -_t126*_t16
+    _t145 = _t143*_t26 + _t144*_t28 - _t5*_t53 - _t54*_t7
+    _t146 = _t143*_t71 + _t144*_t60 - _t39*_t53 - _t42*_t54
+    _t147 = _t143*_t68 + _t144*_t63 - _t46*_t53 - _t49*_t54
+    _t148 = _t141 + _t142*_t5 + _t145*_t34 + _t146*_t40 + _t147*_t47 + _t26*_t56 - _t30*_t32 + _t51*_t55 + _t69*_t96 + _t72*_t95
+    _t149 = _t12*_t22 + _t126*_t74 - _t13*_t22
+    _t150 = _t136*_t55 + _t142*_t7 + _t145*_t36 + _t146*_t43 + _t147*_t50 + _t149 + _t28*_t56 - _t30*_t33 + _t61*_t95 + _t64*_t96
+    _t151 = _t26*_t31 + _t75
+    _t152 = J_theta_cart*_t26 + _t51
+    _t153 = _t151 + _t152*_t5 + _t26*_t34 + _t39*_t72 + _t40*_t71 + _t46*_t69 + _t47*_t68
+    _t154 = -2.0*_t138*_t83 + _t140*_t87 + _t153*_t89
+    _t155 = -_t154*_t91*_t91
+    _t156 = -_t100*_t148 - _t104*_t138 + _t140*_t99 + _t150*_t93 + _t155*(-_t103*_t83 + _t89*_t98)
+    _t157 = _t104*_t153 - _t105*_t150 - _t138*_t99 + _t148*_t93 + _t155*(_t103*_t87 - _t83*_t98)
+    _t158 = _t156*_t76 + _t157*_t79
+    _t159 = _t107*_t14 + _t127*_t66
+    _t160 = _t109*_t14
+    _t161 = _t110 + _t112*_t18 - _t127*_t20
+    _t162 = _t113*_t14 - _t127*_t16
+    _t163 = _t161*_t26 + _t162*_t28
+    _t164 = _t161*_t71 + _t162*_t60
+    _t165 = _t161*_t68 + _t162*_t63
+    _t166 = _t110 + _t16*_t18
+    _t167 = _t159 + _t160*_t5 + _t163*_t34 + _t164*_t40 + _t165*_t47 + _t166*_t75
+    _t168 = _t127*_t74
+    _t169 = _t114*_t166 + _t160*_t7 + _t163*_t36 + _t164*_t43 + _t165*_t50 + _t168
+    _t170 = -_t100*_t167 + _t169*_t93
+    _t171 = -_t105*_t169 + _t167*_t83*_t92
+    _t172 = _t170*_t76 + _t171*_t79
+    _t173 = _t107*_t15 + _t128*_t66
+    _t174 = _t109*_t15
+    _t175 = _t112*_t19 + _t115 - _t128*_t20
+    _t176 = _t113*_t15 - _t128*_t16
+    _t177 = _t175*_t26 + _t176*_t28
+    _t178 = _t175*_t71 + _t176*_t60
+    _t179 = _t175*_t68 + _t176*_t63
+    _t180 = _t115 + _t16*_t19
+    _t181 = _t173 + _t174*_t5 + _t177*_t34 + _t178*_t40 + _t179*_t47 + _t180*_t75
+    _t182 = _t128*_t74
+    _t183 = _t114*_t180 + _t174*_t7 + _t177*_t36 + _t178*_t43 + _t179*_t50 + _t182
+    _t184 = -_t100*_t181 + _t183*_t93
+    _t185 = -_t105*_t183 + _t181*_t83*_t92
+    _t186 = _t184*_t76 + _t185*_t79
+    _t187 = _t156*_t77 + _t157*_t81
+    _t188 = _t170*_t77 + _t171*_t81
+    _t189 = _t184*_t77 + _t185*_t81
+    _t190 = _t76*_t89*_t92 - _t79*_t93
+    _t191 = _t105*_t79 - _t76*_t93
+    _t192 = _t190*_t76 + _t191*_t79
+    _t193 = _t77*_t89*_t92 - _t81*_t93
+    _t194 = _t105*_t81 - _t77*_t93
+    _t195 = _t193*_t76 + _t194*_t79
+    _t196 = _t190*_t77 + _t191*_t81
+    _t197 = _t193*_t77 + _t194*_t81
     A = np.array([
-        [0.0, 0.0, -_t118, 0.0, 0.0, 0.0, 0.0, 0.0, _t119, _t120],
-        [0.0, 0.0, _t117, 0.0, 0.0, 0.0, 0.0, 0.0, _t121, _t122],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t16, _t17],
-        [0.0, 0.0, _t125, -_t125, 0.0, 0.0, 0.0, 0.0, _t126, _t127],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t113, _t115],
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t114, _t116],
-        [0.0, 0.0, _t130, -_t130, 0.0, 0.0, 0.0, 0.0, _t131, _t132],
-        [0.0, 0.0, _t135, -_t135, 0.0, 0.0, 0.0, 0.0, _t136, _t137],
-        [0.0, 0.0, _t160, -_t160, 0.0, 0.0, 0.0, 0.0, _t182, _t204],
-        [0.0, 0.0, _t205, -_t205, 0.0, 0.0, 0.0, 0.0, _t206, _t207],
+        [0.0, 0.0, -_t121, 0.0, 0.0, 0.0, 0.0, 0.0, _t122, _t123],
+        [0.0, 0.0, _t120, 0.0, 0.0, 0.0, 0.0, 0.0, _t124, _t125],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t14, _t15],
+        [0.0, 0.0, _t126, -_t126, 0.0, 0.0, 0.0, 0.0, _t127, _t128],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t116, _t118],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, _t117, _t119],
+        [0.0, 0.0, _t129, -_t129, 0.0, 0.0, 0.0, 0.0, _t130, _t131],
+        [0.0, 0.0, _t132, -_t132, 0.0, 0.0, 0.0, 0.0, _t133, _t134],
+        [0.0, 0.0, _t158, -_t158, 0.0, 0.0, 0.0, 0.0, _t172, _t186],
+        [0.0, 0.0, _t187, -_t187, 0.0, 0.0, 0.0, 0.0, _t188, _t189],
     ])
     B = np.array([
         [0.0, 0.0],
@@ -851,8 +864,8 @@ def linearization(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p: Any) 
         [0.0, 0.0],
         [0.0, 0.0],
         [0.0, 0.0],
-        [_t210, _t213],
-        [_t214, _t215],
+        [_t192, _t195],
+        [_t196, _t197],
     ])
     return A, B
 
@@ -880,7 +893,7 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         longitudinal: array of 2 (shape 2x1, row-major). N, per driven wheel
         lateral: array of 2 (shape 2x1, row-major). N, per no-side-slip row (axle)
 
-    operations after CSE: 91 add, 174 mul, 5 div, 2 sin/cos, 0 sqrt
+    operations after CSE: 95 add, 147 mul, 5 div, 2 sin/cos, 0 sqrt
     """
     _, _, theta_tractor, theta_cart, _, _, _, _ = _flat(q, 8, "q")
     thetadot_right, thetadot_left = _flat(wheel_rates, 2, "wheel_rates")
@@ -906,109 +919,112 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         _t0 = theta_cart - theta_tractor
         _t1 = math.sin(_t0)
         _t2 = math.cos(_t0)
-        _t3 = 0.3*_t1
-        _t4 = radius_left*radius_right
-        _t5 = 1.0/_t4
-        _t6 = _t5*radius_left
-        _t7 = _t5*radius_right
-        _t8 = radius_cart_left*radius_cart_right
-        _t9 = -0.6*_t8
-        _t10 = 1.0/_t9
-        _t11 = _t10*_t8
+        _t3 = 0.3*_t2
+        _t4 = 0.3*_t1
+        _t5 = -1.6666666666666667*_t1
+        _t6 = 0.2*_t5
+        _t7 = -1.6666666666666667*_t3
+        _t8 = 0.2*_t7
+        _t9 = K_theta_cart_x_tractor*_t1
+        _t10 = K_theta_cart_x_tractor_2*_t2
+        _t11 = K_theta_cart_x_tractor*_t2
         _t12 = 2.4154589371980677*radius_right
         _t13 = -2.4154589371980677*radius_left
         _t14 = _t12*thetadot_right + _t13*thetadot_left
         _t15 = _t14*_t14
-        _t16 = 0.3*_t15
-        _t17 = 0.5*radius_right
-        _t18 = 0.5*radius_left
-        _t19 = _t17*thetadot_right + _t18*thetadot_left
-        _t20 = _t1*_t11
-        _t21 = -0.3*_t2
-        _t22 = -_t11*_t21
-        _t23 = _t14*_t22 + _t19*_t20
-        _t24 = _t19*_t23
-        _t25 = -0.3*_t14
-        _t26 = _t23*_t25
-        _t27 = -0.2*radius_cart_right
-        _t28 = -0.6*radius_cart_right
-        _t29 = _t10*(_t1*_t27 + _t2*_t28)
-        _t30 = J_theta_cart_left*_t29
-        _t31 = 0.2*radius_cart_left
-        _t32 = -0.6*radius_cart_left
-        _t33 = _t10*(_t1*_t31 + _t2*_t32)
+        _t16 = 0.5*radius_right
+        _t17 = 0.5*radius_left
+        _t18 = _t16*thetadot_right + _t17*thetadot_left
+        _t19 = _t14*_t7 + _t18*_t5
+        _t20 = _t19*_t19
+        _t21 = K_theta_cart_x_tractor*_t4
+        _t22 = K_theta_cart_x_tractor_2*_t3
+        _t23 = 1.6666666666666667*_t2
+        _t24 = 0.2*_t23
+        _t25 = -1.6666666666666667*_t4
+        _t26 = 0.2*_t25
+        _t27 = _t14*_t18
+        _t28 = 1.0/radius_cart_right
+        _t29 = _t2 + _t6
+        _t30 = _t28*_t29
+        _t31 = J_theta_cart_right*_t30
+        _t32 = -_t4 + _t8
+        _t33 = _t28*_t32
         _t34 = J_theta_cart_right*_t33
-        _t35 = -K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t1
-        _t36 = 0.3*_t35
-        _t37 = J_theta_cart*_t20
-        _t38 = K_theta_tractor_x_tractor*_t15
-        _t39 = _t23*_t23
-        _t40 = -_t35*_t39
-        _t41 = -_t14*_t19
-        _t42 = -_t4*_t41*_t5
-        _t43 = K_theta_cart_x_tractor*_t1 + K_theta_cart_x_tractor_2*_t2
-        _t44 = _t16*_t43 + _t35*_t42
-        _t45 = K_theta_tractor_x_tractor*_t42
-        _t46 = _t39*_t43
-        _t47 = J_theta_cart_left*_t29*_t29 + J_theta_cart_right*_t33*_t33 + J_theta_left*_t7*_t7 + J_theta_right*_t6*_t6 + J_x_tractor
-        _t48 = J_theta_cart*_t20*_t20 + 2.0*_t20*_t43 + _t47
-        _t49 = 0.207*_t6
-        _t50 = -0.207*_t7
-        _t51 = _t10*(-_t21*_t31 - _t3*_t32)
-        _t52 = _t10*(-_t21*_t27 - _t28*_t3)
-        _t53 = J_theta_left*_t50*_t7 + J_theta_right*_t49*_t6 + _t30*_t52 + _t34*_t51
-        _t54 = K_theta_tractor_x_tractor_2 + _t53
-        _t55 = -_t20*_t36 + _t22*_t37 + _t22*_t43 + _t54
-        _t56 = J_theta_cart_left*_t52*_t52 + J_theta_cart_right*_t51*_t51 + J_theta_left*_t50*_t50 + J_theta_right*_t49*_t49
-        _t57 = J_theta_tractor + _t56
-        _t58 = J_theta_cart*_t22*_t22 - 0.6*_t22*_t35 + _t57
-        _t59 = _t48*_t58 - _t55*_t55
-        _t60 = -_t1*_t26 - _t2*_t24
-        _t61 = _t1*_t16 - _t2*_t42 - _t60
-        _t62 = _t11*_t61
-        _t63 = _t1*_t24 - _t2*_t26
-        _t64 = _t1*_t42 + _t16*_t2 - _t63
-        _t65 = _t10*(_t31*_t61 + _t32*_t64)
-        _t66 = _t10*(_t27*_t61 + _t28*_t64)
-        _t67 = _t30*_t66 + _t34*_t65
-        _t68 = _t38 + _t67
-        _t69 = _t20*_t44 + _t37*_t62 + _t40 + _t43*_t62 + _t68
-        _t70 = _t6*tau_right - _t69 + _t7*tau_left
-        _t71 = J_theta_cart_left*_t52*_t66 + J_theta_cart_right*_t51*_t65
-        _t72 = -_t45 + _t71
-        _t73 = J_theta_cart*_t22*_t62 + _t22*_t44 - _t36*_t62 - 0.3*_t46 + _t72
-        _t74 = _t49*tau_right + _t50*tau_left - _t73
-        _t75 = 1.0/_t59
-        _t76 = _t75*(-_t55*_t74 + _t58*_t70)
-        _t77 = _t75*(_t48*_t74 - _t55*_t70)
-        _t78 = _t20*_t76 + _t22*_t77 + _t62
-        _t79 = _t40 + _t43*_t78
-        _t80 = K_theta_tractor_x_tractor_2*_t77 + _t38 + _t79
-        _t81 = J_x_tractor*_t76 + _t80
-        _t82 = 1.0/radius_cart_right
-        _t83 = _t33*_t76 + _t51*_t77 + _t65
-        _t84 = J_theta_cart_right*_t83
-        _t85 = -_t82*_t84
-        _t86 = 1.0/radius_cart_left
-        _t87 = _t29*_t76 + _t52*_t77 + _t66
-        _t88 = J_theta_cart_left*_t87
-        _t89 = -_t86*_t88
-        _t90 = _t16 + _t76
-        _t91 = _t42 - 0.3*_t77
-        _t92 = J_theta_cart*_t78 + _t35*_t91 + _t43*_t90
-        _t93 = 0.2*_t85 - 0.2*_t89 - _t92
-        _t94 = -1.6666666666666667*_t93
-        _t95 = _t1*_t94 + _t2*_t85 + _t2*_t89 - _t81
-        _t96 = 0.5*_t95
-        _t97 = _t35*_t78 + _t46
-        _t98 = J_theta_tractor*_t77 + K_theta_tractor_x_tractor_2*_t76 - _t45 - 0.3*_t97
-        _t99 = 0.3*_t2*_t94 - _t3*_t85 - _t3*_t89 - _t98
-        _t100 = 2.4154589371980677*_t99
-        _t101 = -K_theta_tractor_x_tractor*_t77 + K_theta_tractor_x_tractor_2*_t15 + _t97
-        _t102 = J_x_tractor*_t42 + _t101
-        _t103 = _t100 - _t96
-        _t104 = -_t100 - _t96
-        _t105 = _t1*_t85 + _t1*_t89 - _t102 - _t2*_t94
+        _t35 = 1.0/radius_cart_left
+        _t36 = _t2 - _t6
+        _t37 = _t35*_t36
+        _t38 = J_theta_cart_left*_t37
+        _t39 = -_t4 - _t8
+        _t40 = _t35*_t39
+        _t41 = J_theta_cart_left*_t40
+        _t42 = K_theta_cart_x_tractor_2*_t1 - _t11
+        _t43 = _t15*_t21 + _t15*_t22
+        _t44 = _t27*_t42 + _t43
+        _t45 = -_t18*_t19 + _t27
+        _t46 = -_t14*_t19 + _t15
+        _t47 = _t23*_t45 + _t25*_t46
+        _t48 = J_theta_cart*_t47 + _t44
+        _t49 = -_t20*_t21 - _t20*_t22
+        _t50 = -K_theta_tractor_x_tractor*_t27 + _t49
+        _t51 = 1.0/radius_right
+        _t52 = 1.0/radius_left
+        _t53 = _t10 + _t9
+        _t54 = J_x_tractor + _t5*_t53
+        _t55 = J_theta_cart*_t5 + _t53
+        _t56 = J_theta_right*_t51
+        _t57 = J_theta_left*_t52
+        _t58 = _t30*_t31 + _t37*_t38 + _t5*_t55 + _t51*_t56 + _t52*_t57 + _t54
+        _t59 = K_theta_tractor_x_tractor_2 + _t53*_t7
+        _t60 = K_theta_cart_x_tractor*_t3 - K_theta_cart_x_tractor_2*_t4
+        _t61 = J_theta_cart*_t7 + _t60
+        _t62 = 0.207*_t51
+        _t63 = J_theta_right*_t62
+        _t64 = -0.207*_t52
+        _t65 = J_theta_left*_t64
+        _t66 = _t30*_t34 + _t37*_t41 + _t5*_t61 + _t51*_t63 + _t52*_t65 + _t59
+        _t67 = J_theta_tractor + _t60*_t7
+        _t68 = _t33*_t34 + _t40*_t41 + _t61*_t7 + _t62*_t63 + _t64*_t65 + _t67
+        _t69 = _t58*_t68 - _t66*_t66
+        _t70 = -K_theta_cart_x_tractor_2*_t1*_t20 + K_theta_tractor_x_tractor*_t15 + _t11*_t20
+        _t71 = _t1 + _t24
+        _t72 = _t28*_t71
+        _t73 = _t26 + _t3
+        _t74 = _t28*_t73
+        _t75 = _t45*_t72 + _t46*_t74
+        _t76 = _t1 - _t24
+        _t77 = _t35*_t76
+        _t78 = -_t26 + _t3
+        _t79 = _t35*_t78
+        _t80 = _t45*_t77 + _t46*_t79
+        _t81 = _t31*_t75 + _t38*_t80 + _t47*_t53 + _t48*_t5 + _t70
+        _t82 = _t51*tau_right + _t52*tau_left - _t81
+        _t83 = _t34*_t75 + _t41*_t80 + _t47*_t60 + _t48*_t7 + _t50
+        _t84 = _t62*tau_right + _t64*tau_left - _t83
+        _t85 = 1.0/_t69
+        _t86 = _t85*(-_t66*_t84 + _t68*_t82)
+        _t87 = _t85*(_t58*_t84 - _t66*_t82)
+        _t88 = _t47 + _t5*_t86 + _t7*_t87
+        _t89 = -J_x_tractor*_t86 - K_theta_tractor_x_tractor_2*_t87 - _t53*_t88 - _t70
+        _t90 = _t30*_t86 + _t33*_t87 + _t75
+        _t91 = -J_theta_cart_right*_t90
+        _t92 = _t28*_t91
+        _t93 = _t37*_t86 + _t40*_t87 + _t80
+        _t94 = -J_theta_cart_left*_t93
+        _t95 = _t35*_t94
+        _t96 = -J_theta_cart*_t88 - _t44 - _t53*_t86 - _t60*_t87
+        _t97 = 0.2*_t92 - 0.2*_t95 + _t96
+        _t98 = -1.6666666666666667*_t97
+        _t99 = _t1*_t98 + _t2*_t92 + _t2*_t95 + _t89
+        _t100 = 0.5*_t99
+        _t101 = -J_theta_tractor*_t87 - K_theta_tractor_x_tractor_2*_t86 - _t50 - _t60*_t88
+        _t102 = _t101 + _t3*_t98 - _t4*_t92 - _t4*_t95
+        _t103 = 2.4154589371980677*_t102
+        _t104 = K_theta_tractor_x_tractor_2*_t15 + _t10*_t20 + _t20*_t9
+        _t105 = -J_x_tractor*_t27 + K_theta_tractor_x_tractor*_t87 - _t104 - _t42*_t88
+        _t106 = -_t100 + _t103
+        _t107 = -_t100 - _t103
+        _t108 = _t1*_t92 + _t1*_t95 + _t105 - _t2*_t98
     except ZeroDivisionError:
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces: division by zero (degenerate input)") from None
     if not (radius_cart_left > 0.0):
@@ -1033,12 +1049,12 @@ def wheel_contact_forces(q: ArrayLike, wheel_rates: ArrayLike, tau: ArrayLike, p
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires J_theta_tractor > 0")
     if not (J_x_tractor > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires J_x_tractor > 0")
-    if not (_t48 > 0.0):
+    if not (_t58 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires (S^T M S)[0][0] > 0")
-    if not (_t59 > 0.0):
+    if not (_t69 > 0.0):
         raise ValueError("TRAILER_ERR_BAD_PARAMS: wheel_contact_forces requires det(S^T M S) > 0: a positive-definite model")
-    longitudinal = np.array([_t104, _t103])
-    lateral = np.array([-_t105, -_t94])
+    longitudinal = np.array([_t107, _t106])
+    lateral = np.array([-_t108, -_t98])
     if not np.all(np.isfinite(longitudinal)):
         raise ValueError("TRAILER_ERR_NONFINITE_OUTPUT: a result of wheel_contact_forces is not finite")
     if not np.all(np.isfinite(lateral)):
