@@ -102,22 +102,11 @@ static inline bool trailer_asmc_config_unchanged(const trailer_asmc_config_t *co
                 kept_bytes, 36, 3);
     } else {
         /* value by value (a double build pads after each int) */
-        diff |= trailer_real_bits(config->k1[0]) ^ trailer_real_bits(kept->k1[0]);
-        diff |= trailer_real_bits(config->k1[1]) ^ trailer_real_bits(kept->k1[1]);
-        diff |= trailer_real_bits(config->k1[2]) ^ trailer_real_bits(kept->k1[2]);
-        diff |= trailer_real_bits(config->k1[3]) ^ trailer_real_bits(kept->k1[3]);
-        diff |= trailer_real_bits(config->k1[4]) ^ trailer_real_bits(kept->k1[4]);
-        diff |= trailer_real_bits(config->k1[5]) ^ trailer_real_bits(kept->k1[5]);
-        diff |= trailer_real_bits(config->k1[6]) ^ trailer_real_bits(kept->k1[6]);
-        diff |= trailer_real_bits(config->k1[7]) ^ trailer_real_bits(kept->k1[7]);
-        diff |= trailer_real_bits(config->k2[0]) ^ trailer_real_bits(kept->k2[0]);
-        diff |= trailer_real_bits(config->k2[1]) ^ trailer_real_bits(kept->k2[1]);
-        diff |= trailer_real_bits(config->k2[2]) ^ trailer_real_bits(kept->k2[2]);
-        diff |= trailer_real_bits(config->k2[3]) ^ trailer_real_bits(kept->k2[3]);
-        diff |= trailer_real_bits(config->k2[4]) ^ trailer_real_bits(kept->k2[4]);
-        diff |= trailer_real_bits(config->k2[5]) ^ trailer_real_bits(kept->k2[5]);
-        diff |= trailer_real_bits(config->k2[6]) ^ trailer_real_bits(kept->k2[6]);
-        diff |= trailer_real_bits(config->k2[7]) ^ trailer_real_bits(kept->k2[7]);
+        int i;
+        for (i = 0; i < 8; ++i) {
+            diff |= trailer_real_bits(config->k1[i]) ^ trailer_real_bits(kept->k1[i]);
+            diff |= trailer_real_bits(config->k2[i]) ^ trailer_real_bits(kept->k2[i]);
+        }
         diff |= trailer_nominal_diff(&config->nominal, &kept->nominal);
         diff |= trailer_real_bits(config->q_pos) ^ trailer_real_bits(kept->q_pos);
         diff |= trailer_real_bits(config->q_vel) ^ trailer_real_bits(kept->q_vel);

@@ -134,27 +134,12 @@ static inline bool trailer2_tdroc_config_unchanged(const trailer2_tdroc_config_t
         diff = trailer2_words_diff(bytes, kept_bytes, 0, 56);
     } else {
         /* value by value (a double build pads after each int) */
-        diff |= trailer2_real_bits(config->k1[0]) ^ trailer2_real_bits(kept->k1[0]);
-        diff |= trailer2_real_bits(config->k1[1]) ^ trailer2_real_bits(kept->k1[1]);
-        diff |= trailer2_real_bits(config->k1[2]) ^ trailer2_real_bits(kept->k1[2]);
-        diff |= trailer2_real_bits(config->k1[3]) ^ trailer2_real_bits(kept->k1[3]);
-        diff |= trailer2_real_bits(config->k1[4]) ^ trailer2_real_bits(kept->k1[4]);
-        diff |= trailer2_real_bits(config->k1[5]) ^ trailer2_real_bits(kept->k1[5]);
-        diff |= trailer2_real_bits(config->k1[6]) ^ trailer2_real_bits(kept->k1[6]);
-        diff |= trailer2_real_bits(config->k1[7]) ^ trailer2_real_bits(kept->k1[7]);
-        diff |= trailer2_real_bits(config->k1[8]) ^ trailer2_real_bits(kept->k1[8]);
-        diff |= trailer2_real_bits(config->k1[9]) ^ trailer2_real_bits(kept->k1[9]);
+        int i;
+        for (i = 0; i < 10; ++i) {
+            diff |= trailer2_real_bits(config->k1[i]) ^ trailer2_real_bits(kept->k1[i]);
+            diff |= trailer2_real_bits(config->k2[i]) ^ trailer2_real_bits(kept->k2[i]);
+        }
         diff |= trailer2_real_bits(config->k1[10]) ^ trailer2_real_bits(kept->k1[10]);
-        diff |= trailer2_real_bits(config->k2[0]) ^ trailer2_real_bits(kept->k2[0]);
-        diff |= trailer2_real_bits(config->k2[1]) ^ trailer2_real_bits(kept->k2[1]);
-        diff |= trailer2_real_bits(config->k2[2]) ^ trailer2_real_bits(kept->k2[2]);
-        diff |= trailer2_real_bits(config->k2[3]) ^ trailer2_real_bits(kept->k2[3]);
-        diff |= trailer2_real_bits(config->k2[4]) ^ trailer2_real_bits(kept->k2[4]);
-        diff |= trailer2_real_bits(config->k2[5]) ^ trailer2_real_bits(kept->k2[5]);
-        diff |= trailer2_real_bits(config->k2[6]) ^ trailer2_real_bits(kept->k2[6]);
-        diff |= trailer2_real_bits(config->k2[7]) ^ trailer2_real_bits(kept->k2[7]);
-        diff |= trailer2_real_bits(config->k2[8]) ^ trailer2_real_bits(kept->k2[8]);
-        diff |= trailer2_real_bits(config->k2[9]) ^ trailer2_real_bits(kept->k2[9]);
         diff |= trailer2_real_bits(config->k2[10]) ^ trailer2_real_bits(kept->k2[10]);
         diff |= trailer2_nominal_diff(&config->nominal, &kept->nominal);
         diff |= trailer2_real_bits(config->q_pos) ^ trailer2_real_bits(kept->q_pos);

@@ -110,34 +110,11 @@ static inline bool trailer3_roc_config_unchanged(const trailer3_roc_config_t *co
                 kept_bytes, 64, 1);
     } else {
         /* value by value (a double build pads after each int) */
-        diff |= trailer3_real_bits(config->k1[0]) ^ trailer3_real_bits(kept->k1[0]);
-        diff |= trailer3_real_bits(config->k1[1]) ^ trailer3_real_bits(kept->k1[1]);
-        diff |= trailer3_real_bits(config->k1[2]) ^ trailer3_real_bits(kept->k1[2]);
-        diff |= trailer3_real_bits(config->k1[3]) ^ trailer3_real_bits(kept->k1[3]);
-        diff |= trailer3_real_bits(config->k1[4]) ^ trailer3_real_bits(kept->k1[4]);
-        diff |= trailer3_real_bits(config->k1[5]) ^ trailer3_real_bits(kept->k1[5]);
-        diff |= trailer3_real_bits(config->k1[6]) ^ trailer3_real_bits(kept->k1[6]);
-        diff |= trailer3_real_bits(config->k1[7]) ^ trailer3_real_bits(kept->k1[7]);
-        diff |= trailer3_real_bits(config->k1[8]) ^ trailer3_real_bits(kept->k1[8]);
-        diff |= trailer3_real_bits(config->k1[9]) ^ trailer3_real_bits(kept->k1[9]);
-        diff |= trailer3_real_bits(config->k1[10]) ^ trailer3_real_bits(kept->k1[10]);
-        diff |= trailer3_real_bits(config->k1[11]) ^ trailer3_real_bits(kept->k1[11]);
-        diff |= trailer3_real_bits(config->k1[12]) ^ trailer3_real_bits(kept->k1[12]);
-        diff |= trailer3_real_bits(config->k1[13]) ^ trailer3_real_bits(kept->k1[13]);
-        diff |= trailer3_real_bits(config->k2[0]) ^ trailer3_real_bits(kept->k2[0]);
-        diff |= trailer3_real_bits(config->k2[1]) ^ trailer3_real_bits(kept->k2[1]);
-        diff |= trailer3_real_bits(config->k2[2]) ^ trailer3_real_bits(kept->k2[2]);
-        diff |= trailer3_real_bits(config->k2[3]) ^ trailer3_real_bits(kept->k2[3]);
-        diff |= trailer3_real_bits(config->k2[4]) ^ trailer3_real_bits(kept->k2[4]);
-        diff |= trailer3_real_bits(config->k2[5]) ^ trailer3_real_bits(kept->k2[5]);
-        diff |= trailer3_real_bits(config->k2[6]) ^ trailer3_real_bits(kept->k2[6]);
-        diff |= trailer3_real_bits(config->k2[7]) ^ trailer3_real_bits(kept->k2[7]);
-        diff |= trailer3_real_bits(config->k2[8]) ^ trailer3_real_bits(kept->k2[8]);
-        diff |= trailer3_real_bits(config->k2[9]) ^ trailer3_real_bits(kept->k2[9]);
-        diff |= trailer3_real_bits(config->k2[10]) ^ trailer3_real_bits(kept->k2[10]);
-        diff |= trailer3_real_bits(config->k2[11]) ^ trailer3_real_bits(kept->k2[11]);
-        diff |= trailer3_real_bits(config->k2[12]) ^ trailer3_real_bits(kept->k2[12]);
-        diff |= trailer3_real_bits(config->k2[13]) ^ trailer3_real_bits(kept->k2[13]);
+        int i;
+        for (i = 0; i < 14; ++i) {
+            diff |= trailer3_real_bits(config->k1[i]) ^ trailer3_real_bits(kept->k1[i]);
+            diff |= trailer3_real_bits(config->k2[i]) ^ trailer3_real_bits(kept->k2[i]);
+        }
         diff |= trailer3_nominal_diff(&config->nominal, &kept->nominal);
         diff |= trailer3_real_bits(config->q_pos) ^ trailer3_real_bits(kept->q_pos);
         diff |= trailer3_real_bits(config->q_vel) ^ trailer3_real_bits(kept->q_vel);

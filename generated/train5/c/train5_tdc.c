@@ -100,46 +100,11 @@ static inline bool train5_tdc_config_unchanged(const train5_tdc_config_t *config
                 kept_bytes, 88, 2);
     } else {
         /* value by value (a double build pads after each int) */
-        diff |= train5_real_bits(config->k1[0]) ^ train5_real_bits(kept->k1[0]);
-        diff |= train5_real_bits(config->k1[1]) ^ train5_real_bits(kept->k1[1]);
-        diff |= train5_real_bits(config->k1[2]) ^ train5_real_bits(kept->k1[2]);
-        diff |= train5_real_bits(config->k1[3]) ^ train5_real_bits(kept->k1[3]);
-        diff |= train5_real_bits(config->k1[4]) ^ train5_real_bits(kept->k1[4]);
-        diff |= train5_real_bits(config->k1[5]) ^ train5_real_bits(kept->k1[5]);
-        diff |= train5_real_bits(config->k1[6]) ^ train5_real_bits(kept->k1[6]);
-        diff |= train5_real_bits(config->k1[7]) ^ train5_real_bits(kept->k1[7]);
-        diff |= train5_real_bits(config->k1[8]) ^ train5_real_bits(kept->k1[8]);
-        diff |= train5_real_bits(config->k1[9]) ^ train5_real_bits(kept->k1[9]);
-        diff |= train5_real_bits(config->k1[10]) ^ train5_real_bits(kept->k1[10]);
-        diff |= train5_real_bits(config->k1[11]) ^ train5_real_bits(kept->k1[11]);
-        diff |= train5_real_bits(config->k1[12]) ^ train5_real_bits(kept->k1[12]);
-        diff |= train5_real_bits(config->k1[13]) ^ train5_real_bits(kept->k1[13]);
-        diff |= train5_real_bits(config->k1[14]) ^ train5_real_bits(kept->k1[14]);
-        diff |= train5_real_bits(config->k1[15]) ^ train5_real_bits(kept->k1[15]);
-        diff |= train5_real_bits(config->k1[16]) ^ train5_real_bits(kept->k1[16]);
-        diff |= train5_real_bits(config->k1[17]) ^ train5_real_bits(kept->k1[17]);
-        diff |= train5_real_bits(config->k1[18]) ^ train5_real_bits(kept->k1[18]);
-        diff |= train5_real_bits(config->k1[19]) ^ train5_real_bits(kept->k1[19]);
-        diff |= train5_real_bits(config->k2[0]) ^ train5_real_bits(kept->k2[0]);
-        diff |= train5_real_bits(config->k2[1]) ^ train5_real_bits(kept->k2[1]);
-        diff |= train5_real_bits(config->k2[2]) ^ train5_real_bits(kept->k2[2]);
-        diff |= train5_real_bits(config->k2[3]) ^ train5_real_bits(kept->k2[3]);
-        diff |= train5_real_bits(config->k2[4]) ^ train5_real_bits(kept->k2[4]);
-        diff |= train5_real_bits(config->k2[5]) ^ train5_real_bits(kept->k2[5]);
-        diff |= train5_real_bits(config->k2[6]) ^ train5_real_bits(kept->k2[6]);
-        diff |= train5_real_bits(config->k2[7]) ^ train5_real_bits(kept->k2[7]);
-        diff |= train5_real_bits(config->k2[8]) ^ train5_real_bits(kept->k2[8]);
-        diff |= train5_real_bits(config->k2[9]) ^ train5_real_bits(kept->k2[9]);
-        diff |= train5_real_bits(config->k2[10]) ^ train5_real_bits(kept->k2[10]);
-        diff |= train5_real_bits(config->k2[11]) ^ train5_real_bits(kept->k2[11]);
-        diff |= train5_real_bits(config->k2[12]) ^ train5_real_bits(kept->k2[12]);
-        diff |= train5_real_bits(config->k2[13]) ^ train5_real_bits(kept->k2[13]);
-        diff |= train5_real_bits(config->k2[14]) ^ train5_real_bits(kept->k2[14]);
-        diff |= train5_real_bits(config->k2[15]) ^ train5_real_bits(kept->k2[15]);
-        diff |= train5_real_bits(config->k2[16]) ^ train5_real_bits(kept->k2[16]);
-        diff |= train5_real_bits(config->k2[17]) ^ train5_real_bits(kept->k2[17]);
-        diff |= train5_real_bits(config->k2[18]) ^ train5_real_bits(kept->k2[18]);
-        diff |= train5_real_bits(config->k2[19]) ^ train5_real_bits(kept->k2[19]);
+        int i;
+        for (i = 0; i < 20; ++i) {
+            diff |= train5_real_bits(config->k1[i]) ^ train5_real_bits(kept->k1[i]);
+            diff |= train5_real_bits(config->k2[i]) ^ train5_real_bits(kept->k2[i]);
+        }
         diff |= train5_nominal_diff(&config->nominal, &kept->nominal);
         diff |= train5_real_bits(config->q_pos) ^ train5_real_bits(kept->q_pos);
         diff |= train5_real_bits(config->q_vel) ^ train5_real_bits(kept->q_vel);
