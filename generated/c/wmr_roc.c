@@ -109,11 +109,16 @@ static inline bool wmr_roc_config_unchanged(const wmr_roc_config_t *config,
                 kept_bytes, 24, 1);
     } else {
         /* value by value (a double build pads after each int) */
-        int i;
-        for (i = 0; i < 5; ++i) {
-            diff |= wmr_real_bits(config->k1[i]) ^ wmr_real_bits(kept->k1[i]);
-            diff |= wmr_real_bits(config->k2[i]) ^ wmr_real_bits(kept->k2[i]);
-        }
+        diff |= wmr_real_bits(config->k1[0]) ^ wmr_real_bits(kept->k1[0]);
+        diff |= wmr_real_bits(config->k1[1]) ^ wmr_real_bits(kept->k1[1]);
+        diff |= wmr_real_bits(config->k1[2]) ^ wmr_real_bits(kept->k1[2]);
+        diff |= wmr_real_bits(config->k1[3]) ^ wmr_real_bits(kept->k1[3]);
+        diff |= wmr_real_bits(config->k1[4]) ^ wmr_real_bits(kept->k1[4]);
+        diff |= wmr_real_bits(config->k2[0]) ^ wmr_real_bits(kept->k2[0]);
+        diff |= wmr_real_bits(config->k2[1]) ^ wmr_real_bits(kept->k2[1]);
+        diff |= wmr_real_bits(config->k2[2]) ^ wmr_real_bits(kept->k2[2]);
+        diff |= wmr_real_bits(config->k2[3]) ^ wmr_real_bits(kept->k2[3]);
+        diff |= wmr_real_bits(config->k2[4]) ^ wmr_real_bits(kept->k2[4]);
         diff |= wmr_nominal_diff(&config->nominal, &kept->nominal);
         diff |= wmr_real_bits(config->q_pos) ^ wmr_real_bits(kept->q_pos);
         diff |= wmr_real_bits(config->q_vel) ^ wmr_real_bits(kept->q_vel);

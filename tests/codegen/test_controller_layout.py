@@ -241,7 +241,8 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
     nominal = nominal[:nominal.index("\n}\n")]
     for field in ("J_theta", "radius_l"):
         assert f"diff |= toy_real_bits(a->{field}) ^ toy_real_bits(b->{field});" in nominal
-    assert "for (i = 0; i < 8; ++i) {" in compared  # every entry of an nq-vector
+    # every entry of an nq-vector: a loop of an even nq (vectorised), an odd one written out
+    assert "for (i = 0; i < 8; ++i) {" in compared
     assert "diff |= toy_real_bits(config->k1[i]) ^ toy_real_bits(kept->k1[i]);" in compared
     # the ints as they are, their bits XOR-ed into the same word (one test for all)
     assert ("diff |= ((toy_bits_t)(unsigned int)config->formulation) ^ ((toy_bits_t)(unsigned "

@@ -78,7 +78,7 @@ def module(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, object]:
 
 def test_the_shared_arithmetic_is_printed_once(module: tuple[str, object]) -> None:
     text, _ = module
-    assert len(re.findall(r"^static void wmr_grp\(", text, re.M)) == 1
+    assert len(re.findall(r"^WMR_SHARED_INLINE void wmr_grp\(", text, re.M)) == 1
     assert text.count("WMR_SIN(") + text.count("wmr_sin(") == 1, "sin(x0) printed twice"
     bodies = re.split(r"\n(?=\S.*\bwmr_[fg]\()", text)
     for name in ("wmr_f(", "wmr_g("):
@@ -120,3 +120,4 @@ def test_without_a_group_there_is_no_helper() -> None:
                                       definitions=s.definitions)) for s in (F, G)]
     text = render_all_ir({MODULE: plain})[f"{MODULE}.c"]
     assert "static void" not in text and "wmr_grp" not in text
+    assert "SHARED_INLINE" not in text

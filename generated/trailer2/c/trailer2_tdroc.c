@@ -135,10 +135,12 @@ static inline bool trailer2_tdroc_config_unchanged(const trailer2_tdroc_config_t
     } else {
         /* value by value (a double build pads after each int) */
         int i;
-        for (i = 0; i < 11; ++i) {
+        for (i = 0; i < 10; ++i) {
             diff |= trailer2_real_bits(config->k1[i]) ^ trailer2_real_bits(kept->k1[i]);
             diff |= trailer2_real_bits(config->k2[i]) ^ trailer2_real_bits(kept->k2[i]);
         }
+        diff |= trailer2_real_bits(config->k1[10]) ^ trailer2_real_bits(kept->k1[10]);
+        diff |= trailer2_real_bits(config->k2[10]) ^ trailer2_real_bits(kept->k2[10]);
         diff |= trailer2_nominal_diff(&config->nominal, &kept->nominal);
         diff |= trailer2_real_bits(config->q_pos) ^ trailer2_real_bits(kept->q_pos);
         diff |= trailer2_real_bits(config->q_vel) ^ trailer2_real_bits(kept->q_vel);
