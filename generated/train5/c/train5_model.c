@@ -19,7 +19,7 @@
 /* train5_staged_quantities: The quantities minimal_bias_forces, minimal_forward_dynamics,
    linearization, wheel_contact_forces all read.
    Each caller's documented operations include these:
-   operations after CSE: 614 add, 888 mul, 10 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 225 add, 443 mul, 6 div, 10 sin/cos, 0 sqrt */
 TRAIN5_SHARED_INLINE void train5_staged_quantities(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, train5_real_t *shared_quantities)
 {
@@ -29,1136 +29,572 @@ TRAIN5_SHARED_INLINE void train5_staged_quantities(const train5_params_t *p, con
     const train5_real_t _t1 = _t0 + theta_cart;
     const train5_real_t _t2 = TRAIN5_SIN(_t1);
     const train5_real_t _t3 = TRAIN5_COS(_t1);
-    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t radius_cart_left = p->radius_cart_left;
+    const train5_real_t radius_cart_right = p->radius_cart_right;
+    const train5_real_t _t4 = radius_cart_left*radius_cart_right;
+    const train5_real_t _t5 = -TRAIN5_LIT(0.6)*_t4;
+    const train5_real_t _t6 = TRAIN5_LIT(1.0)/_t5;
+    const train5_real_t _t7 = _t4*_t6;
+    const train5_real_t _t8 = TRAIN5_LIT(0.85)*_t2;
+    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t3;
     const train5_real_t theta_cart2 = q[4];
-    const train5_real_t _t5 = _t0 + theta_cart2;
-    const train5_real_t _t6 = TRAIN5_SIN(_t5);
-    const train5_real_t _t7 = TRAIN5_COS(_t5);
-    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
+    const train5_real_t _t10 = _t0 + theta_cart2;
+    const train5_real_t _t11 = TRAIN5_SIN(_t10);
+    const train5_real_t _t12 = TRAIN5_COS(_t10);
+    const train5_real_t radius_cart2_left = p->radius_cart2_left;
+    const train5_real_t radius_cart2_right = p->radius_cart2_right;
+    const train5_real_t _t13 = radius_cart2_left*radius_cart2_right;
+    const train5_real_t _t14 = -TRAIN5_LIT(0.6)*_t13;
+    const train5_real_t _t15 = TRAIN5_LIT(1.0)/_t14;
+    const train5_real_t _t16 = _t13*_t15;
+    const train5_real_t _t17 = TRAIN5_LIT(0.85)*_t11;
+    const train5_real_t _t18 = TRAIN5_LIT(0.85)*_t12;
     const train5_real_t theta_cart3 = q[5];
-    const train5_real_t _t11 = _t0 + theta_cart3;
-    const train5_real_t _t12 = TRAIN5_SIN(_t11);
-    const train5_real_t _t13 = TRAIN5_COS(_t11);
-    const train5_real_t _t14 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t15 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t16 = TRAIN5_LIT(0.85)*_t7;
+    const train5_real_t _t19 = _t0 + theta_cart3;
+    const train5_real_t _t20 = TRAIN5_SIN(_t19);
+    const train5_real_t _t21 = TRAIN5_COS(_t19);
+    const train5_real_t radius_cart3_left = p->radius_cart3_left;
+    const train5_real_t radius_cart3_right = p->radius_cart3_right;
+    const train5_real_t _t22 = radius_cart3_left*radius_cart3_right;
+    const train5_real_t _t23 = -TRAIN5_LIT(0.6)*_t22;
+    const train5_real_t _t24 = TRAIN5_LIT(1.0)/_t23;
+    const train5_real_t _t25 = _t22*_t24;
+    const train5_real_t _t26 = TRAIN5_LIT(0.85)*_t20;
+    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t21;
     const train5_real_t theta_cart4 = q[6];
-    const train5_real_t _t17 = _t0 + theta_cart4;
-    const train5_real_t _t18 = TRAIN5_SIN(_t17);
-    const train5_real_t _t19 = TRAIN5_COS(_t17);
-    const train5_real_t _t20 = TRAIN5_LIT(0.3)*_t19;
-    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t12;
-    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t13;
+    const train5_real_t _t28 = _t0 + theta_cart4;
+    const train5_real_t _t29 = TRAIN5_SIN(_t28);
+    const train5_real_t _t30 = TRAIN5_COS(_t28);
+    const train5_real_t radius_cart4_left = p->radius_cart4_left;
+    const train5_real_t radius_cart4_right = p->radius_cart4_right;
+    const train5_real_t _t31 = radius_cart4_left*radius_cart4_right;
+    const train5_real_t _t32 = -TRAIN5_LIT(0.6)*_t31;
+    const train5_real_t _t33 = TRAIN5_LIT(1.0)/_t32;
+    const train5_real_t _t34 = _t31*_t33;
+    const train5_real_t _t35 = TRAIN5_LIT(0.85)*_t29;
+    const train5_real_t _t36 = TRAIN5_LIT(0.85)*_t30;
     const train5_real_t theta_cart5 = q[7];
-    const train5_real_t _t23 = _t0 + theta_cart5;
-    const train5_real_t _t24 = TRAIN5_SIN(_t23);
-    const train5_real_t _t25 = TRAIN5_COS(_t23);
-    const train5_real_t _t26 = TRAIN5_LIT(0.3)*_t25;
-    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t25;
-    const train5_real_t _t28 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t29 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t30 = TRAIN5_LIT(0.3)*_t12;
-    const train5_real_t _t31 = TRAIN5_LIT(0.3)*_t18;
-    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t24;
-    const train5_real_t _t33 = -_t10*_t7 - _t6*_t9;
-    const train5_real_t _t34 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t35 = _t33*_t34;
-    const train5_real_t _t36 = _t35 - _t6;
-    const train5_real_t _t37 = -TRAIN5_LIT(1.6666666666666667)*_t4;
-    const train5_real_t _t38 = _t33*_t37;
-    const train5_real_t _t39 = _t38 - _t8;
-    const train5_real_t _t40 = -_t10*_t13 - _t12*_t9;
-    const train5_real_t _t41 = _t34*_t40;
-    const train5_real_t _t42 = -_t12*_t15 - _t13*_t16;
-    const train5_real_t _t43 = TRAIN5_LIT(1.6666666666666667)*_t36;
-    const train5_real_t _t44 = _t42*_t43;
-    const train5_real_t _t45 = -_t12 + _t41 + _t44;
-    const train5_real_t _t46 = _t37*_t40;
-    const train5_real_t _t47 = TRAIN5_LIT(1.6666666666666667)*_t39;
-    const train5_real_t _t48 = _t42*_t47;
-    const train5_real_t _t49 = -_t14 + _t46 + _t48;
-    const train5_real_t _t50 = -_t10*_t19 - _t18*_t9;
-    const train5_real_t _t51 = _t34*_t50;
-    const train5_real_t _t52 = -_t15*_t18 - _t16*_t19;
-    const train5_real_t _t53 = _t43*_t52;
-    const train5_real_t _t54 = -_t18*_t21 - _t19*_t22;
-    const train5_real_t _t55 = TRAIN5_LIT(1.6666666666666667)*_t45;
-    const train5_real_t _t56 = _t54*_t55;
-    const train5_real_t _t57 = -_t18 + _t51 + _t53 + _t56;
-    const train5_real_t _t58 = _t37*_t50;
-    const train5_real_t _t59 = _t47*_t52;
-    const train5_real_t _t60 = TRAIN5_LIT(1.6666666666666667)*_t49;
-    const train5_real_t _t61 = _t54*_t60;
-    const train5_real_t _t62 = -_t20 + _t58 + _t59 + _t61;
-    const train5_real_t _t63 = -_t10*_t25 - _t24*_t9;
-    const train5_real_t _t64 = _t34*_t63;
-    const train5_real_t _t65 = -_t15*_t24 - _t16*_t25;
-    const train5_real_t _t66 = _t43*_t65;
-    const train5_real_t _t67 = -_t21*_t24 - _t22*_t25;
-    const train5_real_t _t68 = _t55*_t67;
-    const train5_real_t _t69 = -TRAIN5_LIT(0.85)*_t18*_t24 - _t19*_t27;
-    const train5_real_t _t70 = TRAIN5_LIT(1.6666666666666667)*_t57;
-    const train5_real_t _t71 = _t69*_t70;
-    const train5_real_t _t72 = -_t24 + _t64 + _t66 + _t68 + _t71;
-    const train5_real_t _t73 = _t37*_t63;
-    const train5_real_t _t74 = _t47*_t65;
-    const train5_real_t _t75 = _t60*_t67;
-    const train5_real_t _t76 = TRAIN5_LIT(1.6666666666666667)*_t62;
-    const train5_real_t _t77 = _t69*_t76;
-    const train5_real_t _t78 = -_t26 + _t73 + _t74 + _t75 + _t77;
-    const train5_real_t _t79 = TRAIN5_LIT(0.2)*_t34;
-    const train5_real_t _t80 = TRAIN5_LIT(0.2)*_t37;
-    const train5_real_t _t81 = TRAIN5_LIT(0.2)*_t43;
-    const train5_real_t _t82 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const train5_real_t _t83 = _t34*_t82;
-    const train5_real_t _t84 = _t7 - _t83;
-    const train5_real_t _t85 = TRAIN5_LIT(0.2)*_t47;
-    const train5_real_t _t86 = _t37*_t82;
-    const train5_real_t _t87 = _t29 + _t86;
-    const train5_real_t _t88 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t89 = TRAIN5_LIT(0.85)*_t12*_t3 - _t13*_t9;
-    const train5_real_t _t90 = _t34*_t89;
-    const train5_real_t _t91 = TRAIN5_LIT(0.85)*_t12*_t7 - _t13*_t15;
-    const train5_real_t _t92 = _t43*_t91;
-    const train5_real_t _t93 = -_t92;
-    const train5_real_t _t94 = TRAIN5_LIT(0.2)*_t60;
-    const train5_real_t _t95 = _t37*_t89;
-    const train5_real_t _t96 = _t47*_t91;
-    const train5_real_t _t97 = _t30 + _t95 + _t96;
-    const train5_real_t _t98 = -_t13 + _t90 + _t92;
-    const train5_real_t _t99 = TRAIN5_LIT(0.2)*_t70;
-    const train5_real_t _t100 = TRAIN5_LIT(0.85)*_t18*_t3 - _t19*_t9;
-    const train5_real_t _t101 = _t100*_t34;
-    const train5_real_t _t102 = -_t15*_t19 + TRAIN5_LIT(0.85)*_t18*_t7;
-    const train5_real_t _t103 = _t102*_t43;
-    const train5_real_t _t104 = TRAIN5_LIT(0.85)*_t13*_t18 - _t19*_t21;
-    const train5_real_t _t105 = _t104*_t55;
-    const train5_real_t _t106 = _t101 + _t103 + _t105 - _t19;
-    const train5_real_t _t107 = TRAIN5_LIT(0.2)*_t76;
-    const train5_real_t _t108 = _t100*_t37;
-    const train5_real_t _t109 = _t102*_t47;
-    const train5_real_t _t110 = _t104*_t60;
-    const train5_real_t _t111 = _t108 + _t109 + _t110 + _t31;
-    const train5_real_t _t112 = TRAIN5_LIT(1.6666666666666667)*_t72;
-    const train5_real_t _t113 = TRAIN5_LIT(0.2)*_t112;
-    const train5_real_t _t114 = TRAIN5_LIT(0.85)*_t24*_t3 - _t25*_t9;
-    const train5_real_t _t115 = _t114*_t34;
-    const train5_real_t _t116 = -_t15*_t25 + TRAIN5_LIT(0.85)*_t24*_t7;
-    const train5_real_t _t117 = _t116*_t43;
-    const train5_real_t _t118 = TRAIN5_LIT(0.85)*_t13*_t24 - _t21*_t25;
-    const train5_real_t _t119 = _t118*_t55;
-    const train5_real_t _t120 = -_t18*_t27 + TRAIN5_LIT(0.85)*_t19*_t24;
-    const train5_real_t _t121 = _t120*_t70;
-    const train5_real_t _t122 = _t115 + _t117 + _t119 + _t121 - _t25;
-    const train5_real_t _t123 = TRAIN5_LIT(1.6666666666666667)*_t78;
-    const train5_real_t _t124 = TRAIN5_LIT(0.2)*_t123;
-    const train5_real_t _t125 = _t114*_t37;
-    const train5_real_t _t126 = _t116*_t47;
-    const train5_real_t _t127 = _t118*_t60;
-    const train5_real_t _t128 = _t120*_t76;
-    const train5_real_t _t129 = _t125 + _t126 + _t127 + _t128 + _t32;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t _t130 = K_theta_cart2_x_tractor*_t6;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t131 = K_theta_cart2_x_tractor_2*_t7;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t _t132 = K_theta_cart3_x_tractor*_t12;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t133 = K_theta_cart3_x_tractor_2*_t13;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t _t134 = K_theta_cart4_x_tractor*_t18;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t135 = K_theta_cart4_x_tractor_2*_t19;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t _t136 = K_theta_cart5_x_tractor*_t24;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t137 = K_theta_cart5_x_tractor_2*_t25;
-    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const train5_real_t _t138 = K_theta_cart_x_tractor*_t3;
-    const train5_real_t _t139 = K_theta_cart2_x_tractor*_t7;
-    const train5_real_t _t140 = K_theta_cart3_x_tractor*_t13;
-    const train5_real_t _t141 = K_theta_cart4_x_tractor*_t19;
-    const train5_real_t _t142 = K_theta_cart5_x_tractor*_t25;
-    const train5_real_t _t143 = K_theta_cart2_x_tractor_2*_t6;
-    const train5_real_t _t144 = K_theta_cart3_x_tractor_2*_t12;
-    const train5_real_t _t145 = K_theta_cart4_x_tractor_2*_t18;
-    const train5_real_t _t146 = K_theta_cart5_x_tractor_2*_t24;
-    const train5_real_t _t147 = TRAIN5_LIT(0.85)*_t18;
-    const train5_real_t _t148 = TRAIN5_LIT(0.85)*_t19;
+    const train5_real_t _t37 = _t0 + theta_cart5;
+    const train5_real_t _t38 = TRAIN5_SIN(_t37);
+    const train5_real_t _t39 = TRAIN5_COS(_t37);
+    const train5_real_t radius_cart5_left = p->radius_cart5_left;
+    const train5_real_t radius_cart5_right = p->radius_cart5_right;
+    const train5_real_t _t40 = radius_cart5_left*radius_cart5_right;
+    const train5_real_t _t41 = -TRAIN5_LIT(0.6)*_t40;
+    const train5_real_t _t42 = TRAIN5_LIT(1.0)/_t41;
+    const train5_real_t _t43 = _t40*_t42;
     const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t149 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t44 = TRAIN5_LIT(0.5)*radius_right;
     const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t150 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t45 = TRAIN5_LIT(0.5)*radius_left;
     const train5_real_t thetadot_right = wheel_rates[0];
     const train5_real_t thetadot_left = wheel_rates[1];
-    const train5_real_t _t151 = _t149*thetadot_right + _t150*thetadot_left;
-    const train5_real_t _t152 = _t151*_t151;
-    const train5_real_t _t153 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t154 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t155 = _t153*thetadot_right + _t154*thetadot_left;
-    const train5_real_t _t156 = _t151*_t47 + _t155*_t43;
-    const train5_real_t _t157 = _t156*_t156;
-    const train5_real_t _t158 = _t151*_t60 + _t155*_t55;
-    const train5_real_t _t159 = _t158*_t158;
-    const train5_real_t _t160 = _t151*_t76 + _t155*_t70;
-    const train5_real_t _t161 = _t160*_t160;
-    const train5_real_t _t162 = _t141*_t161;
-    const train5_real_t _t163 = _t112*_t155 + _t123*_t151;
-    const train5_real_t _t164 = _t163*_t163;
-    const train5_real_t _t165 = _t142*_t164;
-    const train5_real_t _t166 = _t151*_t37 + _t155*_t34;
-    const train5_real_t _t167 = _t166*_t166;
-    const train5_real_t _t168 = _t143*_t157;
-    const train5_real_t _t169 = _t144*_t159;
-    const train5_real_t _t170 = _t145*_t161;
-    const train5_real_t _t171 = _t146*_t164;
-    const train5_real_t _t172 = K_theta_cart3_x_tractor*_t30;
-    const train5_real_t _t173 = K_theta_cart3_x_tractor_2*_t14;
-    const train5_real_t _t174 = K_theta_cart4_x_tractor*_t31;
-    const train5_real_t _t175 = K_theta_cart4_x_tractor_2*_t20;
-    const train5_real_t _t176 = K_theta_cart5_x_tractor*_t32;
-    const train5_real_t _t177 = K_theta_cart5_x_tractor_2*_t26;
-    const train5_real_t _t178 = _t10*_t157;
-    const train5_real_t _t179 = _t10*_t159;
-    const train5_real_t _t180 = _t10*_t161;
-    const train5_real_t _t181 = _t10*_t164;
-    const train5_real_t _t182 = _t167*_t9;
-    const train5_real_t _t183 = _t159*_t16;
-    const train5_real_t _t184 = _t16*_t161;
-    const train5_real_t _t185 = _t16*_t164;
-    const train5_real_t _t186 = _t10*_t167;
-    const train5_real_t _t187 = _t15*_t157;
-    const train5_real_t _t188 = _t157*_t16;
-    const train5_real_t _t189 = _t161*_t22;
-    const train5_real_t _t190 = _t164*_t22;
-    const train5_real_t _t191 = _t159*_t21;
-    const train5_real_t _t192 = _t159*_t22;
-    const train5_real_t _t193 = _t148*_t164;
-    const train5_real_t _t194 = _t147*_t161;
-    const train5_real_t _t195 = _t148*_t161;
-    const train5_real_t _t196 = TRAIN5_LIT(1.6666666666666667)*_t3;
-    const train5_real_t _t197 = _t196*_t33;
-    const train5_real_t _t198 = -TRAIN5_LIT(1.6666666666666667)*_t28;
-    const train5_real_t _t199 = _t198*_t33;
-    const train5_real_t _t200 = _t196*_t40;
-    const train5_real_t _t201 = _t198*_t40;
-    const train5_real_t _t202 = _t196*_t50;
-    const train5_real_t _t203 = _t198*_t50;
-    const train5_real_t _t204 = _t196*_t63;
-    const train5_real_t _t205 = _t198*_t63;
-    const train5_real_t _t206 = TRAIN5_LIT(0.2)*_t196;
-    const train5_real_t _t207 = TRAIN5_LIT(0.2)*_t198;
-    const train5_real_t _t208 = -_t197 - _t7;
-    const train5_real_t _t209 = -TRAIN5_LIT(1.6666666666666667)*_t208;
-    const train5_real_t _t210 = TRAIN5_LIT(0.2)*_t209;
-    const train5_real_t _t211 = _t196*_t82;
-    const train5_real_t _t212 = _t211 - _t6;
-    const train5_real_t _t213 = -_t199 + _t29;
-    const train5_real_t _t214 = -TRAIN5_LIT(1.6666666666666667)*_t213;
-    const train5_real_t _t215 = TRAIN5_LIT(0.2)*_t214;
-    const train5_real_t _t216 = _t198*_t82;
-    const train5_real_t _t217 = _t216 - _t8;
-    const train5_real_t _t218 = _t197 + _t83;
-    const train5_real_t _t219 = -TRAIN5_LIT(1.6666666666666667)*_t218;
-    const train5_real_t _t220 = TRAIN5_LIT(0.2)*_t219;
-    const train5_real_t _t221 = _t199 + _t86;
-    const train5_real_t _t222 = -TRAIN5_LIT(1.6666666666666667)*_t221;
-    const train5_real_t _t223 = TRAIN5_LIT(0.2)*_t222;
-    const train5_real_t _t224 = -TRAIN5_LIT(1.6666666666666667)*_t84;
-    const train5_real_t _t225 = TRAIN5_LIT(0.2)*_t224;
-    const train5_real_t _t226 = TRAIN5_LIT(1.6666666666666667)*_t87;
-    const train5_real_t _t227 = TRAIN5_LIT(0.2)*_t226;
-    const train5_real_t _t228 = -_t13 - _t200 - _t209*_t42;
-    const train5_real_t _t229 = -TRAIN5_LIT(1.6666666666666667)*_t228;
-    const train5_real_t _t230 = TRAIN5_LIT(0.2)*_t229;
-    const train5_real_t _t231 = _t196*_t89;
-    const train5_real_t _t232 = -_t12 + _t209*_t91 + _t231;
-    const train5_real_t _t233 = -_t201 - _t214*_t42 + _t30;
-    const train5_real_t _t234 = -TRAIN5_LIT(1.6666666666666667)*_t233;
-    const train5_real_t _t235 = TRAIN5_LIT(0.2)*_t234;
-    const train5_real_t _t236 = _t198*_t89;
-    const train5_real_t _t237 = -_t14 + _t214*_t91 + _t236;
-    const train5_real_t _t238 = _t200 - _t219*_t42 + _t90;
-    const train5_real_t _t239 = -TRAIN5_LIT(1.6666666666666667)*_t238;
-    const train5_real_t _t240 = TRAIN5_LIT(0.2)*_t239;
-    const train5_real_t _t241 = _t219*_t91 - _t231 + _t41;
-    const train5_real_t _t242 = _t201 - _t222*_t42 + _t95;
-    const train5_real_t _t243 = -TRAIN5_LIT(1.6666666666666667)*_t242;
-    const train5_real_t _t244 = TRAIN5_LIT(0.2)*_t243;
-    const train5_real_t _t245 = _t222*_t91 - _t236 + _t46;
-    const train5_real_t _t246 = -_t224*_t42 - _t93;
-    const train5_real_t _t247 = -TRAIN5_LIT(1.6666666666666667)*_t246;
-    const train5_real_t _t248 = TRAIN5_LIT(0.2)*_t247;
-    const train5_real_t _t249 = _t224*_t91 + _t44;
-    const train5_real_t _t250 = -_t226*_t42 + _t96;
-    const train5_real_t _t251 = -TRAIN5_LIT(1.6666666666666667)*_t250;
-    const train5_real_t _t252 = TRAIN5_LIT(0.2)*_t251;
-    const train5_real_t _t253 = _t226*_t91 + _t48;
-    const train5_real_t _t254 = TRAIN5_LIT(1.6666666666666667)*_t98;
-    const train5_real_t _t255 = TRAIN5_LIT(0.2)*_t254;
-    const train5_real_t _t256 = TRAIN5_LIT(1.6666666666666667)*_t97;
-    const train5_real_t _t257 = TRAIN5_LIT(0.2)*_t256;
-    const train5_real_t _t258 = -_t19 - _t202 - _t209*_t52 - _t229*_t54;
-    const train5_real_t _t259 = -TRAIN5_LIT(1.6666666666666667)*_t258;
-    const train5_real_t _t260 = TRAIN5_LIT(0.2)*_t259;
-    const train5_real_t _t261 = _t100*_t196;
-    const train5_real_t _t262 = _t102*_t209 + _t104*_t229 - _t18 + _t261;
-    const train5_real_t _t263 = -_t203 - _t214*_t52 - _t234*_t54 + _t31;
-    const train5_real_t _t264 = -TRAIN5_LIT(1.6666666666666667)*_t263;
-    const train5_real_t _t265 = TRAIN5_LIT(0.2)*_t264;
-    const train5_real_t _t266 = _t100*_t198;
-    const train5_real_t _t267 = _t102*_t214 + _t104*_t234 - _t20 + _t266;
-    const train5_real_t _t268 = _t101 + _t202 - _t219*_t52 - _t239*_t54;
-    const train5_real_t _t269 = -TRAIN5_LIT(1.6666666666666667)*_t268;
-    const train5_real_t _t270 = TRAIN5_LIT(0.2)*_t269;
-    const train5_real_t _t271 = _t102*_t219 + _t104*_t239 - _t261 + _t51;
-    const train5_real_t _t272 = _t108 + _t203 - _t222*_t52 - _t243*_t54;
-    const train5_real_t _t273 = -TRAIN5_LIT(1.6666666666666667)*_t272;
-    const train5_real_t _t274 = TRAIN5_LIT(0.2)*_t273;
-    const train5_real_t _t275 = _t102*_t222 + _t104*_t243 - _t266 + _t58;
-    const train5_real_t _t276 = _t103 - _t224*_t52 - _t247*_t54;
-    const train5_real_t _t277 = -TRAIN5_LIT(1.6666666666666667)*_t276;
-    const train5_real_t _t278 = TRAIN5_LIT(0.2)*_t277;
-    const train5_real_t _t279 = _t102*_t224 + _t104*_t247 + _t53;
-    const train5_real_t _t280 = _t109 - _t226*_t52 - _t251*_t54;
-    const train5_real_t _t281 = -TRAIN5_LIT(1.6666666666666667)*_t280;
-    const train5_real_t _t282 = TRAIN5_LIT(0.2)*_t281;
-    const train5_real_t _t283 = _t102*_t226 + _t104*_t251 + _t59;
-    const train5_real_t _t284 = _t105 - _t254*_t54;
-    const train5_real_t _t285 = -TRAIN5_LIT(1.6666666666666667)*_t284;
-    const train5_real_t _t286 = TRAIN5_LIT(0.2)*_t285;
-    const train5_real_t _t287 = _t104*_t254 + _t56;
-    const train5_real_t _t288 = _t110 - _t256*_t54;
-    const train5_real_t _t289 = -TRAIN5_LIT(1.6666666666666667)*_t288;
-    const train5_real_t _t290 = TRAIN5_LIT(0.2)*_t289;
-    const train5_real_t _t291 = _t104*_t256 + _t61;
-    const train5_real_t _t292 = TRAIN5_LIT(1.6666666666666667)*_t106;
-    const train5_real_t _t293 = TRAIN5_LIT(0.2)*_t292;
-    const train5_real_t _t294 = TRAIN5_LIT(1.6666666666666667)*_t111;
-    const train5_real_t _t295 = TRAIN5_LIT(0.2)*_t294;
-    const train5_real_t _t296 = -_t204 - _t209*_t65 - _t229*_t67 - _t25 - _t259*_t69;
-    const train5_real_t _t297 = -TRAIN5_LIT(1.6666666666666667)*_t296;
-    const train5_real_t _t298 = TRAIN5_LIT(0.2)*_t297;
-    const train5_real_t _t299 = _t114*_t196;
-    const train5_real_t _t300 = _t116*_t209 + _t118*_t229 + _t120*_t259 - _t24 + _t299;
-    const train5_real_t _t301 = -_t205 - _t214*_t65 - _t234*_t67 - _t264*_t69 + _t32;
-    const train5_real_t _t302 = -TRAIN5_LIT(1.6666666666666667)*_t301;
-    const train5_real_t _t303 = TRAIN5_LIT(0.2)*_t302;
-    const train5_real_t _t304 = _t114*_t198;
-    const train5_real_t _t305 = _t116*_t214 + _t118*_t234 + _t120*_t264 - _t26 + _t304;
-    const train5_real_t _t306 = _t115 + _t204 - _t219*_t65 - _t239*_t67 - _t269*_t69;
-    const train5_real_t _t307 = -TRAIN5_LIT(1.6666666666666667)*_t306;
-    const train5_real_t _t308 = TRAIN5_LIT(0.2)*_t307;
-    const train5_real_t _t309 = _t116*_t219 + _t118*_t239 + _t120*_t269 - _t299 + _t64;
-    const train5_real_t _t310 = _t125 + _t205 - _t222*_t65 - _t243*_t67 - _t273*_t69;
-    const train5_real_t _t311 = -TRAIN5_LIT(1.6666666666666667)*_t310;
-    const train5_real_t _t312 = TRAIN5_LIT(0.2)*_t311;
-    const train5_real_t _t313 = _t116*_t222 + _t118*_t243 + _t120*_t273 - _t304 + _t73;
-    const train5_real_t _t314 = _t117 - _t224*_t65 - _t247*_t67 - _t277*_t69;
-    const train5_real_t _t315 = -TRAIN5_LIT(1.6666666666666667)*_t314;
-    const train5_real_t _t316 = TRAIN5_LIT(0.2)*_t315;
-    const train5_real_t _t317 = _t116*_t224 + _t118*_t247 + _t120*_t277 + _t66;
-    const train5_real_t _t318 = _t126 - _t226*_t65 - _t251*_t67 - _t281*_t69;
-    const train5_real_t _t319 = -TRAIN5_LIT(1.6666666666666667)*_t318;
-    const train5_real_t _t320 = TRAIN5_LIT(0.2)*_t319;
-    const train5_real_t _t321 = _t116*_t226 + _t118*_t251 + _t120*_t281 + _t74;
-    const train5_real_t _t322 = _t119 - _t254*_t67 - _t285*_t69;
-    const train5_real_t _t323 = -TRAIN5_LIT(1.6666666666666667)*_t322;
-    const train5_real_t _t324 = TRAIN5_LIT(0.2)*_t323;
-    const train5_real_t _t325 = _t118*_t254 + _t120*_t285 + _t68;
-    const train5_real_t _t326 = _t127 - _t256*_t67 - _t289*_t69;
-    const train5_real_t _t327 = -TRAIN5_LIT(1.6666666666666667)*_t326;
-    const train5_real_t _t328 = TRAIN5_LIT(0.2)*_t327;
-    const train5_real_t _t329 = _t118*_t256 + _t120*_t289 + _t75;
-    const train5_real_t _t330 = _t121 - _t292*_t69;
-    const train5_real_t _t331 = -TRAIN5_LIT(1.6666666666666667)*_t330;
-    const train5_real_t _t332 = TRAIN5_LIT(0.2)*_t331;
-    const train5_real_t _t333 = _t120*_t292 + _t71;
-    const train5_real_t _t334 = _t128 - _t294*_t69;
-    const train5_real_t _t335 = -TRAIN5_LIT(1.6666666666666667)*_t334;
-    const train5_real_t _t336 = TRAIN5_LIT(0.2)*_t335;
-    const train5_real_t _t337 = _t120*_t294 + _t77;
-    const train5_real_t _t338 = TRAIN5_LIT(1.6666666666666667)*_t122;
-    const train5_real_t _t339 = TRAIN5_LIT(0.2)*_t338;
-    const train5_real_t _t340 = TRAIN5_LIT(1.6666666666666667)*_t129;
-    const train5_real_t _t341 = TRAIN5_LIT(0.2)*_t340;
-    const train5_real_t _t342 = _t151*_t155;
-    const train5_real_t _t343 = _t155*_t166;
-    const train5_real_t _t344 = _t151*_t166;
-    const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t345 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t _t346 = -_t210 - _t212;
-    const train5_real_t _t347 = _t345*_t346;
-    const train5_real_t _t348 = -_t215 - _t217;
-    const train5_real_t _t349 = _t345*_t348;
-    const train5_real_t _t350 = _t211 - _t220 - _t35;
-    const train5_real_t _t351 = _t345*_t350;
-    const train5_real_t _t352 = _t216 - _t223 - _t38;
-    const train5_real_t _t353 = _t345*_t352;
-    const train5_real_t _t354 = -_t225 + _t36;
-    const train5_real_t _t355 = _t345*_t354;
-    const train5_real_t _t356 = -_t227 + _t39;
-    const train5_real_t _t357 = _t345*_t356;
-    const train5_real_t _t358 = _t155*_t156;
-    const train5_real_t _t359 = _t151*_t156;
-    const train5_real_t _t360 = _t152*_t349 + _t342*_t347 + _t343*_t351 + _t344*_t353 + _t355*_t358
-            + _t357*_t359;
+    const train5_real_t _t46 = _t44*thetadot_right + _t45*thetadot_left;
+    const train5_real_t _t47 = _t2*_t7;
+    const train5_real_t _t48 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t49 = -_t48*_t7;
+    const train5_real_t _t50 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t51 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t52 = _t50*thetadot_right + _t51*thetadot_left;
+    const train5_real_t _t53 = _t46*_t47 + _t49*_t52;
+    const train5_real_t _t54 = _t46*_t53;
+    const train5_real_t _t55 = -TRAIN5_LIT(0.3)*_t52;
+    const train5_real_t _t56 = _t53*_t55;
+    const train5_real_t _t57 = _t47*_t8 + TRAIN5_LIT(1.0);
+    const train5_real_t _t58 = -_t47*_t9;
+    const train5_real_t _t59 = _t11*_t57 - _t12*_t58;
+    const train5_real_t _t60 = _t16*_t59;
+    const train5_real_t _t61 = _t49*_t8;
+    const train5_real_t _t62 = -_t49*_t9 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t63 = _t11*_t61 - _t12*_t62;
+    const train5_real_t _t64 = _t16*_t63;
+    const train5_real_t _t65 = _t46*_t60 + _t52*_t64;
+    const train5_real_t _t66 = _t46 + _t53*_t8;
+    const train5_real_t _t67 = _t65*_t66;
+    const train5_real_t _t68 = -_t53*_t9 + _t55;
+    const train5_real_t _t69 = _t65*_t68;
+    const train5_real_t _t70 = _t17*_t60 + _t57;
+    const train5_real_t _t71 = -_t18*_t60 + _t58;
+    const train5_real_t _t72 = _t20*_t70 - _t21*_t71;
+    const train5_real_t _t73 = _t25*_t72;
+    const train5_real_t _t74 = _t17*_t64 + _t61;
+    const train5_real_t _t75 = -_t18*_t64 + _t62;
+    const train5_real_t _t76 = _t20*_t74 - _t21*_t75;
+    const train5_real_t _t77 = _t25*_t76;
+    const train5_real_t _t78 = _t46*_t73 + _t52*_t77;
+    const train5_real_t _t79 = _t17*_t65 + _t66;
+    const train5_real_t _t80 = _t78*_t79;
+    const train5_real_t _t81 = -_t18*_t65 + _t68;
+    const train5_real_t _t82 = _t78*_t81;
+    const train5_real_t _t83 = _t26*_t73 + _t70;
+    const train5_real_t _t84 = -_t27*_t73 + _t71;
+    const train5_real_t _t85 = _t29*_t83 - _t30*_t84;
+    const train5_real_t _t86 = _t34*_t85;
+    const train5_real_t _t87 = _t26*_t77 + _t74;
+    const train5_real_t _t88 = -_t27*_t77 + _t75;
+    const train5_real_t _t89 = _t29*_t87 - _t30*_t88;
+    const train5_real_t _t90 = _t34*_t89;
+    const train5_real_t _t91 = _t46*_t86 + _t52*_t90;
+    const train5_real_t _t92 = _t26*_t78 + _t79;
+    const train5_real_t _t93 = _t91*_t92;
+    const train5_real_t _t94 = -_t27*_t78 + _t81;
+    const train5_real_t _t95 = _t91*_t94;
+    const train5_real_t _t96 = _t35*_t86 + _t83;
+    const train5_real_t _t97 = -_t36*_t86 + _t84;
+    const train5_real_t _t98 = _t38*_t96 - _t39*_t97;
+    const train5_real_t _t99 = _t43*_t98;
+    const train5_real_t _t100 = _t35*_t90 + _t87;
+    const train5_real_t _t101 = -_t36*_t90 + _t88;
+    const train5_real_t _t102 = _t100*_t38 - _t101*_t39;
+    const train5_real_t _t103 = _t102*_t43;
+    const train5_real_t _t104 = _t103*_t52 + _t46*_t99;
+    const train5_real_t _t105 = _t35*_t91 + _t92;
+    const train5_real_t _t106 = _t104*_t105;
+    const train5_real_t _t107 = -_t36*_t91 + _t94;
+    const train5_real_t _t108 = _t104*_t107;
+    const train5_real_t _t109 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t110 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t111 = -_t11*_t69 - _t12*_t67;
+    const train5_real_t _t112 = _t52*_t52;
+    const train5_real_t _t113 = TRAIN5_LIT(0.3)*_t112;
+    const train5_real_t _t114 = _t53*_t53;
+    const train5_real_t _t115 = _t114*_t9;
+    const train5_real_t _t116 = radius_left*radius_right;
+    const train5_real_t _t117 = TRAIN5_LIT(1.0)/_t116;
+    const train5_real_t _t118 = -_t46*_t52;
+    const train5_real_t _t119 = -_t116*_t117*_t118;
+    const train5_real_t _t120 = -_t2*_t56 - _t3*_t54;
+    const train5_real_t _t121 = _t113*_t2 - _t119*_t3 - _t120;
+    const train5_real_t _t122 = _t121*_t7;
+    const train5_real_t _t123 = _t113 + _t115 + _t122*_t8;
+    const train5_real_t _t124 = _t114*_t8;
+    const train5_real_t _t125 = _t119 - _t122*_t9 + _t124;
+    const train5_real_t _t126 = _t11*_t123 - _t111 - _t12*_t125;
+    const train5_real_t _t127 = _t11*_t67 - _t12*_t69;
+    const train5_real_t _t128 = _t11*_t125 + _t12*_t123 - _t127;
+    const train5_real_t _t129 = _t15*(_t109*_t126 + _t110*_t128);
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t361 = J_theta_cart2_left*_t360;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t362 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t _t363 = _t210 - _t212;
-    const train5_real_t _t364 = _t362*_t363;
-    const train5_real_t _t365 = _t215 - _t217;
-    const train5_real_t _t366 = _t362*_t365;
-    const train5_real_t _t367 = _t211 + _t220 - _t35;
-    const train5_real_t _t368 = _t362*_t367;
-    const train5_real_t _t369 = _t216 + _t223 - _t38;
-    const train5_real_t _t370 = _t362*_t369;
-    const train5_real_t _t371 = _t225 + _t36;
-    const train5_real_t _t372 = _t362*_t371;
-    const train5_real_t _t373 = _t227 + _t39;
-    const train5_real_t _t374 = _t362*_t373;
-    const train5_real_t _t375 = _t152*_t366 + _t342*_t364 + _t343*_t368 + _t344*_t370 + _t358*_t372
-            + _t359*_t374;
+    const train5_real_t _t130 = J_theta_cart2_left*_t129;
+    const train5_real_t _t131 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t132 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t133 = _t15*(_t126*_t131 + _t128*_t132);
     const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t376 = J_theta_cart2_right*_t375;
-    const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t377 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t _t378 = -_t230 - _t232;
-    const train5_real_t _t379 = _t377*_t378;
-    const train5_real_t _t380 = -_t235 - _t237;
-    const train5_real_t _t381 = _t377*_t380;
-    const train5_real_t _t382 = -_t240 - _t241;
-    const train5_real_t _t383 = _t377*_t382;
-    const train5_real_t _t384 = -_t244 - _t245;
-    const train5_real_t _t385 = _t377*_t384;
-    const train5_real_t _t386 = -_t248 - _t249;
-    const train5_real_t _t387 = _t377*_t386;
-    const train5_real_t _t388 = -_t252 - _t253;
-    const train5_real_t _t389 = _t377*_t388;
-    const train5_real_t _t390 = -_t255 + _t45;
-    const train5_real_t _t391 = _t377*_t390;
-    const train5_real_t _t392 = -_t257 + _t49;
-    const train5_real_t _t393 = _t377*_t392;
-    const train5_real_t _t394 = _t155*_t158;
-    const train5_real_t _t395 = _t151*_t158;
-    const train5_real_t _t396 = _t152*_t381 + _t342*_t379 + _t343*_t383 + _t344*_t385 + _t358*_t387
-            + _t359*_t389 + _t391*_t394 + _t393*_t395;
+    const train5_real_t _t134 = J_theta_cart2_right*_t133;
+    const train5_real_t _t135 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t136 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t137 = -_t20*_t82 - _t21*_t80;
+    const train5_real_t _t138 = _t65*_t65;
+    const train5_real_t _t139 = _t138*_t18;
+    const train5_real_t _t140 = _t126*_t16;
+    const train5_real_t _t141 = _t123 + _t139 + _t140*_t17;
+    const train5_real_t _t142 = _t138*_t17;
+    const train5_real_t _t143 = _t125 - _t140*_t18 + _t142;
+    const train5_real_t _t144 = -_t137 + _t141*_t20 - _t143*_t21;
+    const train5_real_t _t145 = _t20*_t80 - _t21*_t82;
+    const train5_real_t _t146 = _t141*_t21 + _t143*_t20 - _t145;
+    const train5_real_t _t147 = _t24*(_t135*_t144 + _t136*_t146);
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t397 = J_theta_cart3_left*_t396;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t398 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t _t399 = _t230 - _t232;
-    const train5_real_t _t400 = _t398*_t399;
-    const train5_real_t _t401 = _t235 - _t237;
-    const train5_real_t _t402 = _t398*_t401;
-    const train5_real_t _t403 = _t240 - _t241;
-    const train5_real_t _t404 = _t398*_t403;
-    const train5_real_t _t405 = _t244 - _t245;
-    const train5_real_t _t406 = _t398*_t405;
-    const train5_real_t _t407 = _t248 - _t249;
-    const train5_real_t _t408 = _t398*_t407;
-    const train5_real_t _t409 = _t252 - _t253;
-    const train5_real_t _t410 = _t398*_t409;
-    const train5_real_t _t411 = _t255 + _t45;
-    const train5_real_t _t412 = _t398*_t411;
-    const train5_real_t _t413 = _t257 + _t49;
-    const train5_real_t _t414 = _t398*_t413;
-    const train5_real_t _t415 = _t152*_t402 + _t342*_t400 + _t343*_t404 + _t344*_t406 + _t358*_t408
-            + _t359*_t410 + _t394*_t412 + _t395*_t414;
+    const train5_real_t _t148 = J_theta_cart3_left*_t147;
+    const train5_real_t _t149 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t150 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t151 = _t24*(_t144*_t149 + _t146*_t150);
     const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t416 = J_theta_cart3_right*_t415;
-    const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t417 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t _t418 = -_t260 - _t262;
-    const train5_real_t _t419 = _t417*_t418;
-    const train5_real_t _t420 = -_t265 - _t267;
-    const train5_real_t _t421 = _t417*_t420;
-    const train5_real_t _t422 = -_t270 - _t271;
-    const train5_real_t _t423 = _t417*_t422;
-    const train5_real_t _t424 = -_t274 - _t275;
-    const train5_real_t _t425 = _t417*_t424;
-    const train5_real_t _t426 = -_t278 - _t279;
-    const train5_real_t _t427 = _t417*_t426;
-    const train5_real_t _t428 = -_t282 - _t283;
-    const train5_real_t _t429 = _t417*_t428;
-    const train5_real_t _t430 = -_t286 - _t287;
-    const train5_real_t _t431 = _t417*_t430;
-    const train5_real_t _t432 = -_t290 - _t291;
-    const train5_real_t _t433 = _t417*_t432;
-    const train5_real_t _t434 = -_t293 + _t57;
-    const train5_real_t _t435 = _t417*_t434;
-    const train5_real_t _t436 = -_t295 + _t62;
-    const train5_real_t _t437 = _t417*_t436;
-    const train5_real_t _t438 = _t155*_t160;
-    const train5_real_t _t439 = _t151*_t160;
-    const train5_real_t _t440 = _t152*_t421 + _t342*_t419 + _t343*_t423 + _t344*_t425 + _t358*_t427
-            + _t359*_t429 + _t394*_t431 + _t395*_t433 + _t435*_t438 + _t437*_t439;
+    const train5_real_t _t152 = J_theta_cart3_right*_t151;
+    const train5_real_t _t153 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t154 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t155 = -_t29*_t95 - _t30*_t93;
+    const train5_real_t _t156 = _t78*_t78;
+    const train5_real_t _t157 = _t156*_t27;
+    const train5_real_t _t158 = _t144*_t25;
+    const train5_real_t _t159 = _t141 + _t157 + _t158*_t26;
+    const train5_real_t _t160 = _t156*_t26;
+    const train5_real_t _t161 = _t143 - _t158*_t27 + _t160;
+    const train5_real_t _t162 = -_t155 + _t159*_t29 - _t161*_t30;
+    const train5_real_t _t163 = _t29*_t93 - _t30*_t95;
+    const train5_real_t _t164 = _t159*_t30 + _t161*_t29 - _t163;
+    const train5_real_t _t165 = _t33*(_t153*_t162 + _t154*_t164);
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t441 = J_theta_cart4_left*_t440;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t442 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t _t443 = _t260 - _t262;
-    const train5_real_t _t444 = _t442*_t443;
-    const train5_real_t _t445 = _t265 - _t267;
-    const train5_real_t _t446 = _t442*_t445;
-    const train5_real_t _t447 = _t270 - _t271;
-    const train5_real_t _t448 = _t442*_t447;
-    const train5_real_t _t449 = _t274 - _t275;
-    const train5_real_t _t450 = _t442*_t449;
-    const train5_real_t _t451 = _t278 - _t279;
-    const train5_real_t _t452 = _t442*_t451;
-    const train5_real_t _t453 = _t282 - _t283;
-    const train5_real_t _t454 = _t442*_t453;
-    const train5_real_t _t455 = _t286 - _t287;
-    const train5_real_t _t456 = _t442*_t455;
-    const train5_real_t _t457 = _t290 - _t291;
-    const train5_real_t _t458 = _t442*_t457;
-    const train5_real_t _t459 = _t293 + _t57;
-    const train5_real_t _t460 = _t442*_t459;
-    const train5_real_t _t461 = _t295 + _t62;
-    const train5_real_t _t462 = _t442*_t461;
-    const train5_real_t _t463 = _t152*_t446 + _t342*_t444 + _t343*_t448 + _t344*_t450 + _t358*_t452
-            + _t359*_t454 + _t394*_t456 + _t395*_t458 + _t438*_t460 + _t439*_t462;
+    const train5_real_t _t166 = J_theta_cart4_left*_t165;
+    const train5_real_t _t167 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t168 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t169 = _t33*(_t162*_t167 + _t164*_t168);
     const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t464 = J_theta_cart4_right*_t463;
-    const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t465 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t466 = -_t298 - _t300;
-    const train5_real_t _t467 = _t465*_t466;
-    const train5_real_t _t468 = -_t303 - _t305;
-    const train5_real_t _t469 = _t465*_t468;
-    const train5_real_t _t470 = -_t308 - _t309;
-    const train5_real_t _t471 = _t465*_t470;
-    const train5_real_t _t472 = -_t312 - _t313;
-    const train5_real_t _t473 = _t465*_t472;
-    const train5_real_t _t474 = -_t316 - _t317;
-    const train5_real_t _t475 = _t465*_t474;
-    const train5_real_t _t476 = -_t320 - _t321;
-    const train5_real_t _t477 = _t465*_t476;
-    const train5_real_t _t478 = -_t324 - _t325;
-    const train5_real_t _t479 = _t465*_t478;
-    const train5_real_t _t480 = -_t328 - _t329;
-    const train5_real_t _t481 = _t465*_t480;
-    const train5_real_t _t482 = -_t332 - _t333;
-    const train5_real_t _t483 = _t465*_t482;
-    const train5_real_t _t484 = -_t336 - _t337;
-    const train5_real_t _t485 = _t465*_t484;
-    const train5_real_t _t486 = -_t339 + _t72;
-    const train5_real_t _t487 = _t465*_t486;
-    const train5_real_t _t488 = -_t341 + _t78;
-    const train5_real_t _t489 = _t465*_t488;
-    const train5_real_t _t490 = _t155*_t163;
-    const train5_real_t _t491 = _t151*_t163;
-    const train5_real_t _t492 = _t152*_t469 + _t342*_t467 + _t343*_t471 + _t344*_t473 + _t358*_t475
-            + _t359*_t477 + _t394*_t479 + _t395*_t481 + _t438*_t483 + _t439*_t485 + _t487*_t490
-            + _t489*_t491;
+    const train5_real_t _t170 = J_theta_cart4_right*_t169;
+    const train5_real_t _t171 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t172 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t173 = -_t106*_t39 - _t108*_t38;
+    const train5_real_t _t174 = _t91*_t91;
+    const train5_real_t _t175 = _t174*_t36;
+    const train5_real_t _t176 = _t162*_t34;
+    const train5_real_t _t177 = _t159 + _t175 + _t176*_t35;
+    const train5_real_t _t178 = _t174*_t35;
+    const train5_real_t _t179 = _t161 - _t176*_t36 + _t178;
+    const train5_real_t _t180 = -_t173 + _t177*_t38 - _t179*_t39;
+    const train5_real_t _t181 = _t106*_t38 - _t108*_t39;
+    const train5_real_t _t182 = _t177*_t39 + _t179*_t38 - _t181;
+    const train5_real_t _t183 = _t42*(_t171*_t180 + _t172*_t182);
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t493 = J_theta_cart5_left*_t492;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t494 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t _t495 = _t298 - _t300;
-    const train5_real_t _t496 = _t494*_t495;
-    const train5_real_t _t497 = _t303 - _t305;
-    const train5_real_t _t498 = _t494*_t497;
-    const train5_real_t _t499 = _t308 - _t309;
-    const train5_real_t _t500 = _t494*_t499;
-    const train5_real_t _t501 = _t312 - _t313;
-    const train5_real_t _t502 = _t494*_t501;
-    const train5_real_t _t503 = _t316 - _t317;
-    const train5_real_t _t504 = _t494*_t503;
-    const train5_real_t _t505 = _t320 - _t321;
-    const train5_real_t _t506 = _t494*_t505;
-    const train5_real_t _t507 = _t324 - _t325;
-    const train5_real_t _t508 = _t494*_t507;
-    const train5_real_t _t509 = _t328 - _t329;
-    const train5_real_t _t510 = _t494*_t509;
-    const train5_real_t _t511 = _t332 - _t333;
-    const train5_real_t _t512 = _t494*_t511;
-    const train5_real_t _t513 = _t336 - _t337;
-    const train5_real_t _t514 = _t494*_t513;
-    const train5_real_t _t515 = _t339 + _t72;
-    const train5_real_t _t516 = _t494*_t515;
-    const train5_real_t _t517 = _t341 + _t78;
-    const train5_real_t _t518 = _t494*_t517;
-    const train5_real_t _t519 = _t152*_t498 + _t342*_t496 + _t343*_t500 + _t344*_t502 + _t358*_t504
-            + _t359*_t506 + _t394*_t508 + _t395*_t510 + _t438*_t512 + _t439*_t514 + _t490*_t516
-            + _t491*_t518;
+    const train5_real_t _t184 = J_theta_cart5_left*_t183;
+    const train5_real_t _t185 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t186 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t187 = _t42*(_t180*_t185 + _t182*_t186);
     const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t520 = J_theta_cart5_right*_t519;
-    const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t521 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t _t522 = _t2 - _t206;
-    const train5_real_t _t523 = _t521*_t522;
-    const train5_real_t _t524 = -_t207 + _t4;
-    const train5_real_t _t525 = _t521*_t524;
-    const train5_real_t _t526 = _t342 - _t343;
-    const train5_real_t _t527 = _t152 - _t344;
-    const train5_real_t _t528 = _t523*_t526 + _t525*_t527;
+    const train5_real_t _t188 = J_theta_cart5_right*_t187;
+    const train5_real_t _t189 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t190 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t191 = _t2*_t54 - _t3*_t56;
+    const train5_real_t _t192 = _t113*_t3 + _t119*_t2 - _t191;
+    const train5_real_t _t193 = _t6*(_t121*_t189 + _t190*_t192);
     const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t529 = J_theta_cart_left*_t528;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t530 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t _t531 = _t2 + _t206;
-    const train5_real_t _t532 = _t530*_t531;
-    const train5_real_t _t533 = _t207 + _t4;
-    const train5_real_t _t534 = _t530*_t533;
-    const train5_real_t _t535 = _t526*_t532 + _t527*_t534;
+    const train5_real_t _t194 = J_theta_cart_left*_t193;
+    const train5_real_t _t195 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t196 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t197 = _t6*(_t121*_t195 + _t192*_t196);
     const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t536 = J_theta_cart_right*_t535;
-    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t537 = K_theta_cart_x_tractor_2*_t2 - _t138;
-    const train5_real_t _t538 = _t10*_t139 - _t10*_t143 + _t130*_t9 + _t131*_t9;
-    const train5_real_t _t539 = _t10*_t140 - _t10*_t144 + _t132*_t9 + _t133*_t9;
-    const train5_real_t _t540 = _t10*_t141 - _t10*_t145 + _t134*_t9 + _t135*_t9;
-    const train5_real_t _t541 = _t10*_t142 - _t10*_t146 + _t136*_t9 + _t137*_t9;
-    const train5_real_t _t542 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t157*_t2*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t159*_t2
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t161*_t19*_t2
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t164*_t2*_t25
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor*_t152*_t2
-            + TRAIN5_LIT(0.3)*K_theta_cart_x_tractor_2*_t152*_t3 - _t130*_t178 - _t131*_t178
-            - _t132*_t179 - _t133*_t179 - _t134*_t180 - _t135*_t180 - _t136*_t181 - _t137*_t181
-            - _t168*_t9 - _t169*_t9 - _t170*_t9 - _t171*_t9;
-    const train5_real_t _t543 = _t196*_t526 + _t198*_t527;
-    const train5_real_t _t544 = _t152*_t214 + _t209*_t342 + _t219*_t343 + _t222*_t344 + _t224*_t358
-            + _t226*_t359;
-    const train5_real_t _t545 = _t152*_t234 + _t229*_t342 + _t239*_t343 + _t243*_t344 + _t247*_t358
-            + _t251*_t359 + _t254*_t394 + _t256*_t395;
-    const train5_real_t _t546 = _t152*_t264 + _t259*_t342 + _t269*_t343 + _t273*_t344 + _t277*_t358
-            + _t281*_t359 + _t285*_t394 + _t289*_t395 + _t292*_t438 + _t294*_t439;
-    const train5_real_t _t547 = _t152*_t302 + _t297*_t342 + _t307*_t343 + _t311*_t344 + _t315*_t358
-            + _t319*_t359 + _t323*_t394 + _t327*_t395 + _t331*_t438 + _t335*_t439 + _t338*_t490
-            + _t340*_t491;
+    const train5_real_t _t198 = J_theta_cart_right*_t197;
     const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t548 = J_theta_cart*_t543 + _t342*_t537 + _t538*_t544 + _t539*_t545
-            + _t540*_t546 + _t541*_t547 + _t542;
-    const train5_real_t _t549 = K_theta_cart2_x_tractor_2*_t6 - _t139;
-    const train5_real_t _t550 = _t132*_t15 + _t133*_t15 + _t140*_t16 - _t144*_t16;
-    const train5_real_t _t551 = _t134*_t15 + _t135*_t15 + _t141*_t16 - _t145*_t16;
-    const train5_real_t _t552 = _t136*_t15 + _t137*_t15 + _t142*_t16 - _t146*_t16;
-    const train5_real_t _t553 = TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor*_t152*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor*_t167*_t3*_t6
-            + TRAIN5_LIT(0.3)*K_theta_cart2_x_tractor_2*_t152*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t167*_t2*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2*_t167*_t3*_t7
-            + TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor*_t13*_t159*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor*_t161*_t19*_t6
-            + TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor*_t164*_t25*_t6 - _t132*_t183 - _t133*_t183
-            - _t134*_t184 - _t135*_t184 - _t136*_t185 - _t137*_t185 - _t139*_t182 - _t15*_t169
-            - _t15*_t170 - _t15*_t171;
+    const train5_real_t _t199 = J_theta_cart*_t122;
+    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
+    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
+    const train5_real_t _t200 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t201 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
+    const train5_real_t _t202 = _t113*_t200 + _t119*_t201;
     const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t554 = J_theta_cart2*_t544 + _t342*_t549 + _t538*_t543 + _t545*_t550
-            + _t546*_t551 + _t547*_t552 + _t553;
-    const train5_real_t _t555 = K_theta_cart3_x_tractor_2*_t12 - _t140;
-    const train5_real_t _t556 = _t134*_t21 + _t135*_t21 + _t141*_t22 - _t145*_t22;
-    const train5_real_t _t557 = _t136*_t21 + _t137*_t21 + _t142*_t22 - _t146*_t22;
-    const train5_real_t _t558 = _t132*_t186 + _t132*_t188 + _t133*_t186 + _t133*_t188 - _t134*_t189
-            - _t135*_t189 - _t136*_t190 - _t137*_t190 - _t140*_t182 - _t140*_t187 + _t144*_t182
-            + _t144*_t187 + _t152*_t172 + _t152*_t173 + _t162*_t21 + _t165*_t21 - _t170*_t21
-            - _t171*_t21;
+    const train5_real_t _t203 = J_theta_cart2*_t140;
+    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const train5_real_t _t204 = K_theta_cart2_x_tractor*_t11 + K_theta_cart2_x_tractor_2*_t12;
+    const train5_real_t _t205 = -K_theta_cart2_x_tractor*_t12 + K_theta_cart2_x_tractor_2*_t11;
+    const train5_real_t _t206 = _t113 + _t114*_t9 + _t122*_t8;
+    const train5_real_t _t207 = _t114*_t8 + _t119 - _t122*_t9;
+    const train5_real_t _t208 = _t204*_t206 + _t205*_t207;
+    const train5_real_t _t209 = _t138*_t204 + _t140*_t205;
+    const train5_real_t _t210 = -_t138*_t205 + _t140*_t204;
     const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t559 = J_theta_cart3*_t545 + _t342*_t555 + _t539*_t543 + _t544*_t550
-            + _t546*_t556 + _t547*_t557 + _t558;
-    const train5_real_t _t560 = K_theta_cart4_x_tractor_2*_t18 - _t141;
-    const train5_real_t _t561 = _t136*_t147 + _t137*_t147 + _t142*_t148 - _t146*_t148;
-    const train5_real_t _t562 = _t134*_t186 + _t134*_t188 + _t134*_t192 + _t135*_t186 + _t135*_t188
-            + _t135*_t192 - _t136*_t193 - _t137*_t193 - _t141*_t182 - _t141*_t187 - _t141*_t191
-            + _t145*_t182 + _t145*_t187 + _t145*_t191 + _t147*_t165 - _t147*_t171 + _t152*_t174
-            + _t152*_t175;
+    const train5_real_t _t211 = J_theta_cart3*_t158;
+    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const train5_real_t _t212 = K_theta_cart3_x_tractor*_t20 + K_theta_cart3_x_tractor_2*_t21;
+    const train5_real_t _t213 = -K_theta_cart3_x_tractor*_t21 + K_theta_cart3_x_tractor_2*_t20;
+    const train5_real_t _t214 = _t138*_t18 + _t140*_t17 + _t206;
+    const train5_real_t _t215 = _t138*_t17 - _t140*_t18 + _t207;
+    const train5_real_t _t216 = _t212*_t214 + _t213*_t215;
+    const train5_real_t _t217 = _t156*_t212 + _t158*_t213;
+    const train5_real_t _t218 = -_t156*_t213 + _t158*_t212;
     const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t563 = J_theta_cart4*_t546 + _t342*_t560 + _t540*_t543 + _t544*_t551
-            + _t545*_t556 + _t547*_t561 + _t562;
-    const train5_real_t _t564 = K_theta_cart5_x_tractor_2*_t24 - _t142;
-    const train5_real_t _t565 = _t136*_t186 + _t136*_t188 + _t136*_t192 + _t136*_t195 + _t137*_t186
-            + _t137*_t188 + _t137*_t192 + _t137*_t195 - _t142*_t182 - _t142*_t187 - _t142*_t191
-            - _t142*_t194 + _t146*_t182 + _t146*_t187 + _t146*_t191 + _t146*_t194 + _t152*_t176
-            + _t152*_t177;
+    const train5_real_t _t219 = J_theta_cart4*_t176;
+    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
+    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
+    const train5_real_t _t220 = K_theta_cart4_x_tractor*_t29 + K_theta_cart4_x_tractor_2*_t30;
+    const train5_real_t _t221 = -K_theta_cart4_x_tractor*_t30 + K_theta_cart4_x_tractor_2*_t29;
+    const train5_real_t _t222 = _t156*_t27 + _t158*_t26 + _t214;
+    const train5_real_t _t223 = _t156*_t26 - _t158*_t27 + _t215;
+    const train5_real_t _t224 = _t220*_t222 + _t221*_t223;
+    const train5_real_t _t225 = _t174*_t220 + _t176*_t221;
+    const train5_real_t _t226 = -_t174*_t221 + _t176*_t220;
+    const train5_real_t _t227 = _t180*_t43;
     const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t566 = J_theta_cart5*_t547 + _t342*_t564 + _t541*_t543 + _t544*_t552
-            + _t545*_t557 + _t546*_t561 + _t565;
-    const train5_real_t _t567 = _t3 + _t79;
-    const train5_real_t _t568 = -_t28 + _t80;
-    const train5_real_t _t569 = _t530*_t567;
-    const train5_real_t _t570 = _t530*_t568;
-    const train5_real_t _t571 = _t3 - _t79;
-    const train5_real_t _t572 = -_t28 - _t80;
-    const train5_real_t _t573 = _t521*_t571;
-    const train5_real_t _t574 = _t521*_t572;
-    const train5_real_t _t575 = _t81 + _t84;
-    const train5_real_t _t576 = _t85 - _t87;
-    const train5_real_t _t577 = _t362*_t575;
-    const train5_real_t _t578 = _t362*_t576;
-    const train5_real_t _t579 = _t7 - _t81 - _t83;
-    const train5_real_t _t580 = -_t85 - _t87;
-    const train5_real_t _t581 = _t345*_t579;
-    const train5_real_t _t582 = _t345*_t580;
-    const train5_real_t _t583 = _t13 + _t88 - _t90 + _t93;
-    const train5_real_t _t584 = _t94 - _t97;
-    const train5_real_t _t585 = _t398*_t583;
-    const train5_real_t _t586 = _t398*_t584;
-    const train5_real_t _t587 = -_t88 - _t98;
-    const train5_real_t _t588 = -_t94 - _t97;
-    const train5_real_t _t589 = _t377*_t587;
-    const train5_real_t _t590 = _t377*_t588;
-    const train5_real_t _t591 = -_t106 + _t99;
-    const train5_real_t _t592 = _t107 - _t111;
-    const train5_real_t _t593 = _t442*_t591;
-    const train5_real_t _t594 = _t442*_t592;
-    const train5_real_t _t595 = -_t106 - _t99;
-    const train5_real_t _t596 = -_t107 - _t111;
-    const train5_real_t _t597 = _t417*_t595;
-    const train5_real_t _t598 = _t417*_t596;
-    const train5_real_t _t599 = _t113 - _t122;
-    const train5_real_t _t600 = _t124 - _t129;
-    const train5_real_t _t601 = _t494*_t599;
-    const train5_real_t _t602 = _t494*_t600;
-    const train5_real_t _t603 = -_t113 - _t122;
-    const train5_real_t _t604 = -_t124 - _t129;
-    const train5_real_t _t605 = _t465*_t603;
-    const train5_real_t _t606 = _t465*_t604;
-    const train5_real_t _t607 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t608 = _t130 + _t131;
-    const train5_real_t _t609 = _t132 + _t133;
-    const train5_real_t _t610 = _t134 + _t135;
-    const train5_real_t _t611 = _t136 + _t137;
-    const train5_real_t _t612 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t28;
-    const train5_real_t _t613 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t29;
-    const train5_real_t _t614 = K_theta_cart3_x_tractor*_t14 - K_theta_cart3_x_tractor_2*_t30;
-    const train5_real_t _t615 = K_theta_cart4_x_tractor*_t20 - K_theta_cart4_x_tractor_2*_t31;
-    const train5_real_t _t616 = K_theta_cart5_x_tractor*_t26 - K_theta_cart5_x_tractor_2*_t32;
+    const train5_real_t _t228 = J_theta_cart5*_t227;
+    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
+    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
+    const train5_real_t _t229 = K_theta_cart5_x_tractor*_t38 + K_theta_cart5_x_tractor_2*_t39;
+    const train5_real_t _t230 = -K_theta_cart5_x_tractor*_t39 + K_theta_cart5_x_tractor_2*_t38;
+    const train5_real_t _t231 = _t174*_t36 + _t176*_t35 + _t222;
+    const train5_real_t _t232 = _t174*_t35 - _t176*_t36 + _t223;
+    const train5_real_t _t233 = _t229*_t231 + _t230*_t232;
+    const train5_real_t _t234 = _t104*_t104;
+    const train5_real_t _t235 = _t227*_t230 + _t229*_t234;
+    const train5_real_t _t236 = _t227*_t229 - _t230*_t234;
+    const train5_real_t _t237 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t238 = _t6*(_t195*_t2 + _t196*_t3);
+    const train5_real_t _t239 = _t6*(_t189*_t2 + _t190*_t3);
+    const train5_real_t _t240 = _t11*_t58 + _t12*_t57;
+    const train5_real_t _t241 = _t15*(_t131*_t59 + _t132*_t240);
+    const train5_real_t _t242 = _t15*(_t109*_t59 + _t110*_t240);
+    const train5_real_t _t243 = _t20*_t71 + _t21*_t70;
+    const train5_real_t _t244 = _t24*(_t149*_t72 + _t150*_t243);
+    const train5_real_t _t245 = _t24*(_t135*_t72 + _t136*_t243);
+    const train5_real_t _t246 = _t29*_t84 + _t30*_t83;
+    const train5_real_t _t247 = _t33*(_t167*_t85 + _t168*_t246);
+    const train5_real_t _t248 = _t33*(_t153*_t85 + _t154*_t246);
+    const train5_real_t _t249 = _t38*_t97 + _t39*_t96;
+    const train5_real_t _t250 = _t42*(_t185*_t98 + _t186*_t249);
+    const train5_real_t _t251 = _t42*(_t171*_t98 + _t172*_t249);
+    const train5_real_t _t252 = _t6*(-_t195*_t48 - _t196*_t237);
+    const train5_real_t _t253 = _t6*(-_t189*_t48 - _t190*_t237);
+    const train5_real_t _t254 = _t11*_t62 + _t12*_t61;
+    const train5_real_t _t255 = _t15*(_t131*_t63 + _t132*_t254);
+    const train5_real_t _t256 = _t15*(_t109*_t63 + _t110*_t254);
+    const train5_real_t _t257 = _t20*_t75 + _t21*_t74;
+    const train5_real_t _t258 = _t24*(_t149*_t76 + _t150*_t257);
+    const train5_real_t _t259 = _t24*(_t135*_t76 + _t136*_t257);
+    const train5_real_t _t260 = _t29*_t88 + _t30*_t87;
+    const train5_real_t _t261 = _t33*(_t167*_t89 + _t168*_t260);
+    const train5_real_t _t262 = _t33*(_t153*_t89 + _t154*_t260);
+    const train5_real_t _t263 = _t100*_t39 + _t101*_t38;
+    const train5_real_t _t264 = _t42*(_t102*_t185 + _t186*_t263);
+    const train5_real_t _t265 = _t42*(_t102*_t171 + _t172*_t263);
+    const train5_real_t _t266 = _t130*_t242 + _t134*_t241 + _t148*_t245 + _t152*_t244 + _t166*_t248
+            + _t170*_t247 + _t184*_t251 + _t188*_t250 + _t194*_t239 + _t198*_t238;
     const train5_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
-    const train5_real_t _t617 = -K_theta_cart_x_tractor_2*_t167*_t2
-            + K_theta_tractor_x_tractor*_t152 + _t138*_t167 + _t139*_t157 + _t140*_t159 + _t162
-            + _t165 - _t168 - _t169 - _t170 - _t171;
-    const train5_real_t _t618 = -K_theta_cart2_x_tractor*_t157*_t29
-            - K_theta_cart2_x_tractor_2*_t157*_t8 - K_theta_cart_x_tractor*_t167*_t28
-            - K_theta_cart_x_tractor_2*_t167*_t4 - _t159*_t172 - _t159*_t173 - _t161*_t174
-            - _t161*_t175 - _t164*_t176 - _t164*_t177;
-    const train5_real_t _t619 = _t112*_t566 + _t34*_t548 + _t361*_t581 + _t376*_t577 + _t397*_t589
-            + _t416*_t585 + _t43*_t554 + _t441*_t597 + _t464*_t593 + _t493*_t605 + _t520*_t601
-            + _t529*_t573 + _t536*_t569 + _t543*_t607 + _t544*_t608 + _t545*_t609 + _t546*_t610
-            + _t547*_t611 + _t55*_t559 + _t563*_t70 + _t617;
-    const train5_real_t _t620 = -K_theta_tractor_x_tractor*_t342 + _t123*_t566 + _t361*_t582
-            + _t37*_t548 + _t376*_t578 + _t397*_t590 + _t416*_t586 + _t441*_t598 + _t464*_t594
-            + _t47*_t554 + _t493*_t606 + _t520*_t602 + _t529*_t574 + _t536*_t570 + _t543*_t612
-            + _t544*_t613 + _t545*_t614 + _t546*_t615 + _t547*_t616 + _t559*_t60 + _t563*_t76
-            + _t618;
-    shared_quantities[0] = _t149;
-    shared_quantities[1] = _t150;
-    shared_quantities[2] = _t530;
-    shared_quantities[3] = _t521;
-    shared_quantities[4] = _t362;
-    shared_quantities[5] = _t345;
-    shared_quantities[6] = _t398;
-    shared_quantities[7] = _t377;
-    shared_quantities[8] = _t442;
-    shared_quantities[9] = _t417;
-    shared_quantities[10] = _t494;
-    shared_quantities[11] = _t465;
-    shared_quantities[12] = -_t2;
-    shared_quantities[13] = _t3;
-    shared_quantities[14] = -_t4;
-    shared_quantities[15] = -_t6;
-    shared_quantities[16] = _t7;
-    shared_quantities[17] = -_t8;
-    shared_quantities[18] = _t33;
-    shared_quantities[19] = -_t12;
-    shared_quantities[20] = _t13;
-    shared_quantities[21] = -_t14;
-    shared_quantities[22] = _t40;
-    shared_quantities[23] = _t42;
-    shared_quantities[24] = -_t18;
-    shared_quantities[25] = _t19;
-    shared_quantities[26] = -_t20;
-    shared_quantities[27] = _t50;
-    shared_quantities[28] = _t52;
-    shared_quantities[29] = _t54;
-    shared_quantities[30] = -_t24;
-    shared_quantities[31] = _t25;
-    shared_quantities[32] = -_t26;
-    shared_quantities[33] = _t63;
-    shared_quantities[34] = _t65;
-    shared_quantities[35] = _t67;
-    shared_quantities[36] = _t69;
-    shared_quantities[37] = _t28;
-    shared_quantities[38] = _t29;
-    shared_quantities[39] = _t82;
-    shared_quantities[40] = _t30;
-    shared_quantities[41] = _t89;
-    shared_quantities[42] = _t91;
-    shared_quantities[43] = _t31;
-    shared_quantities[44] = _t100;
-    shared_quantities[45] = _t102;
-    shared_quantities[46] = _t104;
-    shared_quantities[47] = _t32;
-    shared_quantities[48] = _t114;
-    shared_quantities[49] = _t116;
-    shared_quantities[50] = _t118;
-    shared_quantities[51] = _t120;
-    shared_quantities[52] = _t153;
-    shared_quantities[53] = _t154;
-    shared_quantities[54] = _t34;
-    shared_quantities[55] = _t37;
-    shared_quantities[56] = -_t36;
-    shared_quantities[57] = -_t39;
-    shared_quantities[58] = _t43;
-    shared_quantities[59] = _t47;
-    shared_quantities[60] = -_t45;
-    shared_quantities[61] = -_t49;
-    shared_quantities[62] = _t55;
-    shared_quantities[63] = _t60;
-    shared_quantities[64] = -_t57;
-    shared_quantities[65] = -_t62;
-    shared_quantities[66] = _t70;
-    shared_quantities[67] = _t76;
-    shared_quantities[68] = -_t72;
-    shared_quantities[69] = -_t78;
-    shared_quantities[70] = _t112;
-    shared_quantities[71] = _t123;
-    shared_quantities[72] = _t567;
-    shared_quantities[73] = _t568;
-    shared_quantities[74] = _t569;
-    shared_quantities[75] = _t570;
-    shared_quantities[76] = _t571;
-    shared_quantities[77] = _t572;
-    shared_quantities[78] = _t573;
-    shared_quantities[79] = _t574;
-    shared_quantities[80] = _t575;
-    shared_quantities[81] = _t576;
-    shared_quantities[82] = _t577;
-    shared_quantities[83] = _t578;
-    shared_quantities[84] = _t579;
-    shared_quantities[85] = _t580;
-    shared_quantities[86] = _t581;
-    shared_quantities[87] = _t582;
-    shared_quantities[88] = _t583;
-    shared_quantities[89] = _t584;
-    shared_quantities[90] = _t585;
-    shared_quantities[91] = _t586;
-    shared_quantities[92] = _t587;
-    shared_quantities[93] = _t588;
-    shared_quantities[94] = _t589;
-    shared_quantities[95] = _t590;
-    shared_quantities[96] = _t591;
-    shared_quantities[97] = _t592;
-    shared_quantities[98] = _t593;
-    shared_quantities[99] = _t594;
-    shared_quantities[100] = _t595;
-    shared_quantities[101] = _t596;
-    shared_quantities[102] = _t597;
-    shared_quantities[103] = _t598;
-    shared_quantities[104] = _t599;
-    shared_quantities[105] = _t600;
-    shared_quantities[106] = _t601;
-    shared_quantities[107] = _t602;
-    shared_quantities[108] = _t603;
-    shared_quantities[109] = _t604;
-    shared_quantities[110] = _t605;
-    shared_quantities[111] = _t606;
-    shared_quantities[112] = _t155;
-    shared_quantities[113] = _t151;
-    shared_quantities[114] = _t166;
-    shared_quantities[115] = _t156;
-    shared_quantities[116] = _t158;
-    shared_quantities[117] = _t160;
-    shared_quantities[118] = _t163;
-    shared_quantities[119] = _t607;
-    shared_quantities[120] = _t608;
-    shared_quantities[121] = _t609;
-    shared_quantities[122] = _t610;
-    shared_quantities[123] = _t611;
-    shared_quantities[124] = _t537;
-    shared_quantities[125] = _t549;
-    shared_quantities[126] = _t555;
-    shared_quantities[127] = _t560;
-    shared_quantities[128] = _t564;
-    shared_quantities[129] = _t612;
-    shared_quantities[130] = _t613;
-    shared_quantities[131] = _t614;
-    shared_quantities[132] = _t615;
-    shared_quantities[133] = _t616;
-    shared_quantities[134] = _t538;
-    shared_quantities[135] = _t539;
-    shared_quantities[136] = _t540;
-    shared_quantities[137] = _t541;
-    shared_quantities[138] = _t550;
-    shared_quantities[139] = _t551;
-    shared_quantities[140] = _t552;
-    shared_quantities[141] = _t556;
-    shared_quantities[142] = _t557;
-    shared_quantities[143] = _t561;
-    shared_quantities[144] = _t617;
-    shared_quantities[145] = _t618;
-    shared_quantities[146] = _t542;
-    shared_quantities[147] = _t553;
-    shared_quantities[148] = _t558;
-    shared_quantities[149] = _t562;
-    shared_quantities[150] = _t565;
-    shared_quantities[151] = _t196;
-    shared_quantities[152] = _t198;
-    shared_quantities[153] = _t208;
-    shared_quantities[154] = _t209;
-    shared_quantities[155] = _t213;
-    shared_quantities[156] = _t214;
-    shared_quantities[157] = _t218;
-    shared_quantities[158] = _t219;
-    shared_quantities[159] = _t221;
-    shared_quantities[160] = _t222;
-    shared_quantities[161] = _t84;
-    shared_quantities[162] = _t224;
-    shared_quantities[163] = -_t87;
-    shared_quantities[164] = _t226;
-    shared_quantities[165] = _t228;
-    shared_quantities[166] = _t229;
-    shared_quantities[167] = _t233;
-    shared_quantities[168] = _t234;
-    shared_quantities[169] = _t238;
-    shared_quantities[170] = _t239;
-    shared_quantities[171] = _t242;
-    shared_quantities[172] = _t243;
-    shared_quantities[173] = _t246;
-    shared_quantities[174] = _t247;
-    shared_quantities[175] = _t250;
-    shared_quantities[176] = _t251;
-    shared_quantities[177] = -_t98;
-    shared_quantities[178] = _t254;
-    shared_quantities[179] = -_t97;
-    shared_quantities[180] = _t256;
-    shared_quantities[181] = _t258;
-    shared_quantities[182] = _t259;
-    shared_quantities[183] = _t263;
-    shared_quantities[184] = _t264;
-    shared_quantities[185] = _t268;
-    shared_quantities[186] = _t269;
-    shared_quantities[187] = _t272;
-    shared_quantities[188] = _t273;
-    shared_quantities[189] = _t276;
-    shared_quantities[190] = _t277;
-    shared_quantities[191] = _t280;
-    shared_quantities[192] = _t281;
-    shared_quantities[193] = _t284;
-    shared_quantities[194] = _t285;
-    shared_quantities[195] = _t288;
-    shared_quantities[196] = _t289;
-    shared_quantities[197] = -_t106;
-    shared_quantities[198] = _t292;
-    shared_quantities[199] = -_t111;
-    shared_quantities[200] = _t294;
-    shared_quantities[201] = _t296;
-    shared_quantities[202] = _t297;
-    shared_quantities[203] = _t301;
-    shared_quantities[204] = _t302;
-    shared_quantities[205] = _t306;
-    shared_quantities[206] = _t307;
-    shared_quantities[207] = _t310;
-    shared_quantities[208] = _t311;
-    shared_quantities[209] = _t314;
-    shared_quantities[210] = _t315;
-    shared_quantities[211] = _t318;
-    shared_quantities[212] = _t319;
-    shared_quantities[213] = _t322;
-    shared_quantities[214] = _t323;
-    shared_quantities[215] = _t326;
-    shared_quantities[216] = _t327;
-    shared_quantities[217] = _t330;
-    shared_quantities[218] = _t331;
-    shared_quantities[219] = _t334;
-    shared_quantities[220] = _t335;
-    shared_quantities[221] = -_t122;
-    shared_quantities[222] = _t338;
-    shared_quantities[223] = -_t129;
-    shared_quantities[224] = _t340;
-    shared_quantities[225] = _t531;
-    shared_quantities[226] = _t532;
-    shared_quantities[227] = _t533;
-    shared_quantities[228] = _t534;
-    shared_quantities[229] = _t522;
-    shared_quantities[230] = _t523;
-    shared_quantities[231] = _t524;
-    shared_quantities[232] = _t525;
-    shared_quantities[233] = _t363;
-    shared_quantities[234] = _t364;
-    shared_quantities[235] = _t365;
-    shared_quantities[236] = _t366;
-    shared_quantities[237] = _t367;
-    shared_quantities[238] = _t368;
-    shared_quantities[239] = _t369;
-    shared_quantities[240] = _t370;
-    shared_quantities[241] = _t371;
-    shared_quantities[242] = _t372;
-    shared_quantities[243] = _t373;
-    shared_quantities[244] = _t374;
-    shared_quantities[245] = _t346;
-    shared_quantities[246] = _t347;
-    shared_quantities[247] = _t348;
-    shared_quantities[248] = _t349;
-    shared_quantities[249] = _t350;
-    shared_quantities[250] = _t351;
-    shared_quantities[251] = _t352;
-    shared_quantities[252] = _t353;
-    shared_quantities[253] = _t354;
-    shared_quantities[254] = _t355;
-    shared_quantities[255] = _t356;
-    shared_quantities[256] = _t357;
-    shared_quantities[257] = _t399;
-    shared_quantities[258] = _t400;
-    shared_quantities[259] = _t401;
-    shared_quantities[260] = _t402;
-    shared_quantities[261] = _t403;
-    shared_quantities[262] = _t404;
-    shared_quantities[263] = _t405;
-    shared_quantities[264] = _t406;
-    shared_quantities[265] = _t407;
-    shared_quantities[266] = _t408;
-    shared_quantities[267] = _t409;
-    shared_quantities[268] = _t410;
-    shared_quantities[269] = _t411;
-    shared_quantities[270] = _t412;
-    shared_quantities[271] = _t413;
-    shared_quantities[272] = _t414;
-    shared_quantities[273] = _t378;
-    shared_quantities[274] = _t379;
-    shared_quantities[275] = _t380;
-    shared_quantities[276] = _t381;
-    shared_quantities[277] = _t382;
-    shared_quantities[278] = _t383;
-    shared_quantities[279] = _t384;
-    shared_quantities[280] = _t385;
-    shared_quantities[281] = _t386;
-    shared_quantities[282] = _t387;
-    shared_quantities[283] = _t388;
-    shared_quantities[284] = _t389;
-    shared_quantities[285] = _t390;
-    shared_quantities[286] = _t391;
-    shared_quantities[287] = _t392;
-    shared_quantities[288] = _t393;
-    shared_quantities[289] = _t443;
-    shared_quantities[290] = _t444;
-    shared_quantities[291] = _t445;
-    shared_quantities[292] = _t446;
-    shared_quantities[293] = _t447;
-    shared_quantities[294] = _t448;
-    shared_quantities[295] = _t449;
-    shared_quantities[296] = _t450;
-    shared_quantities[297] = _t451;
-    shared_quantities[298] = _t452;
-    shared_quantities[299] = _t453;
-    shared_quantities[300] = _t454;
-    shared_quantities[301] = _t455;
-    shared_quantities[302] = _t456;
-    shared_quantities[303] = _t457;
-    shared_quantities[304] = _t458;
-    shared_quantities[305] = _t459;
-    shared_quantities[306] = _t460;
-    shared_quantities[307] = _t461;
-    shared_quantities[308] = _t462;
-    shared_quantities[309] = _t418;
-    shared_quantities[310] = _t419;
-    shared_quantities[311] = _t420;
-    shared_quantities[312] = _t421;
-    shared_quantities[313] = _t422;
-    shared_quantities[314] = _t423;
-    shared_quantities[315] = _t424;
-    shared_quantities[316] = _t425;
-    shared_quantities[317] = _t426;
-    shared_quantities[318] = _t427;
-    shared_quantities[319] = _t428;
-    shared_quantities[320] = _t429;
-    shared_quantities[321] = _t430;
-    shared_quantities[322] = _t431;
-    shared_quantities[323] = _t432;
-    shared_quantities[324] = _t433;
-    shared_quantities[325] = _t434;
-    shared_quantities[326] = _t435;
-    shared_quantities[327] = _t436;
-    shared_quantities[328] = _t437;
-    shared_quantities[329] = _t495;
-    shared_quantities[330] = _t496;
-    shared_quantities[331] = _t497;
-    shared_quantities[332] = _t498;
-    shared_quantities[333] = _t499;
-    shared_quantities[334] = _t500;
-    shared_quantities[335] = _t501;
-    shared_quantities[336] = _t502;
-    shared_quantities[337] = _t503;
-    shared_quantities[338] = _t504;
-    shared_quantities[339] = _t505;
-    shared_quantities[340] = _t506;
-    shared_quantities[341] = _t507;
-    shared_quantities[342] = _t508;
-    shared_quantities[343] = _t509;
-    shared_quantities[344] = _t510;
-    shared_quantities[345] = _t511;
-    shared_quantities[346] = _t512;
-    shared_quantities[347] = _t513;
-    shared_quantities[348] = _t514;
-    shared_quantities[349] = _t515;
-    shared_quantities[350] = _t516;
-    shared_quantities[351] = _t517;
-    shared_quantities[352] = _t518;
-    shared_quantities[353] = _t466;
-    shared_quantities[354] = _t467;
-    shared_quantities[355] = _t468;
-    shared_quantities[356] = _t469;
-    shared_quantities[357] = _t470;
-    shared_quantities[358] = _t471;
-    shared_quantities[359] = _t472;
-    shared_quantities[360] = _t473;
-    shared_quantities[361] = _t474;
-    shared_quantities[362] = _t475;
-    shared_quantities[363] = _t476;
-    shared_quantities[364] = _t477;
-    shared_quantities[365] = _t478;
-    shared_quantities[366] = _t479;
-    shared_quantities[367] = _t480;
-    shared_quantities[368] = _t481;
-    shared_quantities[369] = _t482;
-    shared_quantities[370] = _t483;
-    shared_quantities[371] = _t484;
-    shared_quantities[372] = _t485;
-    shared_quantities[373] = _t486;
-    shared_quantities[374] = _t487;
-    shared_quantities[375] = _t488;
-    shared_quantities[376] = _t489;
-    shared_quantities[377] = _t526;
-    shared_quantities[378] = _t527;
-    shared_quantities[379] = _t543;
-    shared_quantities[380] = _t342;
-    shared_quantities[381] = _t152;
-    shared_quantities[382] = _t343;
-    shared_quantities[383] = _t344;
-    shared_quantities[384] = _t358;
-    shared_quantities[385] = _t359;
-    shared_quantities[386] = _t544;
-    shared_quantities[387] = _t394;
-    shared_quantities[388] = _t395;
-    shared_quantities[389] = _t545;
-    shared_quantities[390] = _t438;
-    shared_quantities[391] = _t439;
-    shared_quantities[392] = _t546;
-    shared_quantities[393] = _t490;
-    shared_quantities[394] = _t491;
-    shared_quantities[395] = _t547;
-    shared_quantities[396] = _t535;
-    shared_quantities[397] = _t528;
-    shared_quantities[398] = _t375;
-    shared_quantities[399] = _t360;
-    shared_quantities[400] = _t415;
-    shared_quantities[401] = _t396;
-    shared_quantities[402] = _t463;
-    shared_quantities[403] = _t440;
-    shared_quantities[404] = _t519;
-    shared_quantities[405] = _t492;
-    shared_quantities[406] = _t619;
-    shared_quantities[407] = _t620;
+    const train5_real_t _t267 = K_theta_tractor_x_tractor*_t112 + _t266;
+    const train5_real_t _t268 = -_t114*_t201 + _t122*_t200 + _t199*_t47 + _t202*_t47 + _t267;
+    const train5_real_t _t269 = _t203*_t60 + _t208*_t60 + _t209*_t58 + _t210*_t57 + _t268;
+    const train5_real_t _t270 = _t211*_t73 + _t216*_t73 + _t217*_t71 + _t218*_t70 + _t269;
+    const train5_real_t _t271 = _t219*_t86 + _t224*_t86 + _t225*_t84 + _t226*_t83 + _t270;
+    const train5_real_t _t272 = _t228*_t99 + _t233*_t99 + _t235*_t97 + _t236*_t96 + _t271;
+    const train5_real_t _t273 = _t130*_t256 + _t134*_t255 + _t148*_t259 + _t152*_t258 + _t166*_t262
+            + _t170*_t261 + _t184*_t265 + _t188*_t264 + _t194*_t253 + _t198*_t252;
+    const train5_real_t _t274 = -K_theta_tractor_x_tractor*_t119 + _t273;
+    const train5_real_t _t275 = -TRAIN5_LIT(0.3)*_t114*_t200 - TRAIN5_LIT(0.3)*_t122*_t201
+            + _t199*_t49 + _t202*_t49 + _t274;
+    const train5_real_t _t276 = _t203*_t64 + _t208*_t64 + _t209*_t62 + _t210*_t61 + _t275;
+    const train5_real_t _t277 = _t211*_t77 + _t216*_t77 + _t217*_t75 + _t218*_t74 + _t276;
+    const train5_real_t _t278 = _t219*_t90 + _t224*_t90 + _t225*_t88 + _t226*_t87 + _t277;
+    const train5_real_t _t279 = _t100*_t236 + _t101*_t235 + _t103*_t228 + _t103*_t233 + _t278;
+    shared_quantities[0] = _t50;
+    shared_quantities[1] = _t51;
+    shared_quantities[2] = -_t2;
+    shared_quantities[3] = _t3;
+    shared_quantities[4] = _t48;
+    shared_quantities[5] = _t237;
+    shared_quantities[6] = _t44;
+    shared_quantities[7] = _t45;
+    shared_quantities[8] = _t116;
+    shared_quantities[9] = _t117;
+    shared_quantities[10] = _t4;
+    shared_quantities[11] = _t195;
+    shared_quantities[12] = _t196;
+    shared_quantities[13] = _t189;
+    shared_quantities[14] = _t190;
+    shared_quantities[15] = _t5;
+    shared_quantities[16] = _t6;
+    shared_quantities[17] = _t47;
+    shared_quantities[18] = _t238;
+    shared_quantities[19] = _t239;
+    shared_quantities[20] = _t57;
+    shared_quantities[21] = _t58;
+    shared_quantities[22] = _t59;
+    shared_quantities[23] = _t240;
+    shared_quantities[24] = _t13;
+    shared_quantities[25] = _t131;
+    shared_quantities[26] = _t132;
+    shared_quantities[27] = _t109;
+    shared_quantities[28] = _t110;
+    shared_quantities[29] = _t14;
+    shared_quantities[30] = _t15;
+    shared_quantities[31] = _t60;
+    shared_quantities[32] = _t241;
+    shared_quantities[33] = _t242;
+    shared_quantities[34] = _t70;
+    shared_quantities[35] = _t71;
+    shared_quantities[36] = _t72;
+    shared_quantities[37] = _t243;
+    shared_quantities[38] = _t22;
+    shared_quantities[39] = _t149;
+    shared_quantities[40] = _t150;
+    shared_quantities[41] = _t135;
+    shared_quantities[42] = _t136;
+    shared_quantities[43] = _t23;
+    shared_quantities[44] = _t24;
+    shared_quantities[45] = _t73;
+    shared_quantities[46] = _t244;
+    shared_quantities[47] = _t245;
+    shared_quantities[48] = _t83;
+    shared_quantities[49] = _t84;
+    shared_quantities[50] = _t85;
+    shared_quantities[51] = _t246;
+    shared_quantities[52] = _t31;
+    shared_quantities[53] = _t167;
+    shared_quantities[54] = _t168;
+    shared_quantities[55] = _t153;
+    shared_quantities[56] = _t154;
+    shared_quantities[57] = _t32;
+    shared_quantities[58] = _t33;
+    shared_quantities[59] = _t86;
+    shared_quantities[60] = _t247;
+    shared_quantities[61] = _t248;
+    shared_quantities[62] = _t96;
+    shared_quantities[63] = _t97;
+    shared_quantities[64] = _t98;
+    shared_quantities[65] = _t249;
+    shared_quantities[66] = _t40;
+    shared_quantities[67] = _t185;
+    shared_quantities[68] = _t186;
+    shared_quantities[69] = _t171;
+    shared_quantities[70] = _t172;
+    shared_quantities[71] = _t41;
+    shared_quantities[72] = _t42;
+    shared_quantities[73] = _t99;
+    shared_quantities[74] = _t250;
+    shared_quantities[75] = _t251;
+    shared_quantities[76] = _t49;
+    shared_quantities[77] = _t252;
+    shared_quantities[78] = _t253;
+    shared_quantities[79] = _t61;
+    shared_quantities[80] = _t62;
+    shared_quantities[81] = _t63;
+    shared_quantities[82] = _t254;
+    shared_quantities[83] = _t64;
+    shared_quantities[84] = _t255;
+    shared_quantities[85] = _t256;
+    shared_quantities[86] = _t74;
+    shared_quantities[87] = _t75;
+    shared_quantities[88] = _t76;
+    shared_quantities[89] = _t257;
+    shared_quantities[90] = _t77;
+    shared_quantities[91] = _t258;
+    shared_quantities[92] = _t259;
+    shared_quantities[93] = _t87;
+    shared_quantities[94] = _t88;
+    shared_quantities[95] = _t89;
+    shared_quantities[96] = _t260;
+    shared_quantities[97] = _t90;
+    shared_quantities[98] = _t261;
+    shared_quantities[99] = _t262;
+    shared_quantities[100] = _t100;
+    shared_quantities[101] = _t101;
+    shared_quantities[102] = _t102;
+    shared_quantities[103] = _t263;
+    shared_quantities[104] = _t103;
+    shared_quantities[105] = _t264;
+    shared_quantities[106] = _t265;
+    shared_quantities[107] = _t46;
+    shared_quantities[108] = _t52;
+    shared_quantities[109] = _t53;
+    shared_quantities[110] = _t65;
+    shared_quantities[111] = _t78;
+    shared_quantities[112] = _t91;
+    shared_quantities[113] = _t104;
+    shared_quantities[114] = _t112;
+    shared_quantities[115] = _t114;
+    shared_quantities[116] = _t138;
+    shared_quantities[117] = _t156;
+    shared_quantities[118] = _t174;
+    shared_quantities[119] = _t234;
+    shared_quantities[120] = _t113;
+    shared_quantities[121] = _t115;
+    shared_quantities[122] = _t124;
+    shared_quantities[123] = _t139;
+    shared_quantities[124] = _t142;
+    shared_quantities[125] = _t157;
+    shared_quantities[126] = _t160;
+    shared_quantities[127] = _t175;
+    shared_quantities[128] = _t178;
+    shared_quantities[129] = _t55;
+    shared_quantities[130] = _t66;
+    shared_quantities[131] = _t68;
+    shared_quantities[132] = _t79;
+    shared_quantities[133] = _t81;
+    shared_quantities[134] = _t92;
+    shared_quantities[135] = _t94;
+    shared_quantities[136] = _t105;
+    shared_quantities[137] = _t107;
+    shared_quantities[138] = _t118;
+    shared_quantities[139] = _t119;
+    shared_quantities[140] = _t120;
+    shared_quantities[141] = _t191;
+    shared_quantities[142] = _t121;
+    shared_quantities[143] = _t192;
+    shared_quantities[144] = _t122;
+    shared_quantities[145] = _t197;
+    shared_quantities[146] = _t193;
+    shared_quantities[147] = _t111;
+    shared_quantities[148] = _t127;
+    shared_quantities[149] = _t123;
+    shared_quantities[150] = _t125;
+    shared_quantities[151] = _t126;
+    shared_quantities[152] = _t128;
+    shared_quantities[153] = _t140;
+    shared_quantities[154] = _t133;
+    shared_quantities[155] = _t129;
+    shared_quantities[156] = _t137;
+    shared_quantities[157] = _t145;
+    shared_quantities[158] = _t141;
+    shared_quantities[159] = _t143;
+    shared_quantities[160] = _t144;
+    shared_quantities[161] = _t146;
+    shared_quantities[162] = _t158;
+    shared_quantities[163] = _t151;
+    shared_quantities[164] = _t147;
+    shared_quantities[165] = _t155;
+    shared_quantities[166] = _t163;
+    shared_quantities[167] = _t159;
+    shared_quantities[168] = _t161;
+    shared_quantities[169] = _t162;
+    shared_quantities[170] = _t164;
+    shared_quantities[171] = _t176;
+    shared_quantities[172] = _t169;
+    shared_quantities[173] = _t165;
+    shared_quantities[174] = _t173;
+    shared_quantities[175] = _t181;
+    shared_quantities[176] = _t177;
+    shared_quantities[177] = _t179;
+    shared_quantities[178] = _t180;
+    shared_quantities[179] = _t182;
+    shared_quantities[180] = _t227;
+    shared_quantities[181] = _t187;
+    shared_quantities[182] = _t183;
+    shared_quantities[183] = _t200;
+    shared_quantities[184] = _t201;
+    shared_quantities[185] = _t204;
+    shared_quantities[186] = _t205;
+    shared_quantities[187] = _t212;
+    shared_quantities[188] = _t213;
+    shared_quantities[189] = _t220;
+    shared_quantities[190] = _t221;
+    shared_quantities[191] = _t229;
+    shared_quantities[192] = _t230;
+    shared_quantities[193] = _t8;
+    shared_quantities[194] = _t57;
+    shared_quantities[195] = -_t9;
+    shared_quantities[196] = _t58;
+    shared_quantities[197] = _t17;
+    shared_quantities[198] = _t70;
+    shared_quantities[199] = -_t18;
+    shared_quantities[200] = _t71;
+    shared_quantities[201] = _t26;
+    shared_quantities[202] = _t83;
+    shared_quantities[203] = -_t27;
+    shared_quantities[204] = _t84;
+    shared_quantities[205] = _t35;
+    shared_quantities[206] = _t96;
+    shared_quantities[207] = -_t36;
+    shared_quantities[208] = _t97;
+    shared_quantities[209] = _t61;
+    shared_quantities[210] = _t62;
+    shared_quantities[211] = _t74;
+    shared_quantities[212] = _t75;
+    shared_quantities[213] = _t87;
+    shared_quantities[214] = _t88;
+    shared_quantities[215] = _t100;
+    shared_quantities[216] = _t101;
+    shared_quantities[217] = _t206;
+    shared_quantities[218] = _t207;
+    shared_quantities[219] = _t214;
+    shared_quantities[220] = _t215;
+    shared_quantities[221] = _t222;
+    shared_quantities[222] = _t223;
+    shared_quantities[223] = _t231;
+    shared_quantities[224] = _t232;
+    shared_quantities[225] = _t266;
+    shared_quantities[226] = _t267;
+    shared_quantities[227] = _t268;
+    shared_quantities[228] = _t269;
+    shared_quantities[229] = _t270;
+    shared_quantities[230] = _t271;
+    shared_quantities[231] = _t272;
+    shared_quantities[232] = _t273;
+    shared_quantities[233] = _t274;
+    shared_quantities[234] = _t275;
+    shared_quantities[235] = _t276;
+    shared_quantities[236] = _t277;
+    shared_quantities[237] = _t278;
+    shared_quantities[238] = _t279;
 }
 
 /* train5_forward_dynamics: documented in train5_model.h.
-   operations after CSE: 771 add, 983 mul, 13 div, 12 sin/cos, 0 sqrt */
+   operations after CSE: 357 add, 634 mul, 7 div, 12 sin/cos, 0 sqrt */
 train5_status_t train5_forward_dynamics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *qdot, const train5_real_t *tau, train5_real_t *qddot)
 {
@@ -1189,7 +625,7 @@ train5_status_t train5_forward_dynamics(const train5_params_t *p, const train5_r
 }
 
 /* train5_model_prepare: documented in train5_model.h.
-   operations after CSE: 3 add, 23 mul, 12 div, 0 sin/cos, 0 sqrt */
+   operations after CSE: 4 add, 57 mul, 6 div, 0 sin/cos, 0 sqrt */
 train5_status_t train5_model_prepare(const train5_params_t *p, train5_model_prepared_t *prepared)
 {
     const train5_real_t J_theta_cart = p->J_theta_cart;
@@ -1263,38 +699,60 @@ train5_status_t train5_model_prepare(const train5_params_t *p, train5_model_prep
             | train5_exp_carry(radius_right)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
-    const train5_real_t _t0 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t _t1 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t _t2 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t3 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t4 = TRAIN5_LIT(1.0)/radius_cart_right;
-    const train5_real_t _t5 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t _t6 = TRAIN5_LIT(1.0)/radius_cart2_right;
-    const train5_real_t _t7 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t _t8 = TRAIN5_LIT(1.0)/radius_cart3_right;
-    const train5_real_t _t9 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t _t10 = TRAIN5_LIT(1.0)/radius_cart4_right;
-    const train5_real_t _t11 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t _t12 = TRAIN5_LIT(1.0)/radius_cart5_right;
-    const train5_real_t _t13 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t14 = TRAIN5_LIT(0.3)*K_theta_cart_x_tractor;
-    const train5_real_t _t15 = TRAIN5_LIT(0.85)*K_theta_cart3_x_tractor;
-    const train5_real_t _t16 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor;
-    const train5_real_t _t17 = TRAIN5_LIT(0.85)*K_theta_cart4_x_tractor;
-    const train5_real_t _t18 = TRAIN5_LIT(0.85)*K_theta_cart5_x_tractor;
-    const train5_real_t _t19 = TRAIN5_LIT(0.3)*K_theta_cart_x_tractor_2;
-    const train5_real_t _t20 = TRAIN5_LIT(0.85)*K_theta_cart2_x_tractor_2;
-    const train5_real_t _t21 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t22 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t23 = J_theta_right*_t21;
-    const train5_real_t _t24 = J_theta_left*_t22;
-    const train5_real_t _t25 = _t21*_t23 + _t22*_t24;
-    const train5_real_t _t26 = TRAIN5_LIT(0.207)*_t21;
-    const train5_real_t _t27 = J_theta_right*_t26;
-    const train5_real_t _t28 = -TRAIN5_LIT(0.207)*_t22;
-    const train5_real_t _t29 = J_theta_left*_t28;
-    const train5_real_t _t30 = _t21*_t27 + _t22*_t29;
-    const train5_real_t _t31 = _t26*_t27 + _t28*_t29;
+    const train5_real_t _t0 = radius_left*radius_right;
+    const train5_real_t _t1 = TRAIN5_LIT(1.0)/_t0;
+    const train5_real_t _t2 = _t1*radius_left;
+    const train5_real_t _t3 = _t1*radius_right;
+    const train5_real_t _t4 = radius_cart_left*radius_cart_right;
+    const train5_real_t _t5 = -TRAIN5_LIT(0.6)*_t4;
+    const train5_real_t _t6 = TRAIN5_LIT(1.0)/_t5;
+    const train5_real_t _t7 = _t4*_t6;
+    const train5_real_t _t8 = radius_cart2_left*radius_cart2_right;
+    const train5_real_t _t9 = -TRAIN5_LIT(0.6)*_t8;
+    const train5_real_t _t10 = TRAIN5_LIT(1.0)/_t9;
+    const train5_real_t _t11 = _t10*_t8;
+    const train5_real_t _t12 = radius_cart3_left*radius_cart3_right;
+    const train5_real_t _t13 = -TRAIN5_LIT(0.6)*_t12;
+    const train5_real_t _t14 = TRAIN5_LIT(1.0)/_t13;
+    const train5_real_t _t15 = _t12*_t14;
+    const train5_real_t _t16 = radius_cart4_left*radius_cart4_right;
+    const train5_real_t _t17 = -TRAIN5_LIT(0.6)*_t16;
+    const train5_real_t _t18 = TRAIN5_LIT(1.0)/_t17;
+    const train5_real_t _t19 = _t16*_t18;
+    const train5_real_t _t20 = radius_cart5_left*radius_cart5_right;
+    const train5_real_t _t21 = -TRAIN5_LIT(0.6)*_t20;
+    const train5_real_t _t22 = TRAIN5_LIT(1.0)/_t21;
+    const train5_real_t _t23 = _t20*_t22;
+    const train5_real_t _t24 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t25 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t26 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t27 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t28 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t29 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t30 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t31 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t32 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t33 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t34 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t35 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t36 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t37 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t38 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t39 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t40 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t41 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t42 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t43 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t44 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t45 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t46 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t47 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t48 = _t0*_t1;
+    const train5_real_t _t49 = J_theta_left*_t3*_t3 + J_theta_right*_t2*_t2 + J_x_tractor;
+    const train5_real_t _t50 = TRAIN5_LIT(0.207)*_t2;
+    const train5_real_t _t51 = -TRAIN5_LIT(0.207)*_t3;
+    const train5_real_t _t52 = J_theta_left*_t3*_t51 + J_theta_right*_t2*_t50;
+    const train5_real_t _t53 = J_theta_left*_t51*_t51 + J_theta_right*_t50*_t50;
     if (!(radius_cart2_left > TRAIN5_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
@@ -1405,52 +863,65 @@ train5_status_t train5_model_prepare(const train5_params_t *p, train5_model_prep
     prepared->forward_dynamics[13] = J_theta_cart_left;
     prepared->forward_dynamics[14] = J_theta_cart_right;
     prepared->forward_dynamics[15] = J_theta_tractor;
-    prepared->forward_dynamics[16] = J_x_tractor;
-    prepared->forward_dynamics[17] = K_theta_cart_x_tractor;
-    prepared->forward_dynamics[18] = K_theta_cart_x_tractor_2;
-    prepared->forward_dynamics[19] = K_theta_cart2_x_tractor;
-    prepared->forward_dynamics[20] = K_theta_cart2_x_tractor_2;
-    prepared->forward_dynamics[21] = K_theta_cart3_x_tractor;
-    prepared->forward_dynamics[22] = K_theta_cart3_x_tractor_2;
-    prepared->forward_dynamics[23] = K_theta_cart4_x_tractor;
-    prepared->forward_dynamics[24] = K_theta_cart4_x_tractor_2;
-    prepared->forward_dynamics[25] = K_theta_cart5_x_tractor;
-    prepared->forward_dynamics[26] = K_theta_cart5_x_tractor_2;
-    prepared->forward_dynamics[27] = K_theta_tractor_x_tractor;
-    prepared->forward_dynamics[28] = K_theta_tractor_x_tractor_2;
-    prepared->forward_dynamics[29] = _t0;
-    prepared->forward_dynamics[30] = _t1;
-    prepared->forward_dynamics[31] = _t2;
-    prepared->forward_dynamics[32] = _t3;
-    prepared->forward_dynamics[33] = _t4;
-    prepared->forward_dynamics[34] = _t5;
-    prepared->forward_dynamics[35] = _t6;
-    prepared->forward_dynamics[36] = _t7;
-    prepared->forward_dynamics[37] = _t8;
-    prepared->forward_dynamics[38] = _t9;
-    prepared->forward_dynamics[39] = _t10;
-    prepared->forward_dynamics[40] = _t11;
-    prepared->forward_dynamics[41] = _t12;
-    prepared->forward_dynamics[42] = _t13;
-    prepared->forward_dynamics[43] = _t14;
-    prepared->forward_dynamics[44] = _t15;
-    prepared->forward_dynamics[45] = _t16;
-    prepared->forward_dynamics[46] = _t17;
-    prepared->forward_dynamics[47] = _t18;
-    prepared->forward_dynamics[48] = _t19;
-    prepared->forward_dynamics[49] = _t20;
-    prepared->forward_dynamics[50] = _t21;
-    prepared->forward_dynamics[51] = _t22;
-    prepared->forward_dynamics[52] = _t25;
-    prepared->forward_dynamics[53] = _t26;
-    prepared->forward_dynamics[54] = _t28;
-    prepared->forward_dynamics[55] = _t30;
-    prepared->forward_dynamics[56] = _t31;
+    prepared->forward_dynamics[16] = K_theta_cart_x_tractor;
+    prepared->forward_dynamics[17] = K_theta_cart_x_tractor_2;
+    prepared->forward_dynamics[18] = K_theta_cart2_x_tractor;
+    prepared->forward_dynamics[19] = K_theta_cart2_x_tractor_2;
+    prepared->forward_dynamics[20] = K_theta_cart3_x_tractor;
+    prepared->forward_dynamics[21] = K_theta_cart3_x_tractor_2;
+    prepared->forward_dynamics[22] = K_theta_cart4_x_tractor;
+    prepared->forward_dynamics[23] = K_theta_cart4_x_tractor_2;
+    prepared->forward_dynamics[24] = K_theta_cart5_x_tractor;
+    prepared->forward_dynamics[25] = K_theta_cart5_x_tractor_2;
+    prepared->forward_dynamics[26] = K_theta_tractor_x_tractor;
+    prepared->forward_dynamics[27] = K_theta_tractor_x_tractor_2;
+    prepared->forward_dynamics[28] = _t2;
+    prepared->forward_dynamics[29] = _t3;
+    prepared->forward_dynamics[30] = _t6;
+    prepared->forward_dynamics[31] = _t7;
+    prepared->forward_dynamics[32] = _t10;
+    prepared->forward_dynamics[33] = _t11;
+    prepared->forward_dynamics[34] = _t14;
+    prepared->forward_dynamics[35] = _t15;
+    prepared->forward_dynamics[36] = _t18;
+    prepared->forward_dynamics[37] = _t19;
+    prepared->forward_dynamics[38] = _t22;
+    prepared->forward_dynamics[39] = _t23;
+    prepared->forward_dynamics[40] = _t24;
+    prepared->forward_dynamics[41] = _t25;
+    prepared->forward_dynamics[42] = _t26;
+    prepared->forward_dynamics[43] = _t27;
+    prepared->forward_dynamics[44] = _t28;
+    prepared->forward_dynamics[45] = _t29;
+    prepared->forward_dynamics[46] = _t30;
+    prepared->forward_dynamics[47] = _t31;
+    prepared->forward_dynamics[48] = _t32;
+    prepared->forward_dynamics[49] = _t33;
+    prepared->forward_dynamics[50] = _t34;
+    prepared->forward_dynamics[51] = _t35;
+    prepared->forward_dynamics[52] = _t36;
+    prepared->forward_dynamics[53] = _t37;
+    prepared->forward_dynamics[54] = _t38;
+    prepared->forward_dynamics[55] = _t39;
+    prepared->forward_dynamics[56] = _t40;
+    prepared->forward_dynamics[57] = _t41;
+    prepared->forward_dynamics[58] = _t42;
+    prepared->forward_dynamics[59] = _t43;
+    prepared->forward_dynamics[60] = _t44;
+    prepared->forward_dynamics[61] = _t45;
+    prepared->forward_dynamics[62] = _t46;
+    prepared->forward_dynamics[63] = _t47;
+    prepared->forward_dynamics[64] = _t48;
+    prepared->forward_dynamics[65] = _t49;
+    prepared->forward_dynamics[66] = _t50;
+    prepared->forward_dynamics[67] = _t51;
+    prepared->forward_dynamics[68] = _t52;
+    prepared->forward_dynamics[69] = _t53;
     return TRAIN5_OK;
 }
 
 /* train5_forward_dynamics_prepared: documented in train5_model.h.
-   operations after CSE: 768 add, 960 mul, 1 div, 12 sin/cos, 0 sqrt */
+   operations after CSE: 353 add, 577 mul, 1 div, 12 sin/cos, 0 sqrt */
 train5_status_t train5_forward_dynamics_prepared(const train5_model_prepared_t *prepared,
     const train5_real_t *q, const train5_real_t *qdot, const train5_real_t *tau,
     train5_real_t *qddot)
@@ -1462,8 +933,8 @@ train5_status_t train5_forward_dynamics_prepared(const train5_model_prepared_t *
     if (((train5_exp_carry(theta_tractor)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
-    const train5_real_t _t500 = TRAIN5_SIN(theta_tractor);
-    const train5_real_t _t501 = TRAIN5_COS(theta_tractor);
+    const train5_real_t _t296 = TRAIN5_SIN(theta_tractor);
+    const train5_real_t _t297 = TRAIN5_COS(theta_tractor);
     const train5_real_t theta_cart = q[3];
     const train5_real_t theta_cart2 = q[4];
     const train5_real_t theta_cart3 = q[5];
@@ -1480,813 +951,425 @@ train5_status_t train5_forward_dynamics_prepared(const train5_model_prepared_t *
             | train5_exp_carry(tau_left)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
-    const train5_real_t _t32 = -theta_tractor;
-    const train5_real_t _t33 = _t32 + theta_cart;
-    const train5_real_t _t34 = TRAIN5_SIN(_t33);
-    const train5_real_t _t35 = TRAIN5_COS(_t33);
-    const train5_real_t _t36 = TRAIN5_LIT(0.3)*_t35;
-    const train5_real_t _t37 = _t32 + theta_cart2;
-    const train5_real_t _t38 = TRAIN5_SIN(_t37);
-    const train5_real_t _t39 = TRAIN5_COS(_t37);
-    const train5_real_t _t40 = TRAIN5_LIT(0.3)*_t39;
-    const train5_real_t _t41 = TRAIN5_LIT(0.85)*_t34;
-    const train5_real_t _t42 = TRAIN5_LIT(0.85)*_t35;
-    const train5_real_t _t43 = _t32 + theta_cart3;
-    const train5_real_t _t44 = TRAIN5_SIN(_t43);
-    const train5_real_t _t45 = TRAIN5_COS(_t43);
-    const train5_real_t _t46 = TRAIN5_LIT(0.3)*_t45;
-    const train5_real_t _t47 = TRAIN5_LIT(0.85)*_t38;
-    const train5_real_t _t48 = TRAIN5_LIT(0.85)*_t39;
-    const train5_real_t _t49 = _t32 + theta_cart4;
-    const train5_real_t _t50 = TRAIN5_SIN(_t49);
-    const train5_real_t _t51 = TRAIN5_COS(_t49);
-    const train5_real_t _t52 = TRAIN5_LIT(0.3)*_t51;
-    const train5_real_t _t53 = TRAIN5_LIT(0.85)*_t44;
-    const train5_real_t _t54 = TRAIN5_LIT(0.85)*_t45;
-    const train5_real_t _t55 = _t32 + theta_cart5;
+    const train5_real_t _t54 = -theta_tractor;
+    const train5_real_t _t55 = _t54 + theta_cart;
     const train5_real_t _t56 = TRAIN5_SIN(_t55);
     const train5_real_t _t57 = TRAIN5_COS(_t55);
-    const train5_real_t _t58 = TRAIN5_LIT(0.3)*_t57;
+    const train5_real_t _t58 = TRAIN5_LIT(0.85)*_t56;
     const train5_real_t _t59 = TRAIN5_LIT(0.85)*_t57;
-    const train5_real_t _t60 = TRAIN5_LIT(0.3)*_t34;
-    const train5_real_t _t61 = TRAIN5_LIT(0.3)*_t38;
-    const train5_real_t _t62 = TRAIN5_LIT(0.3)*_t44;
-    const train5_real_t _t63 = TRAIN5_LIT(0.3)*_t50;
-    const train5_real_t _t64 = TRAIN5_LIT(0.3)*_t56;
-    const train5_real_t _t65 = -_t38*_t41 - _t39*_t42;
-    const train5_real_t _t66 = -TRAIN5_LIT(1.6666666666666667)*_t34;
-    const train5_real_t _t67 = _t65*_t66;
-    const train5_real_t _t68 = -_t38 + _t67;
-    const train5_real_t _t69 = -TRAIN5_LIT(1.6666666666666667)*_t36;
-    const train5_real_t _t70 = _t65*_t69;
-    const train5_real_t _t71 = -_t40 + _t70;
-    const train5_real_t _t72 = -_t41*_t44 - _t42*_t45;
-    const train5_real_t _t73 = _t66*_t72;
-    const train5_real_t _t74 = -_t44*_t47 - _t45*_t48;
-    const train5_real_t _t75 = TRAIN5_LIT(1.6666666666666667)*_t68;
-    const train5_real_t _t76 = _t74*_t75;
-    const train5_real_t _t77 = -_t44 + _t73 + _t76;
-    const train5_real_t _t78 = _t69*_t72;
-    const train5_real_t _t79 = TRAIN5_LIT(1.6666666666666667)*_t71;
-    const train5_real_t _t80 = _t74*_t79;
-    const train5_real_t _t81 = -_t46 + _t78 + _t80;
-    const train5_real_t _t82 = -_t41*_t50 - _t42*_t51;
-    const train5_real_t _t83 = _t66*_t82;
-    const train5_real_t _t84 = -_t47*_t50 - _t48*_t51;
-    const train5_real_t _t85 = _t75*_t84;
-    const train5_real_t _t86 = -_t50*_t53 - _t51*_t54;
-    const train5_real_t _t87 = TRAIN5_LIT(1.6666666666666667)*_t77;
-    const train5_real_t _t88 = _t86*_t87;
-    const train5_real_t _t89 = -_t50 + _t83 + _t85 + _t88;
-    const train5_real_t _t90 = _t69*_t82;
-    const train5_real_t _t91 = _t79*_t84;
-    const train5_real_t _t92 = TRAIN5_LIT(1.6666666666666667)*_t81;
-    const train5_real_t _t93 = _t86*_t92;
-    const train5_real_t _t94 = -_t52 + _t90 + _t91 + _t93;
-    const train5_real_t _t95 = -_t41*_t56 - _t42*_t57;
-    const train5_real_t _t96 = _t66*_t95;
-    const train5_real_t _t97 = -_t47*_t56 - _t48*_t57;
-    const train5_real_t _t98 = _t75*_t97;
-    const train5_real_t _t99 = -_t53*_t56 - _t54*_t57;
-    const train5_real_t _t100 = _t87*_t99;
-    const train5_real_t _t101 = -TRAIN5_LIT(0.85)*_t50*_t56 - _t51*_t59;
-    const train5_real_t _t102 = TRAIN5_LIT(1.6666666666666667)*_t89;
-    const train5_real_t _t103 = _t101*_t102;
-    const train5_real_t _t104 = _t100 + _t103 - _t56 + _t96 + _t98;
-    const train5_real_t _t105 = _t69*_t95;
-    const train5_real_t _t106 = _t79*_t97;
-    const train5_real_t _t107 = _t92*_t99;
-    const train5_real_t _t108 = TRAIN5_LIT(1.6666666666666667)*_t94;
-    const train5_real_t _t109 = _t101*_t108;
-    const train5_real_t _t110 = _t105 + _t106 + _t107 + _t109 - _t58;
-    const train5_real_t _t111 = TRAIN5_LIT(0.2)*_t66;
-    const train5_real_t _t112 = TRAIN5_LIT(0.2)*_t69;
-    const train5_real_t _t113 = TRAIN5_LIT(0.2)*_t75;
-    const train5_real_t _t114 = TRAIN5_LIT(0.85)*_t35*_t38 - _t39*_t41;
-    const train5_real_t _t115 = _t114*_t66;
-    const train5_real_t _t116 = -_t115 + _t39;
-    const train5_real_t _t117 = TRAIN5_LIT(0.2)*_t79;
-    const train5_real_t _t118 = _t114*_t69;
-    const train5_real_t _t119 = _t118 + _t61;
-    const train5_real_t _t120 = TRAIN5_LIT(0.2)*_t87;
-    const train5_real_t _t121 = TRAIN5_LIT(0.85)*_t35*_t44 - _t41*_t45;
-    const train5_real_t _t122 = _t121*_t66;
-    const train5_real_t _t123 = TRAIN5_LIT(0.85)*_t39*_t44 - _t45*_t47;
-    const train5_real_t _t124 = _t123*_t75;
-    const train5_real_t _t125 = -_t124;
-    const train5_real_t _t126 = TRAIN5_LIT(0.2)*_t92;
-    const train5_real_t _t127 = _t121*_t69;
-    const train5_real_t _t128 = _t123*_t79;
-    const train5_real_t _t129 = _t127 + _t128 + _t62;
-    const train5_real_t _t130 = _t122 + _t124 - _t45;
-    const train5_real_t _t131 = TRAIN5_LIT(0.2)*_t102;
-    const train5_real_t _t132 = TRAIN5_LIT(0.85)*_t35*_t50 - _t41*_t51;
-    const train5_real_t _t133 = _t132*_t66;
-    const train5_real_t _t134 = TRAIN5_LIT(0.85)*_t39*_t50 - _t47*_t51;
-    const train5_real_t _t135 = _t134*_t75;
-    const train5_real_t _t136 = TRAIN5_LIT(0.85)*_t45*_t50 - _t51*_t53;
-    const train5_real_t _t137 = _t136*_t87;
-    const train5_real_t _t138 = _t133 + _t135 + _t137 - _t51;
-    const train5_real_t _t139 = TRAIN5_LIT(0.2)*_t108;
-    const train5_real_t _t140 = _t132*_t69;
-    const train5_real_t _t141 = _t134*_t79;
-    const train5_real_t _t142 = _t136*_t92;
-    const train5_real_t _t143 = _t140 + _t141 + _t142 + _t63;
-    const train5_real_t _t144 = TRAIN5_LIT(1.6666666666666667)*_t104;
-    const train5_real_t _t145 = TRAIN5_LIT(0.2)*_t144;
-    const train5_real_t _t146 = TRAIN5_LIT(0.85)*_t35*_t56 - _t41*_t57;
-    const train5_real_t _t147 = _t146*_t66;
-    const train5_real_t _t148 = TRAIN5_LIT(0.85)*_t39*_t56 - _t47*_t57;
-    const train5_real_t _t149 = _t148*_t75;
-    const train5_real_t _t150 = TRAIN5_LIT(0.85)*_t45*_t56 - _t53*_t57;
-    const train5_real_t _t151 = _t150*_t87;
-    const train5_real_t _t152 = -_t50*_t59 + TRAIN5_LIT(0.85)*_t51*_t56;
-    const train5_real_t _t153 = _t102*_t152;
-    const train5_real_t _t154 = _t147 + _t149 + _t151 + _t153 - _t57;
-    const train5_real_t _t155 = TRAIN5_LIT(1.6666666666666667)*_t110;
-    const train5_real_t _t156 = TRAIN5_LIT(0.2)*_t155;
-    const train5_real_t _t157 = _t146*_t69;
-    const train5_real_t _t158 = _t148*_t79;
-    const train5_real_t _t159 = _t150*_t92;
-    const train5_real_t _t160 = _t108*_t152;
-    const train5_real_t _t161 = _t157 + _t158 + _t159 + _t160 + _t64;
-    const train5_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[19];
-    const train5_real_t _t162 = K_theta_cart2_x_tractor*_t38;
-    const train5_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[20];
-    const train5_real_t _t163 = K_theta_cart2_x_tractor_2*_t39;
-    const train5_real_t K_theta_cart3_x_tractor = prepared->forward_dynamics[21];
-    const train5_real_t _t164 = K_theta_cart3_x_tractor*_t44;
-    const train5_real_t K_theta_cart3_x_tractor_2 = prepared->forward_dynamics[22];
-    const train5_real_t _t165 = K_theta_cart3_x_tractor_2*_t45;
-    const train5_real_t K_theta_cart4_x_tractor = prepared->forward_dynamics[23];
-    const train5_real_t _t166 = K_theta_cart4_x_tractor*_t50;
-    const train5_real_t K_theta_cart4_x_tractor_2 = prepared->forward_dynamics[24];
-    const train5_real_t _t167 = K_theta_cart4_x_tractor_2*_t51;
-    const train5_real_t K_theta_cart5_x_tractor = prepared->forward_dynamics[25];
-    const train5_real_t _t168 = K_theta_cart5_x_tractor*_t56;
-    const train5_real_t K_theta_cart5_x_tractor_2 = prepared->forward_dynamics[26];
-    const train5_real_t _t169 = K_theta_cart5_x_tractor_2*_t57;
-    const train5_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[17];
-    const train5_real_t _t170 = K_theta_cart_x_tractor*_t35;
-    const train5_real_t _t171 = K_theta_cart2_x_tractor*_t39;
-    const train5_real_t _t172 = K_theta_cart3_x_tractor*_t45;
-    const train5_real_t _t173 = K_theta_cart4_x_tractor*_t51;
-    const train5_real_t _t174 = K_theta_cart5_x_tractor*_t57;
-    const train5_real_t _t175 = K_theta_cart2_x_tractor_2*_t38;
-    const train5_real_t _t176 = K_theta_cart3_x_tractor_2*_t44;
-    const train5_real_t _t177 = K_theta_cart4_x_tractor_2*_t50;
-    const train5_real_t _t178 = K_theta_cart5_x_tractor_2*_t56;
-    const train5_real_t _t179 = TRAIN5_LIT(0.85)*_t50;
-    const train5_real_t _t180 = TRAIN5_LIT(0.85)*_t51;
-    const train5_real_t _t0 = prepared->forward_dynamics[29];
-    const train5_real_t _t1 = prepared->forward_dynamics[30];
-    const train5_real_t _t181 = _t0*thetadot_right + _t1*thetadot_left;
-    const train5_real_t _t182 = _t181*_t181;
-    const train5_real_t _t2 = prepared->forward_dynamics[31];
-    const train5_real_t _t3 = prepared->forward_dynamics[32];
-    const train5_real_t _t183 = _t2*thetadot_right + _t3*thetadot_left;
-    const train5_real_t _t184 = _t181*_t79 + _t183*_t75;
-    const train5_real_t _t185 = _t184*_t184;
-    const train5_real_t _t186 = _t181*_t92 + _t183*_t87;
-    const train5_real_t _t187 = _t186*_t186;
-    const train5_real_t _t188 = _t102*_t183 + _t108*_t181;
-    const train5_real_t _t189 = _t188*_t188;
-    const train5_real_t _t190 = _t173*_t189;
-    const train5_real_t _t191 = _t144*_t183 + _t155*_t181;
-    const train5_real_t _t192 = _t191*_t191;
-    const train5_real_t _t193 = _t174*_t192;
-    const train5_real_t _t194 = _t181*_t69 + _t183*_t66;
-    const train5_real_t _t195 = _t194*_t194;
-    const train5_real_t _t196 = _t175*_t185;
-    const train5_real_t _t197 = _t176*_t187;
-    const train5_real_t _t198 = _t177*_t189;
-    const train5_real_t _t199 = _t178*_t192;
-    const train5_real_t _t200 = K_theta_cart3_x_tractor*_t62;
-    const train5_real_t _t201 = K_theta_cart3_x_tractor_2*_t46;
-    const train5_real_t _t202 = K_theta_cart4_x_tractor*_t63;
-    const train5_real_t _t203 = K_theta_cart4_x_tractor_2*_t52;
-    const train5_real_t _t204 = K_theta_cart5_x_tractor*_t64;
-    const train5_real_t _t205 = K_theta_cart5_x_tractor_2*_t58;
-    const train5_real_t _t206 = _t185*_t42;
-    const train5_real_t _t207 = _t187*_t42;
-    const train5_real_t _t208 = _t189*_t42;
-    const train5_real_t _t209 = _t192*_t42;
-    const train5_real_t _t210 = _t195*_t41;
-    const train5_real_t _t211 = _t187*_t48;
-    const train5_real_t _t212 = _t189*_t48;
-    const train5_real_t _t213 = _t192*_t48;
-    const train5_real_t _t214 = _t195*_t42;
-    const train5_real_t _t215 = _t185*_t47;
-    const train5_real_t _t216 = _t185*_t48;
-    const train5_real_t _t217 = _t189*_t54;
-    const train5_real_t _t218 = _t192*_t54;
-    const train5_real_t _t219 = _t187*_t53;
-    const train5_real_t _t220 = _t187*_t54;
-    const train5_real_t _t221 = _t180*_t192;
-    const train5_real_t _t222 = _t179*_t189;
-    const train5_real_t _t223 = _t180*_t189;
-    const train5_real_t _t224 = TRAIN5_LIT(1.6666666666666667)*_t35;
-    const train5_real_t _t225 = _t224*_t65;
-    const train5_real_t _t226 = -TRAIN5_LIT(1.6666666666666667)*_t60;
-    const train5_real_t _t227 = _t226*_t65;
-    const train5_real_t _t228 = _t224*_t72;
-    const train5_real_t _t229 = _t226*_t72;
-    const train5_real_t _t230 = _t224*_t82;
-    const train5_real_t _t231 = _t226*_t82;
-    const train5_real_t _t232 = _t224*_t95;
-    const train5_real_t _t233 = _t226*_t95;
-    const train5_real_t _t234 = TRAIN5_LIT(0.2)*_t224;
-    const train5_real_t _t235 = TRAIN5_LIT(0.2)*_t226;
-    const train5_real_t _t236 = -_t225 - _t39;
-    const train5_real_t _t237 = -TRAIN5_LIT(1.6666666666666667)*_t236;
-    const train5_real_t _t238 = TRAIN5_LIT(0.2)*_t237;
-    const train5_real_t _t239 = _t114*_t224;
-    const train5_real_t _t240 = _t239 - _t38;
-    const train5_real_t _t241 = -_t227 + _t61;
-    const train5_real_t _t242 = -TRAIN5_LIT(1.6666666666666667)*_t241;
-    const train5_real_t _t243 = TRAIN5_LIT(0.2)*_t242;
-    const train5_real_t _t244 = _t114*_t226;
-    const train5_real_t _t245 = _t244 - _t40;
-    const train5_real_t _t246 = _t115 + _t225;
-    const train5_real_t _t247 = -TRAIN5_LIT(1.6666666666666667)*_t246;
-    const train5_real_t _t248 = TRAIN5_LIT(0.2)*_t247;
-    const train5_real_t _t249 = _t118 + _t227;
-    const train5_real_t _t250 = -TRAIN5_LIT(1.6666666666666667)*_t249;
-    const train5_real_t _t251 = TRAIN5_LIT(0.2)*_t250;
-    const train5_real_t _t252 = -TRAIN5_LIT(1.6666666666666667)*_t116;
-    const train5_real_t _t253 = TRAIN5_LIT(0.2)*_t252;
-    const train5_real_t _t254 = TRAIN5_LIT(1.6666666666666667)*_t119;
-    const train5_real_t _t255 = TRAIN5_LIT(0.2)*_t254;
-    const train5_real_t _t256 = -_t228 - _t237*_t74 - _t45;
-    const train5_real_t _t257 = -TRAIN5_LIT(1.6666666666666667)*_t256;
-    const train5_real_t _t258 = TRAIN5_LIT(0.2)*_t257;
-    const train5_real_t _t259 = _t121*_t224;
-    const train5_real_t _t260 = _t123*_t237 + _t259 - _t44;
-    const train5_real_t _t261 = -_t229 - _t242*_t74 + _t62;
-    const train5_real_t _t262 = -TRAIN5_LIT(1.6666666666666667)*_t261;
-    const train5_real_t _t263 = TRAIN5_LIT(0.2)*_t262;
-    const train5_real_t _t264 = _t121*_t226;
-    const train5_real_t _t265 = _t123*_t242 + _t264 - _t46;
-    const train5_real_t _t266 = _t122 + _t228 - _t247*_t74;
-    const train5_real_t _t267 = -TRAIN5_LIT(1.6666666666666667)*_t266;
-    const train5_real_t _t268 = TRAIN5_LIT(0.2)*_t267;
-    const train5_real_t _t269 = _t123*_t247 - _t259 + _t73;
-    const train5_real_t _t270 = _t127 + _t229 - _t250*_t74;
-    const train5_real_t _t271 = -TRAIN5_LIT(1.6666666666666667)*_t270;
-    const train5_real_t _t272 = TRAIN5_LIT(0.2)*_t271;
-    const train5_real_t _t273 = _t123*_t250 - _t264 + _t78;
-    const train5_real_t _t274 = -_t125 - _t252*_t74;
-    const train5_real_t _t275 = -TRAIN5_LIT(1.6666666666666667)*_t274;
-    const train5_real_t _t276 = TRAIN5_LIT(0.2)*_t275;
-    const train5_real_t _t277 = _t123*_t252 + _t76;
-    const train5_real_t _t278 = _t128 - _t254*_t74;
-    const train5_real_t _t279 = -TRAIN5_LIT(1.6666666666666667)*_t278;
-    const train5_real_t _t280 = TRAIN5_LIT(0.2)*_t279;
-    const train5_real_t _t281 = _t123*_t254 + _t80;
-    const train5_real_t _t282 = TRAIN5_LIT(1.6666666666666667)*_t130;
-    const train5_real_t _t283 = TRAIN5_LIT(0.2)*_t282;
-    const train5_real_t _t284 = TRAIN5_LIT(1.6666666666666667)*_t129;
-    const train5_real_t _t285 = TRAIN5_LIT(0.2)*_t284;
-    const train5_real_t _t286 = -_t230 - _t237*_t84 - _t257*_t86 - _t51;
-    const train5_real_t _t287 = -TRAIN5_LIT(1.6666666666666667)*_t286;
-    const train5_real_t _t288 = TRAIN5_LIT(0.2)*_t287;
-    const train5_real_t _t289 = _t132*_t224;
-    const train5_real_t _t290 = _t134*_t237 + _t136*_t257 + _t289 - _t50;
-    const train5_real_t _t291 = -_t231 - _t242*_t84 - _t262*_t86 + _t63;
-    const train5_real_t _t292 = -TRAIN5_LIT(1.6666666666666667)*_t291;
-    const train5_real_t _t293 = TRAIN5_LIT(0.2)*_t292;
-    const train5_real_t _t294 = _t132*_t226;
-    const train5_real_t _t295 = _t134*_t242 + _t136*_t262 + _t294 - _t52;
-    const train5_real_t _t296 = _t133 + _t230 - _t247*_t84 - _t267*_t86;
-    const train5_real_t _t297 = -TRAIN5_LIT(1.6666666666666667)*_t296;
-    const train5_real_t _t298 = TRAIN5_LIT(0.2)*_t297;
-    const train5_real_t _t299 = _t134*_t247 + _t136*_t267 - _t289 + _t83;
-    const train5_real_t _t300 = _t140 + _t231 - _t250*_t84 - _t271*_t86;
-    const train5_real_t _t301 = -TRAIN5_LIT(1.6666666666666667)*_t300;
-    const train5_real_t _t302 = TRAIN5_LIT(0.2)*_t301;
-    const train5_real_t _t303 = _t134*_t250 + _t136*_t271 - _t294 + _t90;
-    const train5_real_t _t304 = _t135 - _t252*_t84 - _t275*_t86;
-    const train5_real_t _t305 = -TRAIN5_LIT(1.6666666666666667)*_t304;
-    const train5_real_t _t306 = TRAIN5_LIT(0.2)*_t305;
-    const train5_real_t _t307 = _t134*_t252 + _t136*_t275 + _t85;
-    const train5_real_t _t308 = _t141 - _t254*_t84 - _t279*_t86;
-    const train5_real_t _t309 = -TRAIN5_LIT(1.6666666666666667)*_t308;
-    const train5_real_t _t310 = TRAIN5_LIT(0.2)*_t309;
-    const train5_real_t _t311 = _t134*_t254 + _t136*_t279 + _t91;
-    const train5_real_t _t312 = _t137 - _t282*_t86;
-    const train5_real_t _t313 = -TRAIN5_LIT(1.6666666666666667)*_t312;
-    const train5_real_t _t314 = TRAIN5_LIT(0.2)*_t313;
-    const train5_real_t _t315 = _t136*_t282 + _t88;
-    const train5_real_t _t316 = _t142 - _t284*_t86;
-    const train5_real_t _t317 = -TRAIN5_LIT(1.6666666666666667)*_t316;
-    const train5_real_t _t318 = TRAIN5_LIT(0.2)*_t317;
-    const train5_real_t _t319 = _t136*_t284 + _t93;
-    const train5_real_t _t320 = TRAIN5_LIT(1.6666666666666667)*_t138;
-    const train5_real_t _t321 = TRAIN5_LIT(0.2)*_t320;
-    const train5_real_t _t322 = TRAIN5_LIT(1.6666666666666667)*_t143;
-    const train5_real_t _t323 = TRAIN5_LIT(0.2)*_t322;
-    const train5_real_t _t324 = -_t101*_t287 - _t232 - _t237*_t97 - _t257*_t99 - _t57;
-    const train5_real_t _t325 = -TRAIN5_LIT(1.6666666666666667)*_t324;
-    const train5_real_t _t326 = TRAIN5_LIT(0.2)*_t325;
-    const train5_real_t _t327 = _t146*_t224;
-    const train5_real_t _t328 = _t148*_t237 + _t150*_t257 + _t152*_t287 + _t327 - _t56;
-    const train5_real_t _t329 = -_t101*_t292 - _t233 - _t242*_t97 - _t262*_t99 + _t64;
-    const train5_real_t _t330 = -TRAIN5_LIT(1.6666666666666667)*_t329;
-    const train5_real_t _t331 = TRAIN5_LIT(0.2)*_t330;
-    const train5_real_t _t332 = _t146*_t226;
-    const train5_real_t _t333 = _t148*_t242 + _t150*_t262 + _t152*_t292 + _t332 - _t58;
-    const train5_real_t _t334 = -_t101*_t297 + _t147 + _t232 - _t247*_t97 - _t267*_t99;
-    const train5_real_t _t335 = -TRAIN5_LIT(1.6666666666666667)*_t334;
-    const train5_real_t _t336 = TRAIN5_LIT(0.2)*_t335;
-    const train5_real_t _t337 = _t148*_t247 + _t150*_t267 + _t152*_t297 - _t327 + _t96;
-    const train5_real_t _t338 = -_t101*_t301 + _t157 + _t233 - _t250*_t97 - _t271*_t99;
-    const train5_real_t _t339 = -TRAIN5_LIT(1.6666666666666667)*_t338;
-    const train5_real_t _t340 = TRAIN5_LIT(0.2)*_t339;
-    const train5_real_t _t341 = _t105 + _t148*_t250 + _t150*_t271 + _t152*_t301 - _t332;
-    const train5_real_t _t342 = -_t101*_t305 + _t149 - _t252*_t97 - _t275*_t99;
-    const train5_real_t _t343 = -TRAIN5_LIT(1.6666666666666667)*_t342;
-    const train5_real_t _t344 = TRAIN5_LIT(0.2)*_t343;
-    const train5_real_t _t345 = _t148*_t252 + _t150*_t275 + _t152*_t305 + _t98;
-    const train5_real_t _t346 = -_t101*_t309 + _t158 - _t254*_t97 - _t279*_t99;
-    const train5_real_t _t347 = -TRAIN5_LIT(1.6666666666666667)*_t346;
-    const train5_real_t _t348 = TRAIN5_LIT(0.2)*_t347;
-    const train5_real_t _t349 = _t106 + _t148*_t254 + _t150*_t279 + _t152*_t309;
-    const train5_real_t _t350 = -_t101*_t313 + _t151 - _t282*_t99;
-    const train5_real_t _t351 = -TRAIN5_LIT(1.6666666666666667)*_t350;
-    const train5_real_t _t352 = TRAIN5_LIT(0.2)*_t351;
-    const train5_real_t _t353 = _t100 + _t150*_t282 + _t152*_t313;
-    const train5_real_t _t354 = -_t101*_t317 + _t159 - _t284*_t99;
-    const train5_real_t _t355 = -TRAIN5_LIT(1.6666666666666667)*_t354;
-    const train5_real_t _t356 = TRAIN5_LIT(0.2)*_t355;
-    const train5_real_t _t357 = _t107 + _t150*_t284 + _t152*_t317;
-    const train5_real_t _t358 = -_t101*_t320 + _t153;
-    const train5_real_t _t359 = -TRAIN5_LIT(1.6666666666666667)*_t358;
-    const train5_real_t _t360 = TRAIN5_LIT(0.2)*_t359;
-    const train5_real_t _t361 = _t103 + _t152*_t320;
-    const train5_real_t _t362 = -_t101*_t322 + _t160;
-    const train5_real_t _t363 = -TRAIN5_LIT(1.6666666666666667)*_t362;
-    const train5_real_t _t364 = TRAIN5_LIT(0.2)*_t363;
-    const train5_real_t _t365 = _t109 + _t152*_t322;
-    const train5_real_t _t366 = TRAIN5_LIT(1.6666666666666667)*_t154;
-    const train5_real_t _t367 = TRAIN5_LIT(0.2)*_t366;
-    const train5_real_t _t368 = TRAIN5_LIT(1.6666666666666667)*_t161;
-    const train5_real_t _t369 = TRAIN5_LIT(0.2)*_t368;
-    const train5_real_t _t370 = _t181*_t183;
-    const train5_real_t _t371 = _t183*_t194;
-    const train5_real_t _t372 = _t181*_t194;
-    const train5_real_t _t373 = _t111 + _t35;
-    const train5_real_t _t4 = prepared->forward_dynamics[33];
-    const train5_real_t _t374 = _t373*_t4;
-    const train5_real_t J_theta_cart_right = prepared->forward_dynamics[14];
-    const train5_real_t _t375 = J_theta_cart_right*_t374;
-    const train5_real_t _t376 = _t112 - _t60;
-    const train5_real_t _t377 = _t376*_t4;
-    const train5_real_t _t378 = J_theta_cart_right*_t377;
-    const train5_real_t _t379 = -_t111 + _t35;
-    const train5_real_t _t5 = prepared->forward_dynamics[34];
-    const train5_real_t _t380 = _t379*_t5;
-    const train5_real_t J_theta_cart_left = prepared->forward_dynamics[13];
-    const train5_real_t _t381 = J_theta_cart_left*_t380;
-    const train5_real_t _t382 = -_t112 - _t60;
-    const train5_real_t _t383 = _t382*_t5;
-    const train5_real_t _t384 = J_theta_cart_left*_t383;
-    const train5_real_t _t385 = _t113 + _t116;
-    const train5_real_t _t6 = prepared->forward_dynamics[35];
-    const train5_real_t _t386 = _t385*_t6;
-    const train5_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
-    const train5_real_t _t387 = J_theta_cart2_right*_t386;
-    const train5_real_t _t388 = _t117 - _t119;
-    const train5_real_t _t389 = _t388*_t6;
-    const train5_real_t _t390 = J_theta_cart2_right*_t389;
-    const train5_real_t _t391 = -_t113 - _t115 + _t39;
-    const train5_real_t _t7 = prepared->forward_dynamics[36];
-    const train5_real_t _t392 = _t391*_t7;
+    const train5_real_t _t60 = _t54 + theta_cart2;
+    const train5_real_t _t61 = TRAIN5_SIN(_t60);
+    const train5_real_t _t62 = TRAIN5_COS(_t60);
+    const train5_real_t _t63 = TRAIN5_LIT(0.85)*_t61;
+    const train5_real_t _t64 = TRAIN5_LIT(0.85)*_t62;
+    const train5_real_t _t65 = _t54 + theta_cart3;
+    const train5_real_t _t66 = TRAIN5_SIN(_t65);
+    const train5_real_t _t67 = TRAIN5_COS(_t65);
+    const train5_real_t _t68 = TRAIN5_LIT(0.85)*_t66;
+    const train5_real_t _t69 = TRAIN5_LIT(0.85)*_t67;
+    const train5_real_t _t70 = _t54 + theta_cart4;
+    const train5_real_t _t71 = TRAIN5_SIN(_t70);
+    const train5_real_t _t72 = TRAIN5_COS(_t70);
+    const train5_real_t _t73 = TRAIN5_LIT(0.85)*_t71;
+    const train5_real_t _t74 = TRAIN5_LIT(0.85)*_t72;
+    const train5_real_t _t75 = _t54 + theta_cart5;
+    const train5_real_t _t76 = TRAIN5_SIN(_t75);
+    const train5_real_t _t77 = TRAIN5_COS(_t75);
+    const train5_real_t _t24 = prepared->forward_dynamics[40];
+    const train5_real_t _t25 = prepared->forward_dynamics[41];
+    const train5_real_t _t78 = _t24*thetadot_right + _t25*thetadot_left;
+    const train5_real_t _t7 = prepared->forward_dynamics[31];
+    const train5_real_t _t79 = _t56*_t7;
+    const train5_real_t _t80 = -TRAIN5_LIT(0.3)*_t57;
+    const train5_real_t _t81 = -_t7*_t80;
+    const train5_real_t _t26 = prepared->forward_dynamics[42];
+    const train5_real_t _t27 = prepared->forward_dynamics[43];
+    const train5_real_t _t82 = _t26*thetadot_right + _t27*thetadot_left;
+    const train5_real_t _t83 = _t78*_t79 + _t81*_t82;
+    const train5_real_t _t84 = _t78*_t83;
+    const train5_real_t _t85 = -TRAIN5_LIT(0.3)*_t82;
+    const train5_real_t _t86 = _t83*_t85;
+    const train5_real_t _t87 = _t58*_t79 + TRAIN5_LIT(1.0);
+    const train5_real_t _t88 = -_t59*_t79;
+    const train5_real_t _t89 = _t61*_t87 - _t62*_t88;
+    const train5_real_t _t11 = prepared->forward_dynamics[33];
+    const train5_real_t _t90 = _t11*_t89;
+    const train5_real_t _t91 = _t58*_t81;
+    const train5_real_t _t92 = -_t59*_t81 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t93 = _t61*_t91 - _t62*_t92;
+    const train5_real_t _t94 = _t11*_t93;
+    const train5_real_t _t95 = _t78*_t90 + _t82*_t94;
+    const train5_real_t _t96 = _t58*_t83 + _t78;
+    const train5_real_t _t97 = _t95*_t96;
+    const train5_real_t _t98 = -_t59*_t83 + _t85;
+    const train5_real_t _t99 = _t95*_t98;
+    const train5_real_t _t100 = _t63*_t90 + _t87;
+    const train5_real_t _t101 = -_t64*_t90 + _t88;
+    const train5_real_t _t102 = _t100*_t66 - _t101*_t67;
+    const train5_real_t _t15 = prepared->forward_dynamics[35];
+    const train5_real_t _t103 = _t102*_t15;
+    const train5_real_t _t104 = _t63*_t94 + _t91;
+    const train5_real_t _t105 = -_t64*_t94 + _t92;
+    const train5_real_t _t106 = _t104*_t66 - _t105*_t67;
+    const train5_real_t _t107 = _t106*_t15;
+    const train5_real_t _t108 = _t103*_t78 + _t107*_t82;
+    const train5_real_t _t109 = _t63*_t95 + _t96;
+    const train5_real_t _t110 = _t108*_t109;
+    const train5_real_t _t111 = -_t64*_t95 + _t98;
+    const train5_real_t _t112 = _t108*_t111;
+    const train5_real_t _t113 = _t100 + _t103*_t68;
+    const train5_real_t _t114 = _t101 - _t103*_t69;
+    const train5_real_t _t115 = _t113*_t71 - _t114*_t72;
+    const train5_real_t _t19 = prepared->forward_dynamics[37];
+    const train5_real_t _t116 = _t115*_t19;
+    const train5_real_t _t117 = _t104 + _t107*_t68;
+    const train5_real_t _t118 = _t105 - _t107*_t69;
+    const train5_real_t _t119 = _t117*_t71 - _t118*_t72;
+    const train5_real_t _t120 = _t119*_t19;
+    const train5_real_t _t121 = _t116*_t78 + _t120*_t82;
+    const train5_real_t _t122 = _t108*_t68 + _t109;
+    const train5_real_t _t123 = _t121*_t122;
+    const train5_real_t _t124 = -_t108*_t69 + _t111;
+    const train5_real_t _t125 = _t121*_t124;
+    const train5_real_t _t126 = _t113 + _t116*_t73;
+    const train5_real_t _t127 = _t114 - _t116*_t74;
+    const train5_real_t _t128 = _t126*_t76 - _t127*_t77;
+    const train5_real_t _t23 = prepared->forward_dynamics[39];
+    const train5_real_t _t129 = _t128*_t23;
+    const train5_real_t _t130 = _t117 + _t120*_t73;
+    const train5_real_t _t131 = _t118 - _t120*_t74;
+    const train5_real_t _t132 = _t130*_t76 - _t131*_t77;
+    const train5_real_t _t133 = _t132*_t23;
+    const train5_real_t _t134 = _t129*_t78 + _t133*_t82;
+    const train5_real_t _t135 = _t121*_t73 + _t122;
+    const train5_real_t _t136 = _t134*_t135;
+    const train5_real_t _t137 = -_t121*_t74 + _t124;
+    const train5_real_t _t138 = _t134*_t137;
+    const train5_real_t K_theta_cart2_x_tractor = prepared->forward_dynamics[18];
+    const train5_real_t K_theta_cart2_x_tractor_2 = prepared->forward_dynamics[19];
+    const train5_real_t _t139 = K_theta_cart2_x_tractor*_t61 + K_theta_cart2_x_tractor_2*_t62;
+    const train5_real_t _t140 = _t139*_t87;
+    const train5_real_t _t141 = -K_theta_cart2_x_tractor*_t62 + K_theta_cart2_x_tractor_2*_t61;
+    const train5_real_t _t142 = _t141*_t88;
+    const train5_real_t K_theta_cart3_x_tractor = prepared->forward_dynamics[20];
+    const train5_real_t K_theta_cart3_x_tractor_2 = prepared->forward_dynamics[21];
+    const train5_real_t _t143 = K_theta_cart3_x_tractor*_t66 + K_theta_cart3_x_tractor_2*_t67;
+    const train5_real_t _t144 = _t100*_t143;
+    const train5_real_t _t145 = -K_theta_cart3_x_tractor*_t67 + K_theta_cart3_x_tractor_2*_t66;
+    const train5_real_t _t146 = _t101*_t145;
+    const train5_real_t K_theta_cart4_x_tractor = prepared->forward_dynamics[22];
+    const train5_real_t K_theta_cart4_x_tractor_2 = prepared->forward_dynamics[23];
+    const train5_real_t _t147 = K_theta_cart4_x_tractor*_t71 + K_theta_cart4_x_tractor_2*_t72;
+    const train5_real_t _t148 = _t113*_t147;
+    const train5_real_t _t149 = -K_theta_cart4_x_tractor*_t72 + K_theta_cart4_x_tractor_2*_t71;
+    const train5_real_t _t150 = _t114*_t149;
+    const train5_real_t K_theta_cart5_x_tractor = prepared->forward_dynamics[24];
+    const train5_real_t K_theta_cart5_x_tractor_2 = prepared->forward_dynamics[25];
+    const train5_real_t _t151 = K_theta_cart5_x_tractor*_t76 + K_theta_cart5_x_tractor_2*_t77;
+    const train5_real_t _t152 = _t126*_t151;
+    const train5_real_t _t153 = -K_theta_cart5_x_tractor*_t77 + K_theta_cart5_x_tractor_2*_t76;
+    const train5_real_t _t154 = _t127*_t153;
+    const train5_real_t _t155 = _t61*_t88 + _t62*_t87;
+    const train5_real_t _t10 = prepared->forward_dynamics[32];
+    const train5_real_t _t28 = prepared->forward_dynamics[44];
+    const train5_real_t _t29 = prepared->forward_dynamics[45];
+    const train5_real_t _t156 = _t10*(_t155*_t29 + _t28*_t89);
     const train5_real_t J_theta_cart2_left = prepared->forward_dynamics[2];
-    const train5_real_t _t393 = J_theta_cart2_left*_t392;
-    const train5_real_t _t394 = -_t117 - _t119;
-    const train5_real_t _t395 = _t394*_t7;
-    const train5_real_t _t396 = J_theta_cart2_left*_t395;
-    const train5_real_t _t397 = _t120 - _t122 + _t125 + _t45;
-    const train5_real_t _t8 = prepared->forward_dynamics[37];
-    const train5_real_t _t398 = _t397*_t8;
-    const train5_real_t J_theta_cart3_right = prepared->forward_dynamics[6];
-    const train5_real_t _t399 = J_theta_cart3_right*_t398;
-    const train5_real_t _t400 = _t126 - _t129;
-    const train5_real_t _t401 = _t400*_t8;
-    const train5_real_t _t402 = J_theta_cart3_right*_t401;
-    const train5_real_t _t403 = -_t120 - _t130;
-    const train5_real_t _t9 = prepared->forward_dynamics[38];
-    const train5_real_t _t404 = _t403*_t9;
+    const train5_real_t _t157 = J_theta_cart2_left*_t156;
+    const train5_real_t _t30 = prepared->forward_dynamics[46];
+    const train5_real_t _t31 = prepared->forward_dynamics[47];
+    const train5_real_t _t158 = _t10*(_t155*_t31 + _t30*_t89);
+    const train5_real_t J_theta_cart2_right = prepared->forward_dynamics[3];
+    const train5_real_t _t159 = J_theta_cart2_right*_t158;
+    const train5_real_t _t160 = _t100*_t67 + _t101*_t66;
+    const train5_real_t _t14 = prepared->forward_dynamics[34];
+    const train5_real_t _t32 = prepared->forward_dynamics[48];
+    const train5_real_t _t33 = prepared->forward_dynamics[49];
+    const train5_real_t _t161 = _t14*(_t102*_t32 + _t160*_t33);
     const train5_real_t J_theta_cart3_left = prepared->forward_dynamics[5];
-    const train5_real_t _t405 = J_theta_cart3_left*_t404;
-    const train5_real_t _t406 = -_t126 - _t129;
-    const train5_real_t _t407 = _t406*_t9;
-    const train5_real_t _t408 = J_theta_cart3_left*_t407;
-    const train5_real_t _t409 = _t131 - _t138;
-    const train5_real_t _t10 = prepared->forward_dynamics[39];
-    const train5_real_t _t410 = _t10*_t409;
-    const train5_real_t J_theta_cart4_right = prepared->forward_dynamics[9];
-    const train5_real_t _t411 = J_theta_cart4_right*_t410;
-    const train5_real_t _t412 = _t139 - _t143;
-    const train5_real_t _t413 = _t10*_t412;
-    const train5_real_t _t414 = J_theta_cart4_right*_t413;
-    const train5_real_t _t415 = -_t131 - _t138;
-    const train5_real_t _t11 = prepared->forward_dynamics[40];
-    const train5_real_t _t416 = _t11*_t415;
+    const train5_real_t _t162 = J_theta_cart3_left*_t161;
+    const train5_real_t _t34 = prepared->forward_dynamics[50];
+    const train5_real_t _t35 = prepared->forward_dynamics[51];
+    const train5_real_t _t163 = _t14*(_t102*_t34 + _t160*_t35);
+    const train5_real_t J_theta_cart3_right = prepared->forward_dynamics[6];
+    const train5_real_t _t164 = J_theta_cart3_right*_t163;
+    const train5_real_t _t165 = _t113*_t72 + _t114*_t71;
+    const train5_real_t _t18 = prepared->forward_dynamics[36];
+    const train5_real_t _t36 = prepared->forward_dynamics[52];
+    const train5_real_t _t37 = prepared->forward_dynamics[53];
+    const train5_real_t _t166 = _t18*(_t115*_t36 + _t165*_t37);
     const train5_real_t J_theta_cart4_left = prepared->forward_dynamics[8];
-    const train5_real_t _t417 = J_theta_cart4_left*_t416;
-    const train5_real_t _t418 = -_t139 - _t143;
-    const train5_real_t _t419 = _t11*_t418;
-    const train5_real_t _t420 = J_theta_cart4_left*_t419;
-    const train5_real_t _t421 = _t145 - _t154;
-    const train5_real_t _t12 = prepared->forward_dynamics[41];
-    const train5_real_t _t422 = _t12*_t421;
-    const train5_real_t J_theta_cart5_right = prepared->forward_dynamics[12];
-    const train5_real_t _t423 = J_theta_cart5_right*_t422;
-    const train5_real_t _t424 = _t156 - _t161;
-    const train5_real_t _t425 = _t12*_t424;
-    const train5_real_t _t426 = J_theta_cart5_right*_t425;
-    const train5_real_t _t427 = -_t145 - _t154;
-    const train5_real_t _t13 = prepared->forward_dynamics[42];
-    const train5_real_t _t428 = _t13*_t427;
+    const train5_real_t _t167 = J_theta_cart4_left*_t166;
+    const train5_real_t _t38 = prepared->forward_dynamics[54];
+    const train5_real_t _t39 = prepared->forward_dynamics[55];
+    const train5_real_t _t168 = _t18*(_t115*_t38 + _t165*_t39);
+    const train5_real_t J_theta_cart4_right = prepared->forward_dynamics[9];
+    const train5_real_t _t169 = J_theta_cart4_right*_t168;
+    const train5_real_t _t170 = _t126*_t77 + _t127*_t76;
+    const train5_real_t _t22 = prepared->forward_dynamics[38];
+    const train5_real_t _t40 = prepared->forward_dynamics[56];
+    const train5_real_t _t41 = prepared->forward_dynamics[57];
+    const train5_real_t _t171 = _t22*(_t128*_t40 + _t170*_t41);
     const train5_real_t J_theta_cart5_left = prepared->forward_dynamics[11];
-    const train5_real_t _t429 = J_theta_cart5_left*_t428;
-    const train5_real_t _t430 = -_t156 - _t161;
-    const train5_real_t _t431 = _t13*_t430;
-    const train5_real_t _t432 = J_theta_cart5_left*_t431;
-    const train5_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[18];
-    const train5_real_t _t433 = K_theta_cart_x_tractor_2*_t34 - _t170;
-    const train5_real_t _t434 = _t41*(_t162 + _t163) + _t42*(_t171 - _t175);
-    const train5_real_t _t435 = _t41*(_t164 + _t165) + _t42*(_t172 - _t176);
-    const train5_real_t _t436 = _t41*(_t166 + _t167) + _t42*(_t173 - _t177);
-    const train5_real_t _t437 = _t41*(_t168 + _t169) + _t42*(_t174 - _t178);
-    const train5_real_t _t14 = prepared->forward_dynamics[43];
-    const train5_real_t _t15 = prepared->forward_dynamics[44];
-    const train5_real_t _t16 = prepared->forward_dynamics[45];
-    const train5_real_t _t17 = prepared->forward_dynamics[46];
-    const train5_real_t _t18 = prepared->forward_dynamics[47];
-    const train5_real_t _t19 = prepared->forward_dynamics[48];
-    const train5_real_t _t438 = _t182*_t19*_t35 + _t206*(-_t162 - _t163) + _t207*(-_t164 - _t165)
-            + _t208*(-_t166 - _t167) + _t209*(-_t168 - _t169) + _t34*(_t14*_t182 + _t15*_t187*_t45
-            + _t16*_t185*_t39 + _t17*_t189*_t51 + _t18*_t192*_t57)
-            + _t41*(-_t196 - _t197 - _t198 - _t199);
-    const train5_real_t _t439 = _t370 - _t371;
-    const train5_real_t _t440 = _t182 - _t372;
-    const train5_real_t _t441 = _t224*_t439 + _t226*_t440;
-    const train5_real_t _t442 = _t183*_t184;
-    const train5_real_t _t443 = _t181*_t184;
-    const train5_real_t _t444 = _t182*_t242 + _t237*_t370 + _t247*_t371 + _t250*_t372 + _t252*_t442
-            + _t254*_t443;
-    const train5_real_t _t445 = _t183*_t186;
-    const train5_real_t _t446 = _t181*_t186;
-    const train5_real_t _t447 = _t182*_t262 + _t257*_t370 + _t267*_t371 + _t271*_t372 + _t275*_t442
-            + _t279*_t443 + _t282*_t445 + _t284*_t446;
-    const train5_real_t _t448 = _t183*_t188;
-    const train5_real_t _t449 = _t181*_t188;
-    const train5_real_t _t450 = _t182*_t292 + _t287*_t370 + _t297*_t371 + _t301*_t372 + _t305*_t442
-            + _t309*_t443 + _t313*_t445 + _t317*_t446 + _t320*_t448 + _t322*_t449;
-    const train5_real_t _t451 = _t183*_t191;
-    const train5_real_t _t452 = _t181*_t191;
-    const train5_real_t _t453 = _t182*_t330 + _t325*_t370 + _t335*_t371 + _t339*_t372 + _t343*_t442
-            + _t347*_t443 + _t351*_t445 + _t355*_t446 + _t359*_t448 + _t363*_t449 + _t366*_t451
-            + _t368*_t452;
+    const train5_real_t _t172 = J_theta_cart5_left*_t171;
+    const train5_real_t _t42 = prepared->forward_dynamics[58];
+    const train5_real_t _t43 = prepared->forward_dynamics[59];
+    const train5_real_t _t173 = _t22*(_t128*_t42 + _t170*_t43);
+    const train5_real_t J_theta_cart5_right = prepared->forward_dynamics[12];
+    const train5_real_t _t174 = J_theta_cart5_right*_t173;
+    const train5_real_t _t6 = prepared->forward_dynamics[30];
+    const train5_real_t _t44 = prepared->forward_dynamics[60];
+    const train5_real_t _t45 = prepared->forward_dynamics[61];
+    const train5_real_t _t175 = _t6*(_t44*_t56 + _t45*_t57);
+    const train5_real_t J_theta_cart_left = prepared->forward_dynamics[13];
+    const train5_real_t _t176 = J_theta_cart_left*_t175;
+    const train5_real_t _t46 = prepared->forward_dynamics[62];
+    const train5_real_t _t47 = prepared->forward_dynamics[63];
+    const train5_real_t _t177 = _t6*(_t46*_t56 + _t47*_t57);
+    const train5_real_t J_theta_cart_right = prepared->forward_dynamics[14];
+    const train5_real_t _t178 = J_theta_cart_right*_t177;
+    const train5_real_t K_theta_cart_x_tractor = prepared->forward_dynamics[16];
+    const train5_real_t K_theta_cart_x_tractor_2 = prepared->forward_dynamics[17];
+    const train5_real_t _t179 = -K_theta_cart_x_tractor*_t57 + K_theta_cart_x_tractor_2*_t56;
+    const train5_real_t _t180 = TRAIN5_LIT(0.3)*_t179;
     const train5_real_t J_theta_cart = prepared->forward_dynamics[0];
-    const train5_real_t _t454 = J_theta_cart*_t441 + _t370*_t433 + _t434*_t444 + _t435*_t447
-            + _t436*_t450 + _t437*_t453 + _t438;
-    const train5_real_t _t455 = K_theta_cart2_x_tractor_2*_t38 - _t171;
-    const train5_real_t _t456 = _t47*(_t164 + _t165) + _t48*(_t172 - _t176);
-    const train5_real_t _t457 = _t47*(_t166 + _t167) + _t48*(_t173 - _t177);
-    const train5_real_t _t458 = _t47*(_t168 + _t169) + _t48*(_t174 - _t178);
-    const train5_real_t _t20 = prepared->forward_dynamics[49];
-    const train5_real_t _t459 = K_theta_cart2_x_tractor_2*_t39*(TRAIN5_LIT(0.3)*_t182
-            + TRAIN5_LIT(0.85)*_t195*_t35) - _t171*_t210 + _t211*(-_t164 - _t165)
-            + _t212*(-_t166 - _t167) + _t213*(-_t168 - _t169)
-            + _t38*(K_theta_cart2_x_tractor*(TRAIN5_LIT(0.3)*_t182 + TRAIN5_LIT(0.85)*_t195*_t35)
-            + _t15*_t187*_t45 + _t17*_t189*_t51 + _t18*_t192*_t57 + _t195*_t20*_t34)
-            + _t47*(-_t197 - _t198 - _t199);
+    const train5_real_t _t181 = J_theta_cart*_t79;
     const train5_real_t J_theta_cart2 = prepared->forward_dynamics[1];
-    const train5_real_t _t460 = J_theta_cart2*_t444 + _t370*_t455 + _t434*_t441 + _t447*_t456
-            + _t450*_t457 + _t453*_t458 + _t459;
-    const train5_real_t _t461 = K_theta_cart3_x_tractor_2*_t44 - _t172;
-    const train5_real_t _t462 = _t53*(_t166 + _t167) + _t54*(_t173 - _t177);
-    const train5_real_t _t463 = _t53*(_t168 + _t169) + _t54*(_t174 - _t178);
-    const train5_real_t _t464 = _t164*(_t214 + _t216) + _t165*(_t214 + _t216)
-            + _t172*(-_t210 - _t215) + _t176*(_t210 + _t215) + _t182*(_t200 + _t201)
-            + _t217*(-_t166 - _t167) + _t218*(-_t168 - _t169) + _t53*(_t190 + _t193 - _t198
-            - _t199);
+    const train5_real_t _t182 = J_theta_cart2*_t90;
+    const train5_real_t _t183 = _t139*_t91;
+    const train5_real_t _t184 = _t141*_t92;
+    const train5_real_t _t185 = _t183 + _t184;
     const train5_real_t J_theta_cart3 = prepared->forward_dynamics[4];
-    const train5_real_t _t465 = J_theta_cart3*_t447 + _t370*_t461 + _t435*_t441 + _t444*_t456
-            + _t450*_t462 + _t453*_t463 + _t464;
-    const train5_real_t _t466 = K_theta_cart4_x_tractor_2*_t50 - _t173;
-    const train5_real_t _t467 = _t179*(_t168 + _t169) + _t180*(_t174 - _t178);
-    const train5_real_t _t468 = _t166*(_t214 + _t216 + _t220) + _t167*(_t214 + _t216 + _t220)
-            + _t173*(-_t210 - _t215 - _t219) + _t177*(_t210 + _t215 + _t219) + _t179*(_t193 - _t199)
-            + _t182*(_t202 + _t203) + _t221*(-_t168 - _t169);
+    const train5_real_t _t186 = J_theta_cart3*_t103;
+    const train5_real_t _t187 = _t104*_t143;
+    const train5_real_t _t188 = _t105*_t145;
+    const train5_real_t _t189 = _t187 + _t188;
     const train5_real_t J_theta_cart4 = prepared->forward_dynamics[7];
-    const train5_real_t _t469 = J_theta_cart4*_t450 + _t370*_t466 + _t436*_t441 + _t444*_t457
-            + _t447*_t462 + _t453*_t467 + _t468;
-    const train5_real_t _t470 = K_theta_cart5_x_tractor_2*_t56 - _t174;
-    const train5_real_t _t471 = _t168*(_t214 + _t216 + _t220 + _t223)
-            + _t169*(_t214 + _t216 + _t220 + _t223) + _t174*(-_t210 - _t215 - _t219 - _t222)
-            + _t178*(_t210 + _t215 + _t219 + _t222) + _t182*(_t204 + _t205);
+    const train5_real_t _t190 = J_theta_cart4*_t116;
+    const train5_real_t _t191 = _t117*_t147;
+    const train5_real_t _t192 = _t118*_t149;
+    const train5_real_t _t193 = _t191 + _t192;
     const train5_real_t J_theta_cart5 = prepared->forward_dynamics[10];
-    const train5_real_t _t472 = J_theta_cart5*_t453 + _t370*_t470 + _t437*_t441 + _t444*_t458
-            + _t447*_t463 + _t450*_t467 + _t471;
-    const train5_real_t _t473 = K_theta_cart_x_tractor*_t34 + K_theta_cart_x_tractor_2*_t35;
-    const train5_real_t _t474 = _t162 + _t163;
-    const train5_real_t _t475 = _t164 + _t165;
-    const train5_real_t _t476 = _t166 + _t167;
-    const train5_real_t _t477 = _t168 + _t169;
-    const train5_real_t J_x_tractor = prepared->forward_dynamics[16];
-    const train5_real_t _t478 = J_x_tractor + _t102*_t476 + _t144*_t477 + _t473*_t66 + _t474*_t75
-            + _t475*_t87;
-    const train5_real_t _t479 = J_theta_cart*_t66 + _t102*_t436 + _t144*_t437 + _t434*_t75
-            + _t435*_t87 + _t473;
-    const train5_real_t _t480 = J_theta_cart2*_t75 + _t102*_t457 + _t144*_t458 + _t434*_t66
-            + _t456*_t87 + _t474;
-    const train5_real_t _t481 = J_theta_cart3*_t87 + _t102*_t462 + _t144*_t463 + _t435*_t66
-            + _t456*_t75 + _t475;
-    const train5_real_t _t482 = J_theta_cart4*_t102 + _t144*_t467 + _t436*_t66 + _t457*_t75
-            + _t462*_t87 + _t476;
-    const train5_real_t _t483 = J_theta_cart5*_t144 + _t102*_t467 + _t437*_t66 + _t458*_t75
-            + _t463*_t87 + _t477;
-    const train5_real_t _t25 = prepared->forward_dynamics[52];
-    const train5_real_t _t484 = _t102*_t482 + _t144*_t483 + _t25 + _t374*_t375 + _t380*_t381
-            + _t386*_t387 + _t392*_t393 + _t398*_t399 + _t404*_t405 + _t410*_t411 + _t416*_t417
-            + _t422*_t423 + _t428*_t429 + _t478 + _t479*_t66 + _t480*_t75 + _t481*_t87;
-    const train5_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[28];
-    const train5_real_t _t485 = K_theta_tractor_x_tractor_2 + _t108*_t476 + _t155*_t477 + _t473*_t69
-            + _t474*_t79 + _t475*_t92;
-    const train5_real_t _t486 = K_theta_cart_x_tractor*_t36 - K_theta_cart_x_tractor_2*_t60;
-    const train5_real_t _t487 = J_theta_cart*_t69 + _t108*_t436 + _t155*_t437 + _t434*_t79
-            + _t435*_t92 + _t486;
-    const train5_real_t _t488 = K_theta_cart2_x_tractor*_t40 - K_theta_cart2_x_tractor_2*_t61;
-    const train5_real_t _t489 = J_theta_cart2*_t79 + _t108*_t457 + _t155*_t458 + _t434*_t69
-            + _t456*_t92 + _t488;
-    const train5_real_t _t490 = K_theta_cart3_x_tractor*_t46 - K_theta_cart3_x_tractor_2*_t62;
-    const train5_real_t _t491 = J_theta_cart3*_t92 + _t108*_t462 + _t155*_t463 + _t435*_t69
-            + _t456*_t79 + _t490;
-    const train5_real_t _t492 = K_theta_cart4_x_tractor*_t52 - K_theta_cart4_x_tractor_2*_t63;
-    const train5_real_t _t493 = J_theta_cart4*_t108 + _t155*_t467 + _t436*_t69 + _t457*_t79
-            + _t462*_t92 + _t492;
-    const train5_real_t _t494 = K_theta_cart5_x_tractor*_t58 - K_theta_cart5_x_tractor_2*_t64;
-    const train5_real_t _t495 = J_theta_cart5*_t155 + _t108*_t467 + _t437*_t69 + _t458*_t79
-            + _t463*_t92 + _t494;
-    const train5_real_t _t30 = prepared->forward_dynamics[55];
-    const train5_real_t _t496 = _t102*_t493 + _t144*_t495 + _t30 + _t374*_t378 + _t380*_t384
-            + _t386*_t390 + _t392*_t396 + _t398*_t402 + _t404*_t408 + _t410*_t414 + _t416*_t420
-            + _t422*_t426 + _t428*_t432 + _t485 + _t487*_t66 + _t489*_t75 + _t491*_t87;
+    const train5_real_t _t194 = J_theta_cart5*_t129;
+    const train5_real_t _t195 = _t130*_t151;
+    const train5_real_t _t196 = _t131*_t153;
+    const train5_real_t _t197 = _t195 + _t196;
+    const train5_real_t _t198 = _t82*_t82;
+    const train5_real_t _t199 = TRAIN5_LIT(0.3)*_t198;
+    const train5_real_t _t200 = -_t78*_t82;
+    const train5_real_t _t48 = prepared->forward_dynamics[64];
+    const train5_real_t _t201 = -_t200*_t48;
+    const train5_real_t _t202 = K_theta_cart_x_tractor*_t56 + K_theta_cart_x_tractor_2*_t57;
+    const train5_real_t _t203 = _t179*_t201 + _t199*_t202;
+    const train5_real_t _t204 = _t83*_t83;
+    const train5_real_t _t205 = -_t56*_t86 - _t57*_t84;
+    const train5_real_t _t206 = _t199*_t56 - _t201*_t57 - _t205;
+    const train5_real_t _t207 = _t206*_t7;
+    const train5_real_t _t208 = _t199 + _t204*_t59 + _t207*_t58;
+    const train5_real_t _t209 = _t201 + _t204*_t58 - _t207*_t59;
+    const train5_real_t _t210 = _t139*_t208 + _t141*_t209;
+    const train5_real_t _t211 = _t95*_t95;
+    const train5_real_t _t212 = -_t61*_t99 - _t62*_t97;
+    const train5_real_t _t213 = _t204*_t59;
+    const train5_real_t _t214 = _t199 + _t207*_t58 + _t213;
+    const train5_real_t _t215 = _t204*_t58;
+    const train5_real_t _t216 = _t201 - _t207*_t59 + _t215;
+    const train5_real_t _t217 = -_t212 + _t214*_t61 - _t216*_t62;
+    const train5_real_t _t218 = _t11*_t217;
+    const train5_real_t _t219 = _t139*_t211 + _t141*_t218;
+    const train5_real_t _t220 = _t139*_t218 - _t141*_t211;
+    const train5_real_t _t221 = _t208 + _t211*_t64 + _t218*_t63;
+    const train5_real_t _t222 = _t209 + _t211*_t63 - _t218*_t64;
+    const train5_real_t _t223 = _t143*_t221 + _t145*_t222;
+    const train5_real_t _t224 = _t108*_t108;
+    const train5_real_t _t225 = -_t110*_t67 - _t112*_t66;
+    const train5_real_t _t226 = _t211*_t64;
+    const train5_real_t _t227 = _t214 + _t218*_t63 + _t226;
+    const train5_real_t _t228 = _t211*_t63;
+    const train5_real_t _t229 = _t216 - _t218*_t64 + _t228;
+    const train5_real_t _t230 = -_t225 + _t227*_t66 - _t229*_t67;
+    const train5_real_t _t231 = _t15*_t230;
+    const train5_real_t _t232 = _t143*_t224 + _t145*_t231;
+    const train5_real_t _t233 = _t143*_t231 - _t145*_t224;
+    const train5_real_t _t234 = _t221 + _t224*_t69 + _t231*_t68;
+    const train5_real_t _t235 = _t222 + _t224*_t68 - _t231*_t69;
+    const train5_real_t _t236 = _t147*_t234 + _t149*_t235;
+    const train5_real_t _t237 = _t121*_t121;
+    const train5_real_t _t238 = -_t123*_t72 - _t125*_t71;
+    const train5_real_t _t239 = _t224*_t69;
+    const train5_real_t _t240 = _t227 + _t231*_t68 + _t239;
+    const train5_real_t _t241 = _t224*_t68;
+    const train5_real_t _t242 = _t229 - _t231*_t69 + _t241;
+    const train5_real_t _t243 = -_t238 + _t240*_t71 - _t242*_t72;
+    const train5_real_t _t244 = _t19*_t243;
+    const train5_real_t _t245 = _t147*_t237 + _t149*_t244;
+    const train5_real_t _t246 = _t147*_t244 - _t149*_t237;
+    const train5_real_t _t247 = _t234 + _t237*_t74 + _t244*_t73;
+    const train5_real_t _t248 = _t235 + _t237*_t73 - _t244*_t74;
+    const train5_real_t _t249 = _t151*_t247 + _t153*_t248;
+    const train5_real_t _t250 = _t134*_t134;
+    const train5_real_t _t251 = -_t136*_t77 - _t138*_t76;
+    const train5_real_t _t252 = _t237*_t74;
+    const train5_real_t _t253 = _t240 + _t244*_t73 + _t252;
+    const train5_real_t _t254 = _t237*_t73;
+    const train5_real_t _t255 = _t242 - _t244*_t74 + _t254;
+    const train5_real_t _t256 = -_t251 + _t253*_t76 - _t255*_t77;
+    const train5_real_t _t257 = _t23*_t256;
+    const train5_real_t _t258 = _t151*_t250 + _t153*_t257;
+    const train5_real_t _t259 = _t151*_t257 - _t153*_t250;
+    const train5_real_t _t49 = prepared->forward_dynamics[65];
+    const train5_real_t _t260 = J_theta_cart2_left*_t156*_t156 + J_theta_cart2_right*_t158*_t158
+            + J_theta_cart3_left*_t161*_t161 + J_theta_cart3_right*_t163*_t163
+            + J_theta_cart4_left*_t166*_t166 + J_theta_cart4_right*_t168*_t168
+            + J_theta_cart5_left*_t171*_t171 + J_theta_cart5_right*_t173*_t173
+            + J_theta_cart_left*_t175*_t175 + J_theta_cart_right*_t177*_t177 + _t49;
+    const train5_real_t _t261 = J_theta_cart*_t79*_t79 + TRAIN5_LIT(2.0)*_t202*_t79 + _t260;
+    const train5_real_t _t262 = J_theta_cart2*_t90*_t90 + _t261
+            + _t90*(TRAIN5_LIT(2.0)*_t140 + TRAIN5_LIT(2.0)*_t142);
+    const train5_real_t _t263 = J_theta_cart3*_t103*_t103 + _t103*(TRAIN5_LIT(2.0)*_t144
+            + TRAIN5_LIT(2.0)*_t146) + _t262;
+    const train5_real_t _t264 = J_theta_cart4*_t116*_t116 + _t116*(TRAIN5_LIT(2.0)*_t148
+            + TRAIN5_LIT(2.0)*_t150) + _t263;
+    const train5_real_t _t265 = J_theta_cart5*_t129*_t129 + _t129*(TRAIN5_LIT(2.0)*_t152
+            + TRAIN5_LIT(2.0)*_t154) + _t264;
+    const train5_real_t _t266 = TRAIN5_LIT(0.3)*_t56;
+    const train5_real_t _t267 = _t6*(-_t266*_t47 - _t46*_t80);
+    const train5_real_t _t268 = _t6*(-_t266*_t45 - _t44*_t80);
+    const train5_real_t _t269 = _t61*_t92 + _t62*_t91;
+    const train5_real_t _t270 = _t10*(_t269*_t31 + _t30*_t93);
+    const train5_real_t _t271 = _t10*(_t269*_t29 + _t28*_t93);
+    const train5_real_t _t272 = _t104*_t67 + _t105*_t66;
+    const train5_real_t _t273 = _t14*(_t106*_t34 + _t272*_t35);
+    const train5_real_t _t274 = _t14*(_t106*_t32 + _t272*_t33);
+    const train5_real_t _t275 = _t117*_t72 + _t118*_t71;
+    const train5_real_t _t276 = _t18*(_t119*_t38 + _t275*_t39);
+    const train5_real_t _t277 = _t18*(_t119*_t36 + _t275*_t37);
+    const train5_real_t _t278 = _t130*_t77 + _t131*_t76;
+    const train5_real_t _t279 = _t22*(_t132*_t42 + _t278*_t43);
+    const train5_real_t _t280 = _t22*(_t132*_t40 + _t278*_t41);
+    const train5_real_t _t52 = prepared->forward_dynamics[68];
+    const train5_real_t _t281 = _t157*_t271 + _t159*_t270 + _t162*_t274 + _t164*_t273 + _t167*_t277
+            + _t169*_t276 + _t172*_t280 + _t174*_t279 + _t176*_t268 + _t178*_t267 + _t52;
+    const train5_real_t K_theta_tractor_x_tractor_2 = prepared->forward_dynamics[27];
+    const train5_real_t _t282 = K_theta_tractor_x_tractor_2 + _t281;
+    const train5_real_t _t283 = -_t180*_t79 + _t282 + _t81*(_t181 + _t202);
+    const train5_real_t _t284 = _t185*_t90 + _t283 + _t94*(_t140 + _t142 + _t182);
+    const train5_real_t _t285 = _t103*_t189 + _t107*(_t144 + _t146 + _t186) + _t284;
+    const train5_real_t _t286 = _t116*_t193 + _t120*(_t148 + _t150 + _t190) + _t285;
+    const train5_real_t _t287 = _t129*_t197 + _t133*(_t152 + _t154 + _t194) + _t286;
+    const train5_real_t _t53 = prepared->forward_dynamics[69];
+    const train5_real_t _t288 = J_theta_cart2_left*_t271*_t271 + J_theta_cart2_right*_t270*_t270
+            + J_theta_cart3_left*_t274*_t274 + J_theta_cart3_right*_t273*_t273
+            + J_theta_cart4_left*_t277*_t277 + J_theta_cart4_right*_t276*_t276
+            + J_theta_cart5_left*_t280*_t280 + J_theta_cart5_right*_t279*_t279
+            + J_theta_cart_left*_t268*_t268 + J_theta_cart_right*_t267*_t267 + _t53;
     const train5_real_t J_theta_tractor = prepared->forward_dynamics[15];
-    const train5_real_t _t497 = J_theta_tractor + _t108*_t492 + _t155*_t494 + _t486*_t69
-            + _t488*_t79 + _t490*_t92;
-    const train5_real_t _t31 = prepared->forward_dynamics[56];
-    const train5_real_t _t498 = _t108*_t493 + _t155*_t495 + _t31 + _t377*_t378 + _t383*_t384
-            + _t389*_t390 + _t395*_t396 + _t401*_t402 + _t407*_t408 + _t413*_t414 + _t419*_t420
-            + _t425*_t426 + _t431*_t432 + _t487*_t69 + _t489*_t79 + _t491*_t92 + _t497;
-    const train5_real_t _t499 = _t484*_t498 - _t496*_t496;
-    const train5_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[27];
-    const train5_real_t _t502 = K_theta_tractor_x_tractor*_t182 + _t171*_t185 + _t172*_t187 + _t190
-            + _t193 + _t195*(-K_theta_cart_x_tractor_2*_t34 + _t170) - _t196 - _t197 - _t198
-            - _t199;
-    const train5_real_t _t503 = _t185*(-K_theta_cart2_x_tractor*_t61
-            - K_theta_cart2_x_tractor_2*_t40) + _t187*(-_t200 - _t201) + _t189*(-_t202 - _t203)
-            + _t192*(-_t204 - _t205) + _t195*(-K_theta_cart_x_tractor*_t60
-            - K_theta_cart_x_tractor_2*_t36);
-    const train5_real_t _t504 = _t234 + _t34;
-    const train5_real_t _t505 = _t4*_t504;
-    const train5_real_t _t506 = _t235 + _t36;
-    const train5_real_t _t507 = _t4*_t506;
-    const train5_real_t _t508 = -_t234 + _t34;
-    const train5_real_t _t509 = _t5*_t508;
-    const train5_real_t _t510 = -_t235 + _t36;
-    const train5_real_t _t511 = _t5*_t510;
-    const train5_real_t _t512 = _t238 - _t240;
-    const train5_real_t _t513 = _t512*_t6;
-    const train5_real_t _t514 = _t243 - _t245;
-    const train5_real_t _t515 = _t514*_t6;
-    const train5_real_t _t516 = _t239 + _t248 - _t67;
-    const train5_real_t _t517 = _t516*_t6;
-    const train5_real_t _t518 = _t244 + _t251 - _t70;
-    const train5_real_t _t519 = _t518*_t6;
-    const train5_real_t _t520 = _t253 + _t68;
-    const train5_real_t _t521 = _t520*_t6;
-    const train5_real_t _t522 = _t255 + _t71;
-    const train5_real_t _t523 = _t522*_t6;
-    const train5_real_t _t524 = -_t238 - _t240;
-    const train5_real_t _t525 = _t524*_t7;
-    const train5_real_t _t526 = -_t243 - _t245;
-    const train5_real_t _t527 = _t526*_t7;
-    const train5_real_t _t528 = _t239 - _t248 - _t67;
-    const train5_real_t _t529 = _t528*_t7;
-    const train5_real_t _t530 = _t244 - _t251 - _t70;
-    const train5_real_t _t531 = _t530*_t7;
-    const train5_real_t _t532 = -_t253 + _t68;
-    const train5_real_t _t533 = _t532*_t7;
-    const train5_real_t _t534 = -_t255 + _t71;
-    const train5_real_t _t535 = _t534*_t7;
-    const train5_real_t _t536 = _t258 - _t260;
-    const train5_real_t _t537 = _t536*_t8;
-    const train5_real_t _t538 = _t263 - _t265;
-    const train5_real_t _t539 = _t538*_t8;
-    const train5_real_t _t540 = _t268 - _t269;
-    const train5_real_t _t541 = _t540*_t8;
-    const train5_real_t _t542 = _t272 - _t273;
-    const train5_real_t _t543 = _t542*_t8;
-    const train5_real_t _t544 = _t276 - _t277;
-    const train5_real_t _t545 = _t544*_t8;
-    const train5_real_t _t546 = _t280 - _t281;
-    const train5_real_t _t547 = _t546*_t8;
-    const train5_real_t _t548 = _t283 + _t77;
-    const train5_real_t _t549 = _t548*_t8;
-    const train5_real_t _t550 = _t285 + _t81;
-    const train5_real_t _t551 = _t550*_t8;
-    const train5_real_t _t552 = -_t258 - _t260;
-    const train5_real_t _t553 = _t552*_t9;
-    const train5_real_t _t554 = -_t263 - _t265;
-    const train5_real_t _t555 = _t554*_t9;
-    const train5_real_t _t556 = -_t268 - _t269;
-    const train5_real_t _t557 = _t556*_t9;
-    const train5_real_t _t558 = -_t272 - _t273;
-    const train5_real_t _t559 = _t558*_t9;
-    const train5_real_t _t560 = -_t276 - _t277;
-    const train5_real_t _t561 = _t560*_t9;
-    const train5_real_t _t562 = -_t280 - _t281;
-    const train5_real_t _t563 = _t562*_t9;
-    const train5_real_t _t564 = -_t283 + _t77;
-    const train5_real_t _t565 = _t564*_t9;
-    const train5_real_t _t566 = -_t285 + _t81;
-    const train5_real_t _t567 = _t566*_t9;
-    const train5_real_t _t568 = _t288 - _t290;
-    const train5_real_t _t569 = _t10*_t568;
-    const train5_real_t _t570 = _t293 - _t295;
-    const train5_real_t _t571 = _t10*_t570;
-    const train5_real_t _t572 = _t298 - _t299;
-    const train5_real_t _t573 = _t10*_t572;
-    const train5_real_t _t574 = _t302 - _t303;
-    const train5_real_t _t575 = _t10*_t574;
-    const train5_real_t _t576 = _t306 - _t307;
-    const train5_real_t _t577 = _t10*_t576;
-    const train5_real_t _t578 = _t310 - _t311;
-    const train5_real_t _t579 = _t10*_t578;
-    const train5_real_t _t580 = _t314 - _t315;
-    const train5_real_t _t581 = _t10*_t580;
-    const train5_real_t _t582 = _t318 - _t319;
-    const train5_real_t _t583 = _t10*_t582;
-    const train5_real_t _t584 = _t321 + _t89;
-    const train5_real_t _t585 = _t10*_t584;
-    const train5_real_t _t586 = _t323 + _t94;
-    const train5_real_t _t587 = _t10*_t586;
-    const train5_real_t _t588 = -_t288 - _t290;
-    const train5_real_t _t589 = _t11*_t588;
-    const train5_real_t _t590 = -_t293 - _t295;
-    const train5_real_t _t591 = _t11*_t590;
-    const train5_real_t _t592 = -_t298 - _t299;
-    const train5_real_t _t593 = _t11*_t592;
-    const train5_real_t _t594 = -_t302 - _t303;
-    const train5_real_t _t595 = _t11*_t594;
-    const train5_real_t _t596 = -_t306 - _t307;
-    const train5_real_t _t597 = _t11*_t596;
-    const train5_real_t _t598 = -_t310 - _t311;
-    const train5_real_t _t599 = _t11*_t598;
-    const train5_real_t _t600 = -_t314 - _t315;
-    const train5_real_t _t601 = _t11*_t600;
-    const train5_real_t _t602 = -_t318 - _t319;
-    const train5_real_t _t603 = _t11*_t602;
-    const train5_real_t _t604 = -_t321 + _t89;
-    const train5_real_t _t605 = _t11*_t604;
-    const train5_real_t _t606 = -_t323 + _t94;
-    const train5_real_t _t607 = _t11*_t606;
-    const train5_real_t _t608 = _t326 - _t328;
-    const train5_real_t _t609 = _t12*_t608;
-    const train5_real_t _t610 = _t331 - _t333;
-    const train5_real_t _t611 = _t12*_t610;
-    const train5_real_t _t612 = _t336 - _t337;
-    const train5_real_t _t613 = _t12*_t612;
-    const train5_real_t _t614 = _t340 - _t341;
-    const train5_real_t _t615 = _t12*_t614;
-    const train5_real_t _t616 = _t344 - _t345;
-    const train5_real_t _t617 = _t12*_t616;
-    const train5_real_t _t618 = _t348 - _t349;
-    const train5_real_t _t619 = _t12*_t618;
-    const train5_real_t _t620 = _t352 - _t353;
-    const train5_real_t _t621 = _t12*_t620;
-    const train5_real_t _t622 = _t356 - _t357;
-    const train5_real_t _t623 = _t12*_t622;
-    const train5_real_t _t624 = _t360 - _t361;
-    const train5_real_t _t625 = _t12*_t624;
-    const train5_real_t _t626 = _t364 - _t365;
-    const train5_real_t _t627 = _t12*_t626;
-    const train5_real_t _t628 = _t104 + _t367;
-    const train5_real_t _t629 = _t12*_t628;
-    const train5_real_t _t630 = _t110 + _t369;
-    const train5_real_t _t631 = _t12*_t630;
-    const train5_real_t _t632 = -_t326 - _t328;
-    const train5_real_t _t633 = _t13*_t632;
-    const train5_real_t _t634 = -_t331 - _t333;
-    const train5_real_t _t635 = _t13*_t634;
-    const train5_real_t _t636 = -_t336 - _t337;
-    const train5_real_t _t637 = _t13*_t636;
-    const train5_real_t _t638 = -_t340 - _t341;
-    const train5_real_t _t639 = _t13*_t638;
-    const train5_real_t _t640 = -_t344 - _t345;
-    const train5_real_t _t641 = _t13*_t640;
-    const train5_real_t _t642 = -_t348 - _t349;
-    const train5_real_t _t643 = _t13*_t642;
-    const train5_real_t _t644 = -_t352 - _t353;
-    const train5_real_t _t645 = _t13*_t644;
-    const train5_real_t _t646 = -_t356 - _t357;
-    const train5_real_t _t647 = _t13*_t646;
-    const train5_real_t _t648 = -_t360 - _t361;
-    const train5_real_t _t649 = _t13*_t648;
-    const train5_real_t _t650 = -_t364 - _t365;
-    const train5_real_t _t651 = _t13*_t650;
-    const train5_real_t _t652 = _t104 - _t367;
-    const train5_real_t _t653 = _t13*_t652;
-    const train5_real_t _t654 = _t110 - _t369;
-    const train5_real_t _t655 = _t13*_t654;
-    const train5_real_t _t656 = _t439*_t505 + _t440*_t507;
-    const train5_real_t _t657 = _t439*_t509 + _t440*_t511;
-    const train5_real_t _t658 = _t182*_t515 + _t370*_t513 + _t371*_t517 + _t372*_t519 + _t442*_t521
-            + _t443*_t523;
-    const train5_real_t _t659 = _t182*_t527 + _t370*_t525 + _t371*_t529 + _t372*_t531 + _t442*_t533
-            + _t443*_t535;
-    const train5_real_t _t660 = _t182*_t539 + _t370*_t537 + _t371*_t541 + _t372*_t543 + _t442*_t545
-            + _t443*_t547 + _t445*_t549 + _t446*_t551;
-    const train5_real_t _t661 = _t182*_t555 + _t370*_t553 + _t371*_t557 + _t372*_t559 + _t442*_t561
-            + _t443*_t563 + _t445*_t565 + _t446*_t567;
-    const train5_real_t _t662 = _t182*_t571 + _t370*_t569 + _t371*_t573 + _t372*_t575 + _t442*_t577
-            + _t443*_t579 + _t445*_t581 + _t446*_t583 + _t448*_t585 + _t449*_t587;
-    const train5_real_t _t663 = _t182*_t591 + _t370*_t589 + _t371*_t593 + _t372*_t595 + _t442*_t597
-            + _t443*_t599 + _t445*_t601 + _t446*_t603 + _t448*_t605 + _t449*_t607;
-    const train5_real_t _t664 = _t182*_t611 + _t370*_t609 + _t371*_t613 + _t372*_t615 + _t442*_t617
-            + _t443*_t619 + _t445*_t621 + _t446*_t623 + _t448*_t625 + _t449*_t627 + _t451*_t629
-            + _t452*_t631;
-    const train5_real_t _t665 = _t182*_t635 + _t370*_t633 + _t371*_t637 + _t372*_t639 + _t442*_t641
-            + _t443*_t643 + _t445*_t645 + _t446*_t647 + _t448*_t649 + _t449*_t651 + _t451*_t653
-            + _t452*_t655;
-    const train5_real_t _t666 = _t102*_t469 + _t144*_t472 + _t375*_t656 + _t381*_t657 + _t387*_t658
-            + _t393*_t659 + _t399*_t660 + _t405*_t661 + _t411*_t662 + _t417*_t663 + _t423*_t664
-            + _t429*_t665 + _t441*_t473 + _t444*_t474 + _t447*_t475 + _t450*_t476 + _t453*_t477
-            + _t454*_t66 + _t460*_t75 + _t465*_t87 + _t502;
-    const train5_real_t _t667 = -K_theta_tractor_x_tractor*_t370 + _t108*_t469 + _t155*_t472
-            + _t378*_t656 + _t384*_t657 + _t390*_t658 + _t396*_t659 + _t402*_t660 + _t408*_t661
-            + _t414*_t662 + _t420*_t663 + _t426*_t664 + _t432*_t665 + _t441*_t486 + _t444*_t488
-            + _t447*_t490 + _t450*_t492 + _t453*_t494 + _t454*_t69 + _t460*_t79 + _t465*_t92
-            + _t503;
-    const train5_real_t _t21 = prepared->forward_dynamics[50];
-    const train5_real_t _t22 = prepared->forward_dynamics[51];
-    const train5_real_t _t668 = _t21*tau_right + _t22*tau_left - _t666;
-    const train5_real_t _t26 = prepared->forward_dynamics[53];
-    const train5_real_t _t28 = prepared->forward_dynamics[54];
-    const train5_real_t _t669 = _t26*tau_right + _t28*tau_left - _t667;
-    const train5_real_t _t670 = TRAIN5_LIT(1.0)/_t499;
-    const train5_real_t _t671 = _t670*(-_t496*_t669 + _t498*_t668);
-    const train5_real_t _t672 = _t670*(_t484*_t669 - _t496*_t668);
-    const train5_real_t _t673 = _t441 + _t66*_t671 + _t672*_t69;
-    const train5_real_t _t674 = _t444 + _t671*_t75 + _t672*_t79;
-    const train5_real_t _t675 = _t447 + _t671*_t87 + _t672*_t92;
-    const train5_real_t _t676 = _t102*_t671 + _t108*_t672 + _t450;
-    const train5_real_t _t677 = _t144*_t671 + _t155*_t672 + _t453;
-    const train5_real_t _t678 = _t21*_t671 + _t26*_t672;
-    const train5_real_t _t679 = _t22*_t671 + _t28*_t672;
-    const train5_real_t _t680 = _t374*_t671 + _t377*_t672 + _t656;
-    const train5_real_t _t681 = _t380*_t671 + _t383*_t672 + _t657;
-    const train5_real_t _t682 = _t386*_t671 + _t389*_t672 + _t658;
-    const train5_real_t _t683 = _t392*_t671 + _t395*_t672 + _t659;
-    const train5_real_t _t684 = _t398*_t671 + _t401*_t672 + _t660;
-    const train5_real_t _t685 = _t404*_t671 + _t407*_t672 + _t661;
-    const train5_real_t _t686 = _t410*_t671 + _t413*_t672 + _t662;
-    const train5_real_t _t687 = _t416*_t671 + _t419*_t672 + _t663;
-    const train5_real_t _t688 = _t422*_t671 + _t425*_t672 + _t664;
-    const train5_real_t _t689 = _t428*_t671 + _t431*_t672 + _t665;
-    const train5_real_t _t690 = -_t370*_t500 + _t501*_t671;
-    const train5_real_t _t691 = _t370*_t501 + _t500*_t671;
-    if (!(_t484 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    const train5_real_t _t289 = J_theta_tractor + _t288;
+    const train5_real_t _t290 = J_theta_cart*_t81*_t81 - TRAIN5_LIT(0.6)*_t179*_t81 + _t289;
+    const train5_real_t _t291 = J_theta_cart2*_t94*_t94 + _t290 + _t94*(_t183 + _t184 + _t185);
+    const train5_real_t _t292 = J_theta_cart3*_t107*_t107 + _t107*(_t187 + _t188 + _t189) + _t291;
+    const train5_real_t _t293 = J_theta_cart4*_t120*_t120 + _t120*(_t191 + _t192 + _t193) + _t292;
+    const train5_real_t _t294 = J_theta_cart5*_t133*_t133 + _t133*(_t195 + _t196 + _t197) + _t293;
+    const train5_real_t _t295 = _t265*_t294 - _t287*_t287;
+    const train5_real_t _t298 = _t56*_t84 - _t57*_t86;
+    const train5_real_t _t299 = _t199*_t57 + _t201*_t56 - _t298;
+    const train5_real_t _t300 = _t6*(_t206*_t46 + _t299*_t47);
+    const train5_real_t _t301 = _t6*(_t206*_t44 + _t299*_t45);
+    const train5_real_t _t302 = _t61*_t97 - _t62*_t99;
+    const train5_real_t _t303 = _t214*_t62 + _t216*_t61 - _t302;
+    const train5_real_t _t304 = _t10*(_t217*_t30 + _t303*_t31);
+    const train5_real_t _t305 = _t10*(_t217*_t28 + _t29*_t303);
+    const train5_real_t _t306 = _t110*_t66 - _t112*_t67;
+    const train5_real_t _t307 = _t227*_t67 + _t229*_t66 - _t306;
+    const train5_real_t _t308 = _t14*(_t230*_t34 + _t307*_t35);
+    const train5_real_t _t309 = _t14*(_t230*_t32 + _t307*_t33);
+    const train5_real_t _t310 = _t123*_t71 - _t125*_t72;
+    const train5_real_t _t311 = _t240*_t72 + _t242*_t71 - _t310;
+    const train5_real_t _t312 = _t18*(_t243*_t38 + _t311*_t39);
+    const train5_real_t _t313 = _t18*(_t243*_t36 + _t311*_t37);
+    const train5_real_t _t314 = _t136*_t76 - _t138*_t77;
+    const train5_real_t _t315 = _t253*_t77 + _t255*_t76 - _t314;
+    const train5_real_t _t316 = _t22*(_t256*_t42 + _t315*_t43);
+    const train5_real_t _t317 = _t22*(_t256*_t40 + _t315*_t41);
+    const train5_real_t _t318 = _t157*_t305 + _t159*_t304 + _t162*_t309 + _t164*_t308 + _t167*_t313
+            + _t169*_t312 + _t172*_t317 + _t174*_t316 + _t176*_t301 + _t178*_t300;
+    const train5_real_t K_theta_tractor_x_tractor = prepared->forward_dynamics[26];
+    const train5_real_t _t319 = K_theta_tractor_x_tractor*_t198 + _t318;
+    const train5_real_t _t320 = -_t179*_t204 + _t203*_t79 + _t207*(_t181 + _t202) + _t319;
+    const train5_real_t _t321 = _t182*_t218 + _t210*_t90 + _t219*_t88 + _t220*_t87 + _t320;
+    const train5_real_t _t322 = _t100*_t233 + _t101*_t232 + _t103*_t223 + _t186*_t231 + _t321;
+    const train5_real_t _t323 = _t113*_t246 + _t114*_t245 + _t116*_t236 + _t190*_t244 + _t322;
+    const train5_real_t _t324 = _t126*_t259 + _t127*_t258 + _t129*_t249 + _t194*_t257 + _t323;
+    const train5_real_t _t325 = J_theta_cart2_left*_t271*_t305 + J_theta_cart2_right*_t270*_t304
+            + J_theta_cart3_left*_t274*_t309 + J_theta_cart3_right*_t273*_t308
+            + J_theta_cart4_left*_t277*_t313 + J_theta_cart4_right*_t276*_t312
+            + J_theta_cart5_left*_t280*_t317 + J_theta_cart5_right*_t279*_t316
+            + J_theta_cart_left*_t268*_t301 + J_theta_cart_right*_t267*_t300;
+    const train5_real_t _t326 = -K_theta_tractor_x_tractor*_t201 + _t325;
+    const train5_real_t _t327 = -TRAIN5_LIT(0.3)*_t202*_t204 + _t203*_t81
+            + _t207*(J_theta_cart*_t81 - _t180) + _t326;
+    const train5_real_t _t328 = _t219*_t92 + _t220*_t91 + _t327
+            + _t94*(J_theta_cart2*_t218 + _t210);
+    const train5_real_t _t329 = _t104*_t233 + _t105*_t232 + _t107*(J_theta_cart3*_t231 + _t223)
+            + _t328;
+    const train5_real_t _t330 = _t117*_t246 + _t118*_t245 + _t120*(J_theta_cart4*_t244 + _t236)
+            + _t329;
+    const train5_real_t _t331 = _t130*_t259 + _t131*_t258 + _t133*(J_theta_cart5*_t257 + _t249)
+            + _t330;
+    const train5_real_t _t2 = prepared->forward_dynamics[28];
+    const train5_real_t _t3 = prepared->forward_dynamics[29];
+    const train5_real_t _t332 = _t2*tau_right + _t3*tau_left - _t324;
+    const train5_real_t _t50 = prepared->forward_dynamics[66];
+    const train5_real_t _t51 = prepared->forward_dynamics[67];
+    const train5_real_t _t333 = -_t331 + _t50*tau_right + _t51*tau_left;
+    const train5_real_t _t334 = TRAIN5_LIT(1.0)/_t295;
+    const train5_real_t _t335 = _t334*(-_t287*_t333 + _t294*_t332);
+    const train5_real_t _t336 = _t334*(_t265*_t333 - _t287*_t332);
+    const train5_real_t _t337 = _t207 + _t335*_t79 + _t336*_t81;
+    const train5_real_t _t338 = _t218 + _t335*_t90 + _t336*_t94;
+    const train5_real_t _t339 = _t103*_t335 + _t107*_t336 + _t231;
+    const train5_real_t _t340 = _t116*_t335 + _t120*_t336 + _t244;
+    const train5_real_t _t341 = _t129*_t335 + _t133*_t336 + _t257;
+    const train5_real_t _t342 = _t2*_t335 + _t336*_t50;
+    const train5_real_t _t343 = _t3*_t335 + _t336*_t51;
+    const train5_real_t _t344 = _t177*_t335 + _t267*_t336 + _t300;
+    const train5_real_t _t345 = _t175*_t335 + _t268*_t336 + _t301;
+    const train5_real_t _t346 = _t158*_t335 + _t270*_t336 + _t304;
+    const train5_real_t _t347 = _t156*_t335 + _t271*_t336 + _t305;
+    const train5_real_t _t348 = _t163*_t335 + _t273*_t336 + _t308;
+    const train5_real_t _t349 = _t161*_t335 + _t274*_t336 + _t309;
+    const train5_real_t _t350 = _t168*_t335 + _t276*_t336 + _t312;
+    const train5_real_t _t351 = _t166*_t335 + _t277*_t336 + _t313;
+    const train5_real_t _t352 = _t173*_t335 + _t279*_t336 + _t316;
+    const train5_real_t _t353 = _t171*_t335 + _t280*_t336 + _t317;
+    const train5_real_t _t354 = -_t201*_t296 + _t297*_t335;
+    const train5_real_t _t355 = _t201*_t297 + _t296*_t335;
+    if (!(_t265 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    if (!(_t499 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t295 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    const train5_real_t r_0 = _t690;
-    const train5_real_t r_1 = _t691;
-    const train5_real_t r_2 = _t672;
-    const train5_real_t r_3 = _t673;
-    const train5_real_t r_4 = _t674;
-    const train5_real_t r_5 = _t675;
-    const train5_real_t r_6 = _t676;
-    const train5_real_t r_7 = _t677;
-    const train5_real_t r_8 = _t678;
-    const train5_real_t r_9 = _t679;
-    const train5_real_t r_10 = _t680;
-    const train5_real_t r_11 = _t681;
-    const train5_real_t r_12 = _t682;
-    const train5_real_t r_13 = _t683;
-    const train5_real_t r_14 = _t684;
-    const train5_real_t r_15 = _t685;
-    const train5_real_t r_16 = _t686;
-    const train5_real_t r_17 = _t687;
-    const train5_real_t r_18 = _t688;
-    const train5_real_t r_19 = _t689;
+    const train5_real_t r_0 = _t354;
+    const train5_real_t r_1 = _t355;
+    const train5_real_t r_2 = _t336;
+    const train5_real_t r_3 = _t337;
+    const train5_real_t r_4 = _t338;
+    const train5_real_t r_5 = _t339;
+    const train5_real_t r_6 = _t340;
+    const train5_real_t r_7 = _t341;
+    const train5_real_t r_8 = _t342;
+    const train5_real_t r_9 = _t343;
+    const train5_real_t r_10 = _t344;
+    const train5_real_t r_11 = _t345;
+    const train5_real_t r_12 = _t346;
+    const train5_real_t r_13 = _t347;
+    const train5_real_t r_14 = _t348;
+    const train5_real_t r_15 = _t349;
+    const train5_real_t r_16 = _t350;
+    const train5_real_t r_17 = _t351;
+    const train5_real_t r_18 = _t352;
+    const train5_real_t r_19 = _t353;
     if (((train5_exp_carry(r_0) | train5_exp_carry(r_1) | train5_exp_carry(r_2)
             | train5_exp_carry(r_3) | train5_exp_carry(r_4) | train5_exp_carry(r_5)
             | train5_exp_carry(r_6) | train5_exp_carry(r_7) | train5_exp_carry(r_8)
@@ -2320,7 +1403,7 @@ train5_status_t train5_forward_dynamics_prepared(const train5_model_prepared_t *
 }
 
 /* train5_kinematics: documented in train5_model.h.
-   operations after CSE: 105 add, 188 mul, 10 div, 12 sin/cos, 0 sqrt */
+   operations after CSE: 72 add, 203 mul, 5 div, 12 sin/cos, 0 sqrt */
 void train5_kinematics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, train5_real_t *pose_rates)
 {
@@ -2330,205 +1413,193 @@ void train5_kinematics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t _t1 = _t0 + theta_cart;
     const train5_real_t _t2 = TRAIN5_SIN(_t1);
     const train5_real_t _t3 = TRAIN5_COS(_t1);
-    const train5_real_t theta_cart2 = q[4];
-    const train5_real_t _t4 = _t0 + theta_cart2;
-    const train5_real_t _t5 = TRAIN5_SIN(_t4);
-    const train5_real_t _t6 = TRAIN5_COS(_t4);
-    const train5_real_t _t7 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t8 = TRAIN5_LIT(0.85)*_t3;
-    const train5_real_t theta_cart3 = q[5];
-    const train5_real_t _t9 = _t0 + theta_cart3;
-    const train5_real_t _t10 = TRAIN5_SIN(_t9);
-    const train5_real_t _t11 = TRAIN5_COS(_t9);
-    const train5_real_t _t12 = TRAIN5_LIT(0.85)*_t5;
-    const train5_real_t _t13 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t theta_cart4 = q[6];
-    const train5_real_t _t14 = _t0 + theta_cart4;
-    const train5_real_t _t15 = TRAIN5_SIN(_t14);
-    const train5_real_t _t16 = TRAIN5_COS(_t14);
-    const train5_real_t _t17 = TRAIN5_LIT(0.85)*_t10;
-    const train5_real_t _t18 = TRAIN5_LIT(0.85)*_t11;
-    const train5_real_t theta_cart5 = q[7];
-    const train5_real_t _t19 = _t0 + theta_cart5;
-    const train5_real_t _t20 = TRAIN5_SIN(_t19);
-    const train5_real_t _t21 = TRAIN5_COS(_t19);
-    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t21;
-    const train5_real_t _t23 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t24 = TRAIN5_LIT(0.2)*_t23;
-    const train5_real_t _t25 = -TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t _t26 = TRAIN5_LIT(1.6666666666666667)*_t25;
-    const train5_real_t _t27 = TRAIN5_LIT(0.2)*_t26;
-    const train5_real_t _t28 = -_t5*_t7 - _t6*_t8;
-    const train5_real_t _t29 = -_t23*_t28 + _t5;
-    const train5_real_t _t30 = -TRAIN5_LIT(1.6666666666666667)*_t29;
-    const train5_real_t _t31 = TRAIN5_LIT(0.2)*_t30;
-    const train5_real_t _t32 = TRAIN5_LIT(0.85)*_t3*_t5 - _t6*_t7;
-    const train5_real_t _t33 = _t23*_t32;
-    const train5_real_t _t34 = -TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t35 = -_t26*_t28 - _t34;
-    const train5_real_t _t36 = -TRAIN5_LIT(1.6666666666666667)*_t35;
-    const train5_real_t _t37 = TRAIN5_LIT(0.2)*_t36;
-    const train5_real_t _t38 = TRAIN5_LIT(0.3)*_t5;
-    const train5_real_t _t39 = _t26*_t32 + _t38;
-    const train5_real_t _t40 = -_t10*_t7 - _t11*_t8;
-    const train5_real_t _t41 = -_t10*_t12 - _t11*_t13;
-    const train5_real_t _t42 = _t10 - _t23*_t40 - _t30*_t41;
-    const train5_real_t _t43 = -TRAIN5_LIT(1.6666666666666667)*_t42;
-    const train5_real_t _t44 = TRAIN5_LIT(0.2)*_t43;
-    const train5_real_t _t45 = TRAIN5_LIT(0.85)*_t10*_t3 - _t11*_t7;
-    const train5_real_t _t46 = _t23*_t45;
-    const train5_real_t _t47 = TRAIN5_LIT(0.85)*_t10*_t6 - _t11*_t12;
-    const train5_real_t _t48 = _t30*_t47;
-    const train5_real_t _t49 = -TRAIN5_LIT(0.3)*_t11;
-    const train5_real_t _t50 = -_t26*_t40 - _t36*_t41 - _t49;
-    const train5_real_t _t51 = -TRAIN5_LIT(1.6666666666666667)*_t50;
-    const train5_real_t _t52 = TRAIN5_LIT(0.2)*_t51;
-    const train5_real_t _t53 = TRAIN5_LIT(0.3)*_t10;
-    const train5_real_t _t54 = _t26*_t45 + _t36*_t47 + _t53;
-    const train5_real_t _t55 = -_t15*_t7 - _t16*_t8;
-    const train5_real_t _t56 = -_t12*_t15 - _t13*_t16;
-    const train5_real_t _t57 = -_t15*_t17 - _t16*_t18;
-    const train5_real_t _t58 = _t15 - _t23*_t55 - _t30*_t56 - _t43*_t57;
-    const train5_real_t _t59 = -TRAIN5_LIT(1.6666666666666667)*_t58;
-    const train5_real_t _t60 = TRAIN5_LIT(0.2)*_t59;
-    const train5_real_t _t61 = TRAIN5_LIT(0.85)*_t15*_t3 - _t16*_t7;
-    const train5_real_t _t62 = -_t12*_t16 + TRAIN5_LIT(0.85)*_t15*_t6;
-    const train5_real_t _t63 = TRAIN5_LIT(0.85)*_t11*_t15 - _t16*_t17;
-    const train5_real_t _t64 = -_t16 + _t23*_t61 + _t30*_t62 + _t43*_t63;
-    const train5_real_t _t65 = -TRAIN5_LIT(0.3)*_t16;
-    const train5_real_t _t66 = -_t26*_t55 - _t36*_t56 - _t51*_t57 - _t65;
-    const train5_real_t _t67 = -TRAIN5_LIT(1.6666666666666667)*_t66;
-    const train5_real_t _t68 = TRAIN5_LIT(0.2)*_t67;
-    const train5_real_t _t69 = TRAIN5_LIT(0.3)*_t15;
-    const train5_real_t _t70 = _t26*_t61 + _t36*_t62 + _t51*_t63 + _t69;
-    const train5_real_t _t71 = -_t20*_t7 - _t21*_t8;
-    const train5_real_t _t72 = -_t12*_t20 - _t13*_t21;
-    const train5_real_t _t73 = -_t17*_t20 - _t18*_t21;
-    const train5_real_t _t74 = -TRAIN5_LIT(0.85)*_t15*_t20 - _t16*_t22;
-    const train5_real_t _t75 = _t20 - _t23*_t71 - _t30*_t72 - _t43*_t73 - _t59*_t74;
-    const train5_real_t _t76 = -TRAIN5_LIT(1.6666666666666667)*_t75;
-    const train5_real_t _t77 = TRAIN5_LIT(0.2)*_t76;
-    const train5_real_t _t78 = TRAIN5_LIT(0.85)*_t20*_t3 - _t21*_t7;
-    const train5_real_t _t79 = -_t12*_t21 + TRAIN5_LIT(0.85)*_t20*_t6;
-    const train5_real_t _t80 = TRAIN5_LIT(0.85)*_t11*_t20 - _t17*_t21;
-    const train5_real_t _t81 = -_t15*_t22 + TRAIN5_LIT(0.85)*_t16*_t20;
-    const train5_real_t _t82 = -_t21 + _t23*_t78 + _t30*_t79 + _t43*_t80 + _t59*_t81;
-    const train5_real_t _t83 = -TRAIN5_LIT(0.3)*_t21;
-    const train5_real_t _t84 = -_t26*_t71 - _t36*_t72 - _t51*_t73 - _t67*_t74 - _t83;
-    const train5_real_t _t85 = -TRAIN5_LIT(1.6666666666666667)*_t84;
-    const train5_real_t _t86 = TRAIN5_LIT(0.2)*_t85;
-    const train5_real_t _t87 = TRAIN5_LIT(0.3)*_t20;
-    const train5_real_t _t88 = _t26*_t78 + _t36*_t79 + _t51*_t80 + _t67*_t81 + _t87;
-    const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t89 = TRAIN5_LIT(2.4154589371980677)*radius_right;
-    const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t90 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t91 = TRAIN5_LIT(1.0)/radius_cart_right;
     const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t92 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t93 = TRAIN5_LIT(1.0)/radius_cart2_right;
+    const train5_real_t radius_cart_right = p->radius_cart_right;
+    const train5_real_t _t4 = radius_cart_left*radius_cart_right;
+    const train5_real_t _t5 = -TRAIN5_LIT(0.6)*_t4;
+    const train5_real_t _t6 = TRAIN5_LIT(1.0)/_t5;
+    const train5_real_t _t7 = _t4*_t6;
+    const train5_real_t _t8 = _t2*_t7;
+    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t8;
+    const train5_real_t theta_cart2 = q[4];
+    const train5_real_t _t10 = _t0 + theta_cart2;
+    const train5_real_t _t11 = TRAIN5_SIN(_t10);
+    const train5_real_t _t12 = TRAIN5_COS(_t10);
     const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t94 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t95 = TRAIN5_LIT(1.0)/radius_cart3_right;
+    const train5_real_t radius_cart2_right = p->radius_cart2_right;
+    const train5_real_t _t13 = radius_cart2_left*radius_cart2_right;
+    const train5_real_t _t14 = -TRAIN5_LIT(0.6)*_t13;
+    const train5_real_t _t15 = TRAIN5_LIT(1.0)/_t14;
+    const train5_real_t _t16 = _t13*_t15;
+    const train5_real_t _t17 = _t2*_t9 + TRAIN5_LIT(1.0);
+    const train5_real_t _t18 = -_t3*_t9;
+    const train5_real_t _t19 = _t11*_t17 - _t12*_t18;
+    const train5_real_t _t20 = _t16*_t19;
+    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t20;
+    const train5_real_t theta_cart3 = q[5];
+    const train5_real_t _t22 = _t0 + theta_cart3;
+    const train5_real_t _t23 = TRAIN5_SIN(_t22);
+    const train5_real_t _t24 = TRAIN5_COS(_t22);
     const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t96 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t97 = TRAIN5_LIT(1.0)/radius_cart4_right;
+    const train5_real_t radius_cart3_right = p->radius_cart3_right;
+    const train5_real_t _t25 = radius_cart3_left*radius_cart3_right;
+    const train5_real_t _t26 = -TRAIN5_LIT(0.6)*_t25;
+    const train5_real_t _t27 = TRAIN5_LIT(1.0)/_t26;
+    const train5_real_t _t28 = _t25*_t27;
+    const train5_real_t _t29 = _t11*_t21 + _t17;
+    const train5_real_t _t30 = -_t12*_t21 + _t18;
+    const train5_real_t _t31 = _t23*_t29 - _t24*_t30;
+    const train5_real_t _t32 = _t28*_t31;
+    const train5_real_t _t33 = TRAIN5_LIT(0.85)*_t32;
+    const train5_real_t theta_cart4 = q[6];
+    const train5_real_t _t34 = _t0 + theta_cart4;
+    const train5_real_t _t35 = TRAIN5_SIN(_t34);
+    const train5_real_t _t36 = TRAIN5_COS(_t34);
     const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t98 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t99 = TRAIN5_LIT(1.0)/radius_cart5_right;
+    const train5_real_t radius_cart4_right = p->radius_cart4_right;
+    const train5_real_t _t37 = radius_cart4_left*radius_cart4_right;
+    const train5_real_t _t38 = -TRAIN5_LIT(0.6)*_t37;
+    const train5_real_t _t39 = TRAIN5_LIT(1.0)/_t38;
+    const train5_real_t _t40 = _t37*_t39;
+    const train5_real_t _t41 = _t23*_t33 + _t29;
+    const train5_real_t _t42 = -_t24*_t33 + _t30;
+    const train5_real_t _t43 = _t35*_t41 - _t36*_t42;
+    const train5_real_t _t44 = _t40*_t43;
+    const train5_real_t _t45 = TRAIN5_LIT(0.85)*_t44;
+    const train5_real_t theta_cart5 = q[7];
+    const train5_real_t _t46 = _t0 + theta_cart5;
+    const train5_real_t _t47 = TRAIN5_SIN(_t46);
+    const train5_real_t _t48 = TRAIN5_COS(_t46);
     const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t100 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t101 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t102 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t103 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t104 = _t24 + _t3;
-    const train5_real_t _t105 = -_t101 + _t27;
-    const train5_real_t _t106 = _t104*_t91;
-    const train5_real_t _t107 = _t105*_t91;
-    const train5_real_t _t108 = -_t24 + _t3;
-    const train5_real_t _t109 = -_t101 - _t27;
-    const train5_real_t _t110 = _t108*_t92;
-    const train5_real_t _t111 = _t109*_t92;
-    const train5_real_t _t112 = _t31 - _t33 + _t6;
-    const train5_real_t _t113 = _t37 - _t39;
-    const train5_real_t _t114 = _t112*_t93;
-    const train5_real_t _t115 = _t113*_t93;
-    const train5_real_t _t116 = -_t31 - _t33 + _t6;
-    const train5_real_t _t117 = -_t37 - _t39;
-    const train5_real_t _t118 = _t116*_t94;
-    const train5_real_t _t119 = _t117*_t94;
-    const train5_real_t _t120 = _t11 + _t44 - _t46 - _t48;
-    const train5_real_t _t121 = _t52 - _t54;
-    const train5_real_t _t122 = _t120*_t95;
-    const train5_real_t _t123 = _t121*_t95;
-    const train5_real_t _t124 = _t11 - _t44 - _t46 - _t48;
-    const train5_real_t _t125 = -_t52 - _t54;
-    const train5_real_t _t126 = _t124*_t96;
-    const train5_real_t _t127 = _t125*_t96;
-    const train5_real_t _t128 = _t60 - _t64;
-    const train5_real_t _t129 = _t68 - _t70;
-    const train5_real_t _t130 = _t128*_t97;
-    const train5_real_t _t131 = _t129*_t97;
-    const train5_real_t _t132 = -_t60 - _t64;
-    const train5_real_t _t133 = -_t68 - _t70;
-    const train5_real_t _t134 = _t132*_t98;
-    const train5_real_t _t135 = _t133*_t98;
-    const train5_real_t _t136 = _t77 - _t82;
-    const train5_real_t _t137 = _t86 - _t88;
-    const train5_real_t _t138 = _t136*_t99;
-    const train5_real_t _t139 = _t137*_t99;
-    const train5_real_t _t140 = -_t77 - _t82;
-    const train5_real_t _t141 = -_t86 - _t88;
-    const train5_real_t _t142 = _t100*_t140;
-    const train5_real_t _t143 = _t100*_t141;
+    const train5_real_t radius_cart5_right = p->radius_cart5_right;
+    const train5_real_t _t49 = radius_cart5_left*radius_cart5_right;
+    const train5_real_t _t50 = -TRAIN5_LIT(0.6)*_t49;
+    const train5_real_t _t51 = TRAIN5_LIT(1.0)/_t50;
+    const train5_real_t _t52 = _t49*_t51;
+    const train5_real_t _t53 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t54 = -_t53*_t7;
+    const train5_real_t _t55 = TRAIN5_LIT(0.85)*_t54;
+    const train5_real_t _t56 = _t2*_t55;
+    const train5_real_t _t57 = -_t3*_t55 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t58 = _t11*_t56 - _t12*_t57;
+    const train5_real_t _t59 = _t16*_t58;
+    const train5_real_t _t60 = TRAIN5_LIT(0.85)*_t59;
+    const train5_real_t _t61 = _t11*_t60 + _t56;
+    const train5_real_t _t62 = -_t12*_t60 + _t57;
+    const train5_real_t _t63 = _t23*_t61 - _t24*_t62;
+    const train5_real_t _t64 = _t28*_t63;
+    const train5_real_t _t65 = TRAIN5_LIT(0.85)*_t64;
+    const train5_real_t _t66 = _t23*_t65 + _t61;
+    const train5_real_t _t67 = -_t24*_t65 + _t62;
+    const train5_real_t _t68 = _t35*_t66 - _t36*_t67;
+    const train5_real_t _t69 = _t40*_t68;
+    const train5_real_t _t70 = TRAIN5_LIT(0.85)*_t69;
+    const train5_real_t radius_right = p->radius_right;
+    const train5_real_t _t71 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t radius_left = p->radius_left;
+    const train5_real_t _t72 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t73 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t74 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t75 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t76 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t77 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t78 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t79 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t80 = _t6*(_t2*_t76 + _t3*_t77);
+    const train5_real_t _t81 = _t6*(_t2*_t78 + _t3*_t79);
+    const train5_real_t _t82 = _t11*_t18 + _t12*_t17;
+    const train5_real_t _t83 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t84 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t85 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t86 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t87 = _t15*(_t19*_t83 + _t82*_t84);
+    const train5_real_t _t88 = _t15*(_t19*_t85 + _t82*_t86);
+    const train5_real_t _t89 = _t23*_t30 + _t24*_t29;
+    const train5_real_t _t90 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t91 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t92 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t93 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t94 = _t27*(_t31*_t90 + _t89*_t91);
+    const train5_real_t _t95 = _t27*(_t31*_t92 + _t89*_t93);
+    const train5_real_t _t96 = _t35*_t42 + _t36*_t41;
+    const train5_real_t _t97 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t98 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t99 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t100 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t101 = _t39*(_t43*_t97 + _t96*_t98);
+    const train5_real_t _t102 = _t39*(_t100*_t96 + _t43*_t99);
+    const train5_real_t _t103 = _t35*_t45 + _t41;
+    const train5_real_t _t104 = -_t36*_t45 + _t42;
+    const train5_real_t _t105 = _t103*_t47 - _t104*_t48;
+    const train5_real_t _t106 = _t103*_t48 + _t104*_t47;
+    const train5_real_t _t107 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t108 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t109 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t110 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t111 = _t105*_t52;
+    const train5_real_t _t112 = _t51*(_t105*_t107 + _t106*_t108);
+    const train5_real_t _t113 = _t51*(_t105*_t109 + _t106*_t110);
+    const train5_real_t _t114 = _t6*(-_t53*_t76 - _t73*_t77);
+    const train5_real_t _t115 = _t6*(-_t53*_t78 - _t73*_t79);
+    const train5_real_t _t116 = _t11*_t57 + _t12*_t56;
+    const train5_real_t _t117 = _t15*(_t116*_t84 + _t58*_t83);
+    const train5_real_t _t118 = _t15*(_t116*_t86 + _t58*_t85);
+    const train5_real_t _t119 = _t23*_t62 + _t24*_t61;
+    const train5_real_t _t120 = _t27*(_t119*_t91 + _t63*_t90);
+    const train5_real_t _t121 = _t27*(_t119*_t93 + _t63*_t92);
+    const train5_real_t _t122 = _t35*_t67 + _t36*_t66;
+    const train5_real_t _t123 = _t39*(_t122*_t98 + _t68*_t97);
+    const train5_real_t _t124 = _t39*(_t100*_t122 + _t68*_t99);
+    const train5_real_t _t125 = _t35*_t70 + _t66;
+    const train5_real_t _t126 = -_t36*_t70 + _t67;
+    const train5_real_t _t127 = _t125*_t47 - _t126*_t48;
+    const train5_real_t _t128 = _t125*_t48 + _t126*_t47;
+    const train5_real_t _t129 = _t127*_t52;
+    const train5_real_t _t130 = _t51*(_t107*_t127 + _t108*_t128);
+    const train5_real_t _t131 = _t51*(_t109*_t127 + _t110*_t128);
     const train5_real_t thetadot_right = wheel_rates[0];
     const train5_real_t thetadot_left = wheel_rates[1];
-    const train5_real_t _t144 = _t102*thetadot_right + _t103*thetadot_left;
-    const train5_real_t _t145 = _t89*thetadot_right + _t90*thetadot_left;
-    const train5_real_t _t146 = _t144*_t23 + _t145*_t26;
-    const train5_real_t _t147 = _t144*_t30 + _t145*_t36;
-    const train5_real_t _t148 = _t144*_t43 + _t145*_t51;
-    const train5_real_t _t149 = _t144*_t59 + _t145*_t67;
-    const train5_real_t _t150 = _t144*_t76 + _t145*_t85;
-    const train5_real_t _t151 = _t106*_t144 + _t107*_t145;
-    const train5_real_t _t152 = _t110*_t144 + _t111*_t145;
-    const train5_real_t _t153 = _t114*_t144 + _t115*_t145;
-    const train5_real_t _t154 = _t118*_t144 + _t119*_t145;
-    const train5_real_t _t155 = _t122*_t144 + _t123*_t145;
-    const train5_real_t _t156 = _t126*_t144 + _t127*_t145;
-    const train5_real_t _t157 = _t130*_t144 + _t131*_t145;
-    const train5_real_t _t158 = _t134*_t144 + _t135*_t145;
-    const train5_real_t _t159 = _t138*_t144 + _t139*_t145;
-    const train5_real_t _t160 = _t142*_t144 + _t143*_t145;
-    const train5_real_t _t161 = _t144*TRAIN5_COS(theta_tractor);
-    const train5_real_t _t162 = _t144*TRAIN5_SIN(theta_tractor);
-    pose_rates[0] = _t161;
-    pose_rates[1] = _t162;
-    pose_rates[2] = _t145;
-    pose_rates[3] = _t146;
-    pose_rates[4] = _t147;
-    pose_rates[5] = _t148;
-    pose_rates[6] = _t149;
-    pose_rates[7] = _t150;
-    pose_rates[8] = _t151;
-    pose_rates[9] = _t152;
-    pose_rates[10] = _t153;
-    pose_rates[11] = _t154;
-    pose_rates[12] = _t155;
-    pose_rates[13] = _t156;
-    pose_rates[14] = _t157;
-    pose_rates[15] = _t158;
-    pose_rates[16] = _t159;
-    pose_rates[17] = _t160;
+    const train5_real_t _t132 = _t74*thetadot_right + _t75*thetadot_left;
+    const train5_real_t _t133 = _t71*thetadot_right + _t72*thetadot_left;
+    const train5_real_t _t134 = _t132*_t8 + _t133*_t54;
+    const train5_real_t _t135 = _t132*_t20 + _t133*_t59;
+    const train5_real_t _t136 = _t132*_t32 + _t133*_t64;
+    const train5_real_t _t137 = _t132*_t44 + _t133*_t69;
+    const train5_real_t _t138 = _t111*_t132 + _t129*_t133;
+    const train5_real_t _t139 = _t114*_t133 + _t132*_t80;
+    const train5_real_t _t140 = _t115*_t133 + _t132*_t81;
+    const train5_real_t _t141 = _t117*_t133 + _t132*_t87;
+    const train5_real_t _t142 = _t118*_t133 + _t132*_t88;
+    const train5_real_t _t143 = _t120*_t133 + _t132*_t94;
+    const train5_real_t _t144 = _t121*_t133 + _t132*_t95;
+    const train5_real_t _t145 = _t101*_t132 + _t123*_t133;
+    const train5_real_t _t146 = _t102*_t132 + _t124*_t133;
+    const train5_real_t _t147 = _t112*_t132 + _t130*_t133;
+    const train5_real_t _t148 = _t113*_t132 + _t131*_t133;
+    const train5_real_t _t149 = _t132*TRAIN5_COS(theta_tractor);
+    const train5_real_t _t150 = _t132*TRAIN5_SIN(theta_tractor);
+    pose_rates[0] = _t149;
+    pose_rates[1] = _t150;
+    pose_rates[2] = _t133;
+    pose_rates[3] = _t134;
+    pose_rates[4] = _t135;
+    pose_rates[5] = _t136;
+    pose_rates[6] = _t137;
+    pose_rates[7] = _t138;
+    pose_rates[8] = _t139;
+    pose_rates[9] = _t140;
+    pose_rates[10] = _t141;
+    pose_rates[11] = _t142;
+    pose_rates[12] = _t143;
+    pose_rates[13] = _t144;
+    pose_rates[14] = _t145;
+    pose_rates[15] = _t146;
+    pose_rates[16] = _t147;
+    pose_rates[17] = _t148;
 }
 
 /* train5_minimal_mass_matrix: documented in train5_model.h.
-   operations after CSE: 251 add, 379 mul, 12 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 171 add, 367 mul, 6 div, 10 sin/cos, 0 sqrt */
 void train5_minimal_mass_matrix(const train5_params_t *p, const train5_real_t *q, train5_real_t *M)
 {
     const train5_real_t theta_tractor = q[2];
@@ -2537,339 +1608,294 @@ void train5_minimal_mass_matrix(const train5_params_t *p, const train5_real_t *q
     const train5_real_t _t1 = _t0 + theta_cart;
     const train5_real_t _t2 = TRAIN5_SIN(_t1);
     const train5_real_t _t3 = TRAIN5_COS(_t1);
-    const train5_real_t _t4 = TRAIN5_LIT(0.3)*_t3;
-    const train5_real_t theta_cart2 = q[4];
-    const train5_real_t _t5 = _t0 + theta_cart2;
-    const train5_real_t _t6 = TRAIN5_SIN(_t5);
-    const train5_real_t _t7 = TRAIN5_COS(_t5);
-    const train5_real_t _t8 = TRAIN5_LIT(0.3)*_t7;
-    const train5_real_t _t9 = TRAIN5_LIT(0.85)*_t2;
-    const train5_real_t _t10 = TRAIN5_LIT(0.85)*_t3;
-    const train5_real_t _t11 = _t10*_t7;
-    const train5_real_t theta_cart3 = q[5];
-    const train5_real_t _t12 = _t0 + theta_cart3;
-    const train5_real_t _t13 = TRAIN5_SIN(_t12);
-    const train5_real_t _t14 = TRAIN5_COS(_t12);
-    const train5_real_t _t15 = TRAIN5_LIT(0.3)*_t14;
-    const train5_real_t _t16 = _t10*_t14;
-    const train5_real_t _t17 = TRAIN5_LIT(0.85)*_t6;
-    const train5_real_t _t18 = TRAIN5_LIT(0.85)*_t7;
-    const train5_real_t _t19 = _t14*_t18;
-    const train5_real_t theta_cart4 = q[6];
-    const train5_real_t _t20 = _t0 + theta_cart4;
-    const train5_real_t _t21 = TRAIN5_SIN(_t20);
-    const train5_real_t _t22 = TRAIN5_COS(_t20);
-    const train5_real_t _t23 = TRAIN5_LIT(0.3)*_t22;
-    const train5_real_t _t24 = _t10*_t22;
-    const train5_real_t _t25 = _t18*_t22;
-    const train5_real_t _t26 = TRAIN5_LIT(0.85)*_t13;
-    const train5_real_t _t27 = TRAIN5_LIT(0.85)*_t14;
-    const train5_real_t _t28 = _t22*_t27;
-    const train5_real_t theta_cart5 = q[7];
-    const train5_real_t _t29 = _t0 + theta_cart5;
-    const train5_real_t _t30 = TRAIN5_SIN(_t29);
-    const train5_real_t _t31 = TRAIN5_COS(_t29);
-    const train5_real_t _t32 = TRAIN5_LIT(0.3)*_t31;
-    const train5_real_t _t33 = _t10*_t31;
-    const train5_real_t _t34 = _t18*_t31;
-    const train5_real_t _t35 = _t27*_t31;
-    const train5_real_t _t36 = TRAIN5_LIT(0.85)*_t30;
-    const train5_real_t _t37 = TRAIN5_LIT(0.85)*_t31;
-    const train5_real_t _t38 = _t22*_t37;
-    const train5_real_t _t39 = TRAIN5_LIT(0.3)*_t2;
-    const train5_real_t _t40 = TRAIN5_LIT(0.3)*_t6;
-    const train5_real_t _t41 = TRAIN5_LIT(0.3)*_t13;
-    const train5_real_t _t42 = TRAIN5_LIT(0.3)*_t21;
-    const train5_real_t _t43 = TRAIN5_LIT(0.3)*_t30;
-    const train5_real_t _t44 = -TRAIN5_LIT(1.6666666666666667)*_t2;
-    const train5_real_t _t45 = TRAIN5_LIT(0.2)*_t44;
-    const train5_real_t _t46 = -TRAIN5_LIT(1.6666666666666667)*_t4;
-    const train5_real_t _t47 = TRAIN5_LIT(0.2)*_t46;
-    const train5_real_t _t48 = -_t11 - _t6*_t9;
-    const train5_real_t _t49 = -_t44*_t48 + _t6;
-    const train5_real_t _t50 = -TRAIN5_LIT(1.6666666666666667)*_t49;
-    const train5_real_t _t51 = TRAIN5_LIT(0.2)*_t50;
-    const train5_real_t _t52 = TRAIN5_LIT(0.85)*_t3*_t6 - _t7*_t9;
-    const train5_real_t _t53 = _t44*_t52;
-    const train5_real_t _t54 = -_t46*_t48 + _t8;
-    const train5_real_t _t55 = -TRAIN5_LIT(1.6666666666666667)*_t54;
-    const train5_real_t _t56 = TRAIN5_LIT(0.2)*_t55;
-    const train5_real_t _t57 = _t40 + _t46*_t52;
-    const train5_real_t _t58 = -_t13*_t9 - _t16;
-    const train5_real_t _t59 = -_t13*_t17 - _t19;
-    const train5_real_t _t60 = _t13 - _t44*_t58 - _t50*_t59;
-    const train5_real_t _t61 = -TRAIN5_LIT(1.6666666666666667)*_t60;
-    const train5_real_t _t62 = TRAIN5_LIT(0.2)*_t61;
-    const train5_real_t _t63 = TRAIN5_LIT(0.85)*_t13*_t3 - _t14*_t9;
-    const train5_real_t _t64 = _t44*_t63;
-    const train5_real_t _t65 = TRAIN5_LIT(0.85)*_t13*_t7 - _t14*_t17;
-    const train5_real_t _t66 = _t50*_t65;
-    const train5_real_t _t67 = _t15 - _t46*_t58 - _t55*_t59;
-    const train5_real_t _t68 = -TRAIN5_LIT(1.6666666666666667)*_t67;
-    const train5_real_t _t69 = TRAIN5_LIT(0.2)*_t68;
-    const train5_real_t _t70 = _t41 + _t46*_t63 + _t55*_t65;
-    const train5_real_t _t71 = -_t21*_t9 - _t24;
-    const train5_real_t _t72 = -_t17*_t21 - _t25;
-    const train5_real_t _t73 = -_t21*_t26 - _t28;
-    const train5_real_t _t74 = _t21 - _t44*_t71 - _t50*_t72 - _t61*_t73;
-    const train5_real_t _t75 = -TRAIN5_LIT(1.6666666666666667)*_t74;
-    const train5_real_t _t76 = TRAIN5_LIT(0.2)*_t75;
-    const train5_real_t _t77 = TRAIN5_LIT(0.85)*_t21*_t3 - _t22*_t9;
-    const train5_real_t _t78 = -_t17*_t22 + TRAIN5_LIT(0.85)*_t21*_t7;
-    const train5_real_t _t79 = TRAIN5_LIT(0.85)*_t14*_t21 - _t22*_t26;
-    const train5_real_t _t80 = -_t22 + _t44*_t77 + _t50*_t78 + _t61*_t79;
-    const train5_real_t _t81 = _t23 - _t46*_t71 - _t55*_t72 - _t68*_t73;
-    const train5_real_t _t82 = -TRAIN5_LIT(1.6666666666666667)*_t81;
-    const train5_real_t _t83 = TRAIN5_LIT(0.2)*_t82;
-    const train5_real_t _t84 = _t42 + _t46*_t77 + _t55*_t78 + _t68*_t79;
-    const train5_real_t _t85 = -_t30*_t9 - _t33;
-    const train5_real_t _t86 = -_t17*_t30 - _t34;
-    const train5_real_t _t87 = -_t26*_t30 - _t35;
-    const train5_real_t _t88 = -_t21*_t36 - _t38;
-    const train5_real_t _t89 = _t30 - _t44*_t85 - _t50*_t86 - _t61*_t87 - _t75*_t88;
-    const train5_real_t _t90 = -TRAIN5_LIT(1.6666666666666667)*_t89;
-    const train5_real_t _t91 = TRAIN5_LIT(0.2)*_t90;
-    const train5_real_t _t92 = TRAIN5_LIT(0.85)*_t3*_t30 - _t31*_t9;
-    const train5_real_t _t93 = -_t17*_t31 + TRAIN5_LIT(0.85)*_t30*_t7;
-    const train5_real_t _t94 = TRAIN5_LIT(0.85)*_t14*_t30 - _t26*_t31;
-    const train5_real_t _t95 = -_t21*_t37 + TRAIN5_LIT(0.85)*_t22*_t30;
-    const train5_real_t _t96 = -_t31 + _t44*_t92 + _t50*_t93 + _t61*_t94 + _t75*_t95;
-    const train5_real_t _t97 = _t32 - _t46*_t85 - _t55*_t86 - _t68*_t87 - _t82*_t88;
-    const train5_real_t _t98 = -TRAIN5_LIT(1.6666666666666667)*_t97;
-    const train5_real_t _t99 = TRAIN5_LIT(0.2)*_t98;
-    const train5_real_t _t100 = _t43 + _t46*_t92 + _t55*_t93 + _t68*_t94 + _t82*_t95;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t _t101 = K_theta_cart2_x_tractor*_t6;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t _t102 = K_theta_cart2_x_tractor_2*_t7;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t _t103 = K_theta_cart3_x_tractor*_t13;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t _t104 = K_theta_cart3_x_tractor_2*_t14;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t _t105 = K_theta_cart4_x_tractor*_t21;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t _t106 = K_theta_cart4_x_tractor_2*_t22;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t _t107 = K_theta_cart5_x_tractor*_t30;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
-    const train5_real_t _t108 = K_theta_cart5_x_tractor_2*_t31;
-    const train5_real_t _t109 = TRAIN5_LIT(0.85)*_t21;
-    const train5_real_t radius_right = p->radius_right;
-    const train5_real_t _t110 = TRAIN5_LIT(2.4154589371980677)*radius_right;
     const train5_real_t radius_left = p->radius_left;
-    const train5_real_t _t111 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
-    const train5_real_t radius_cart_right = p->radius_cart_right;
-    const train5_real_t _t112 = TRAIN5_LIT(1.0)/radius_cart_right;
+    const train5_real_t radius_right = p->radius_right;
+    const train5_real_t _t4 = radius_left*radius_right;
+    const train5_real_t _t5 = TRAIN5_LIT(1.0)/_t4;
+    const train5_real_t _t6 = _t5*radius_left;
+    const train5_real_t _t7 = _t5*radius_right;
     const train5_real_t radius_cart_left = p->radius_cart_left;
-    const train5_real_t _t113 = TRAIN5_LIT(1.0)/radius_cart_left;
-    const train5_real_t radius_cart2_right = p->radius_cart2_right;
-    const train5_real_t _t114 = TRAIN5_LIT(1.0)/radius_cart2_right;
+    const train5_real_t radius_cart_right = p->radius_cart_right;
+    const train5_real_t _t8 = radius_cart_left*radius_cart_right;
+    const train5_real_t _t9 = -TRAIN5_LIT(0.6)*_t8;
+    const train5_real_t _t10 = TRAIN5_LIT(1.0)/_t9;
+    const train5_real_t _t11 = _t10*_t8;
+    const train5_real_t _t12 = TRAIN5_LIT(0.85)*_t2;
+    const train5_real_t _t13 = TRAIN5_LIT(0.85)*_t3;
+    const train5_real_t theta_cart2 = q[4];
+    const train5_real_t _t14 = _t0 + theta_cart2;
+    const train5_real_t _t15 = TRAIN5_SIN(_t14);
+    const train5_real_t _t16 = TRAIN5_COS(_t14);
     const train5_real_t radius_cart2_left = p->radius_cart2_left;
-    const train5_real_t _t115 = TRAIN5_LIT(1.0)/radius_cart2_left;
-    const train5_real_t radius_cart3_right = p->radius_cart3_right;
-    const train5_real_t _t116 = TRAIN5_LIT(1.0)/radius_cart3_right;
+    const train5_real_t radius_cart2_right = p->radius_cart2_right;
+    const train5_real_t _t17 = radius_cart2_left*radius_cart2_right;
+    const train5_real_t _t18 = -TRAIN5_LIT(0.6)*_t17;
+    const train5_real_t _t19 = TRAIN5_LIT(1.0)/_t18;
+    const train5_real_t _t20 = _t17*_t19;
+    const train5_real_t _t21 = TRAIN5_LIT(0.85)*_t15;
+    const train5_real_t _t22 = TRAIN5_LIT(0.85)*_t16;
+    const train5_real_t theta_cart3 = q[5];
+    const train5_real_t _t23 = _t0 + theta_cart3;
+    const train5_real_t _t24 = TRAIN5_SIN(_t23);
+    const train5_real_t _t25 = TRAIN5_COS(_t23);
     const train5_real_t radius_cart3_left = p->radius_cart3_left;
-    const train5_real_t _t117 = TRAIN5_LIT(1.0)/radius_cart3_left;
-    const train5_real_t radius_cart4_right = p->radius_cart4_right;
-    const train5_real_t _t118 = TRAIN5_LIT(1.0)/radius_cart4_right;
+    const train5_real_t radius_cart3_right = p->radius_cart3_right;
+    const train5_real_t _t26 = radius_cart3_left*radius_cart3_right;
+    const train5_real_t _t27 = -TRAIN5_LIT(0.6)*_t26;
+    const train5_real_t _t28 = TRAIN5_LIT(1.0)/_t27;
+    const train5_real_t _t29 = _t26*_t28;
+    const train5_real_t _t30 = TRAIN5_LIT(0.85)*_t24;
+    const train5_real_t _t31 = TRAIN5_LIT(0.85)*_t25;
+    const train5_real_t theta_cart4 = q[6];
+    const train5_real_t _t32 = _t0 + theta_cart4;
+    const train5_real_t _t33 = TRAIN5_SIN(_t32);
+    const train5_real_t _t34 = TRAIN5_COS(_t32);
     const train5_real_t radius_cart4_left = p->radius_cart4_left;
-    const train5_real_t _t119 = TRAIN5_LIT(1.0)/radius_cart4_left;
-    const train5_real_t radius_cart5_right = p->radius_cart5_right;
-    const train5_real_t _t120 = TRAIN5_LIT(1.0)/radius_cart5_right;
+    const train5_real_t radius_cart4_right = p->radius_cart4_right;
+    const train5_real_t _t35 = radius_cart4_left*radius_cart4_right;
+    const train5_real_t _t36 = -TRAIN5_LIT(0.6)*_t35;
+    const train5_real_t _t37 = TRAIN5_LIT(1.0)/_t36;
+    const train5_real_t _t38 = _t35*_t37;
+    const train5_real_t _t39 = TRAIN5_LIT(0.85)*_t33;
+    const train5_real_t _t40 = TRAIN5_LIT(0.85)*_t34;
+    const train5_real_t theta_cart5 = q[7];
+    const train5_real_t _t41 = _t0 + theta_cart5;
+    const train5_real_t _t42 = TRAIN5_SIN(_t41);
+    const train5_real_t _t43 = TRAIN5_COS(_t41);
     const train5_real_t radius_cart5_left = p->radius_cart5_left;
-    const train5_real_t _t121 = TRAIN5_LIT(1.0)/radius_cart5_left;
-    const train5_real_t _t122 = TRAIN5_LIT(0.5)*radius_right;
-    const train5_real_t _t123 = TRAIN5_LIT(0.5)*radius_left;
-    const train5_real_t _t124 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t125 = TRAIN5_LIT(0.207)*_t124;
-    const train5_real_t _t126 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t127 = -TRAIN5_LIT(0.207)*_t126;
-    const train5_real_t _t128 = _t3 + _t45;
-    const train5_real_t _t129 = -_t39 + _t47;
-    const train5_real_t _t130 = _t112*_t128;
-    const train5_real_t _t131 = _t112*_t129;
-    const train5_real_t _t132 = _t3 - _t45;
-    const train5_real_t _t133 = -_t39 - _t47;
-    const train5_real_t _t134 = _t113*_t132;
-    const train5_real_t _t135 = _t113*_t133;
-    const train5_real_t _t136 = _t51 - _t53 + _t7;
-    const train5_real_t _t137 = _t56 - _t57;
-    const train5_real_t _t138 = _t114*_t136;
-    const train5_real_t _t139 = _t114*_t137;
-    const train5_real_t _t140 = -_t51 - _t53 + _t7;
-    const train5_real_t _t141 = -_t56 - _t57;
-    const train5_real_t _t142 = _t115*_t140;
-    const train5_real_t _t143 = _t115*_t141;
-    const train5_real_t _t144 = _t14 + _t62 - _t64 - _t66;
-    const train5_real_t _t145 = _t69 - _t70;
-    const train5_real_t _t146 = _t116*_t144;
-    const train5_real_t _t147 = _t116*_t145;
-    const train5_real_t _t148 = _t14 - _t62 - _t64 - _t66;
-    const train5_real_t _t149 = -_t69 - _t70;
-    const train5_real_t _t150 = _t117*_t148;
-    const train5_real_t _t151 = _t117*_t149;
-    const train5_real_t _t152 = _t76 - _t80;
-    const train5_real_t _t153 = _t83 - _t84;
-    const train5_real_t _t154 = _t118*_t152;
-    const train5_real_t _t155 = _t118*_t153;
-    const train5_real_t _t156 = -_t76 - _t80;
-    const train5_real_t _t157 = -_t83 - _t84;
-    const train5_real_t _t158 = _t119*_t156;
-    const train5_real_t _t159 = _t119*_t157;
-    const train5_real_t _t160 = _t91 - _t96;
-    const train5_real_t _t161 = -_t100 + _t99;
-    const train5_real_t _t162 = _t120*_t160;
-    const train5_real_t _t163 = _t120*_t161;
-    const train5_real_t _t164 = -_t91 - _t96;
-    const train5_real_t _t165 = -_t100 - _t99;
-    const train5_real_t _t166 = _t121*_t164;
-    const train5_real_t _t167 = _t121*_t165;
+    const train5_real_t radius_cart5_right = p->radius_cart5_right;
+    const train5_real_t _t44 = radius_cart5_left*radius_cart5_right;
+    const train5_real_t _t45 = -TRAIN5_LIT(0.6)*_t44;
+    const train5_real_t _t46 = TRAIN5_LIT(1.0)/_t45;
+    const train5_real_t _t47 = _t44*_t46;
+    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
+    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
+    const train5_real_t _t48 = K_theta_cart2_x_tractor*_t15 + K_theta_cart2_x_tractor_2*_t16;
+    const train5_real_t _t49 = _t11*_t2;
+    const train5_real_t _t50 = _t12*_t49 + TRAIN5_LIT(1.0);
+    const train5_real_t _t51 = _t48*_t50;
+    const train5_real_t _t52 = -K_theta_cart2_x_tractor*_t16 + K_theta_cart2_x_tractor_2*_t15;
+    const train5_real_t _t53 = -_t13*_t49;
+    const train5_real_t _t54 = _t52*_t53;
+    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
+    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
+    const train5_real_t _t55 = K_theta_cart3_x_tractor*_t24 + K_theta_cart3_x_tractor_2*_t25;
+    const train5_real_t _t56 = _t15*_t50 - _t16*_t53;
+    const train5_real_t _t57 = _t20*_t56;
+    const train5_real_t _t58 = _t21*_t57 + _t50;
+    const train5_real_t _t59 = _t55*_t58;
+    const train5_real_t _t60 = -K_theta_cart3_x_tractor*_t25 + K_theta_cart3_x_tractor_2*_t24;
+    const train5_real_t _t61 = -_t22*_t57 + _t53;
+    const train5_real_t _t62 = _t60*_t61;
+    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
+    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
+    const train5_real_t _t63 = K_theta_cart4_x_tractor*_t33 + K_theta_cart4_x_tractor_2*_t34;
+    const train5_real_t _t64 = _t24*_t58 - _t25*_t61;
+    const train5_real_t _t65 = _t29*_t64;
+    const train5_real_t _t66 = _t30*_t65 + _t58;
+    const train5_real_t _t67 = _t63*_t66;
+    const train5_real_t _t68 = -K_theta_cart4_x_tractor*_t34 + K_theta_cart4_x_tractor_2*_t33;
+    const train5_real_t _t69 = -_t31*_t65 + _t61;
+    const train5_real_t _t70 = _t68*_t69;
+    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
+    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
+    const train5_real_t _t71 = K_theta_cart5_x_tractor*_t42 + K_theta_cart5_x_tractor_2*_t43;
+    const train5_real_t _t72 = _t33*_t66 - _t34*_t69;
+    const train5_real_t _t73 = _t38*_t72;
+    const train5_real_t _t74 = _t39*_t73 + _t66;
+    const train5_real_t _t75 = _t71*_t74;
+    const train5_real_t _t76 = -K_theta_cart5_x_tractor*_t43 + K_theta_cart5_x_tractor_2*_t42;
+    const train5_real_t _t77 = -_t40*_t73 + _t69;
+    const train5_real_t _t78 = _t76*_t77;
+    const train5_real_t _t79 = -TRAIN5_LIT(0.3)*_t3;
+    const train5_real_t _t80 = -_t11*_t79;
+    const train5_real_t _t81 = _t12*_t80;
+    const train5_real_t _t82 = _t48*_t81;
+    const train5_real_t _t83 = -_t13*_t80 - TRAIN5_LIT(3.0)/TRAIN5_LIT(10.0);
+    const train5_real_t _t84 = _t52*_t83;
+    const train5_real_t _t85 = _t82 + _t84;
+    const train5_real_t _t86 = _t15*_t81 - _t16*_t83;
+    const train5_real_t _t87 = _t20*_t86;
+    const train5_real_t _t88 = _t21*_t87 + _t81;
+    const train5_real_t _t89 = _t55*_t88;
+    const train5_real_t _t90 = -_t22*_t87 + _t83;
+    const train5_real_t _t91 = _t60*_t90;
+    const train5_real_t _t92 = _t89 + _t91;
+    const train5_real_t _t93 = _t24*_t88 - _t25*_t90;
+    const train5_real_t _t94 = _t29*_t93;
+    const train5_real_t _t95 = _t30*_t94 + _t88;
+    const train5_real_t _t96 = _t63*_t95;
+    const train5_real_t _t97 = -_t31*_t94 + _t90;
+    const train5_real_t _t98 = _t68*_t97;
+    const train5_real_t _t99 = _t96 + _t98;
+    const train5_real_t _t100 = _t33*_t95 - _t34*_t97;
+    const train5_real_t _t101 = _t100*_t38;
+    const train5_real_t _t102 = _t101*_t39 + _t95;
+    const train5_real_t _t103 = _t102*_t71;
+    const train5_real_t _t104 = -_t101*_t40 + _t97;
+    const train5_real_t _t105 = _t104*_t76;
+    const train5_real_t _t106 = _t103 + _t105;
+    const train5_real_t _t107 = TRAIN5_LIT(2.4154589371980677)*radius_right;
+    const train5_real_t _t108 = -TRAIN5_LIT(2.4154589371980677)*radius_left;
+    const train5_real_t _t109 = TRAIN5_LIT(0.3)*_t2;
+    const train5_real_t _t110 = TRAIN5_LIT(0.5)*radius_right;
+    const train5_real_t _t111 = TRAIN5_LIT(0.5)*radius_left;
+    const train5_real_t _t112 = TRAIN5_LIT(0.2)*radius_cart_left;
+    const train5_real_t _t113 = -TRAIN5_LIT(0.6)*radius_cart_left;
+    const train5_real_t _t114 = -TRAIN5_LIT(0.2)*radius_cart_right;
+    const train5_real_t _t115 = -TRAIN5_LIT(0.6)*radius_cart_right;
+    const train5_real_t _t116 = _t10*(_t112*_t2 + _t113*_t3);
+    const train5_real_t _t117 = _t10*(_t114*_t2 + _t115*_t3);
+    const train5_real_t _t118 = _t15*_t53 + _t16*_t50;
+    const train5_real_t _t119 = TRAIN5_LIT(0.2)*radius_cart2_left;
+    const train5_real_t _t120 = -TRAIN5_LIT(0.6)*radius_cart2_left;
+    const train5_real_t _t121 = -TRAIN5_LIT(0.2)*radius_cart2_right;
+    const train5_real_t _t122 = -TRAIN5_LIT(0.6)*radius_cart2_right;
+    const train5_real_t _t123 = _t19*(_t118*_t120 + _t119*_t56);
+    const train5_real_t _t124 = _t19*(_t118*_t122 + _t121*_t56);
+    const train5_real_t _t125 = _t24*_t61 + _t25*_t58;
+    const train5_real_t _t126 = TRAIN5_LIT(0.2)*radius_cart3_left;
+    const train5_real_t _t127 = -TRAIN5_LIT(0.6)*radius_cart3_left;
+    const train5_real_t _t128 = -TRAIN5_LIT(0.2)*radius_cart3_right;
+    const train5_real_t _t129 = -TRAIN5_LIT(0.6)*radius_cart3_right;
+    const train5_real_t _t130 = _t28*(_t125*_t127 + _t126*_t64);
+    const train5_real_t _t131 = _t28*(_t125*_t129 + _t128*_t64);
+    const train5_real_t _t132 = _t33*_t69 + _t34*_t66;
+    const train5_real_t _t133 = TRAIN5_LIT(0.2)*radius_cart4_left;
+    const train5_real_t _t134 = -TRAIN5_LIT(0.6)*radius_cart4_left;
+    const train5_real_t _t135 = -TRAIN5_LIT(0.2)*radius_cart4_right;
+    const train5_real_t _t136 = -TRAIN5_LIT(0.6)*radius_cart4_right;
+    const train5_real_t _t137 = _t37*(_t132*_t134 + _t133*_t72);
+    const train5_real_t _t138 = _t37*(_t132*_t136 + _t135*_t72);
+    const train5_real_t _t139 = _t42*_t74 - _t43*_t77;
+    const train5_real_t _t140 = _t42*_t77 + _t43*_t74;
+    const train5_real_t _t141 = TRAIN5_LIT(0.2)*radius_cart5_left;
+    const train5_real_t _t142 = -TRAIN5_LIT(0.6)*radius_cart5_left;
+    const train5_real_t _t143 = -TRAIN5_LIT(0.2)*radius_cart5_right;
+    const train5_real_t _t144 = -TRAIN5_LIT(0.6)*radius_cart5_right;
+    const train5_real_t _t145 = _t139*_t47;
+    const train5_real_t _t146 = _t46*(_t139*_t141 + _t140*_t142);
+    const train5_real_t _t147 = _t46*(_t139*_t143 + _t140*_t144);
+    const train5_real_t _t148 = TRAIN5_LIT(0.207)*_t6;
+    const train5_real_t _t149 = -TRAIN5_LIT(0.207)*_t7;
+    const train5_real_t _t150 = _t10*(-_t109*_t113 - _t112*_t79);
+    const train5_real_t _t151 = _t10*(-_t109*_t115 - _t114*_t79);
+    const train5_real_t _t152 = _t15*_t83 + _t16*_t81;
+    const train5_real_t _t153 = _t19*(_t119*_t86 + _t120*_t152);
+    const train5_real_t _t154 = _t19*(_t121*_t86 + _t122*_t152);
+    const train5_real_t _t155 = _t24*_t90 + _t25*_t88;
+    const train5_real_t _t156 = _t28*(_t126*_t93 + _t127*_t155);
+    const train5_real_t _t157 = _t28*(_t128*_t93 + _t129*_t155);
+    const train5_real_t _t158 = _t33*_t97 + _t34*_t95;
+    const train5_real_t _t159 = _t37*(_t100*_t133 + _t134*_t158);
+    const train5_real_t _t160 = _t37*(_t100*_t135 + _t136*_t158);
+    const train5_real_t _t161 = _t102*_t42 - _t104*_t43;
+    const train5_real_t _t162 = _t102*_t43 + _t104*_t42;
+    const train5_real_t _t163 = _t161*_t47;
+    const train5_real_t _t164 = _t46*(_t141*_t161 + _t142*_t162);
+    const train5_real_t _t165 = _t46*(_t143*_t161 + _t144*_t162);
     const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
     const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t _t168 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
-    const train5_real_t _t169 = _t101 + _t102;
-    const train5_real_t _t170 = _t103 + _t104;
-    const train5_real_t _t171 = _t105 + _t106;
-    const train5_real_t _t172 = _t107 + _t108;
-    const train5_real_t _t173 = K_theta_cart_x_tractor*_t4 - K_theta_cart_x_tractor_2*_t39;
-    const train5_real_t _t174 = K_theta_cart2_x_tractor*_t8 - K_theta_cart2_x_tractor_2*_t40;
-    const train5_real_t _t175 = K_theta_cart3_x_tractor*_t15 - K_theta_cart3_x_tractor_2*_t41;
-    const train5_real_t _t176 = K_theta_cart4_x_tractor*_t23 - K_theta_cart4_x_tractor_2*_t42;
-    const train5_real_t _t177 = K_theta_cart5_x_tractor*_t32 - K_theta_cart5_x_tractor_2*_t43;
-    const train5_real_t _t178 = K_theta_cart2_x_tractor*_t11 - K_theta_cart2_x_tractor_2*_t10*_t6
-            + _t101*_t9 + _t102*_t9;
-    const train5_real_t _t179 = K_theta_cart3_x_tractor*_t16 - K_theta_cart3_x_tractor_2*_t10*_t13
-            + _t103*_t9 + _t104*_t9;
-    const train5_real_t _t180 = K_theta_cart4_x_tractor*_t24 - K_theta_cart4_x_tractor_2*_t10*_t21
-            + _t105*_t9 + _t106*_t9;
-    const train5_real_t _t181 = K_theta_cart5_x_tractor*_t33 - K_theta_cart5_x_tractor_2*_t10*_t30
-            + _t107*_t9 + _t108*_t9;
-    const train5_real_t _t182 = K_theta_cart3_x_tractor*_t19 - K_theta_cart3_x_tractor_2*_t13*_t18
-            + _t103*_t17 + _t104*_t17;
-    const train5_real_t _t183 = K_theta_cart4_x_tractor*_t25 - K_theta_cart4_x_tractor_2*_t18*_t21
-            + _t105*_t17 + _t106*_t17;
-    const train5_real_t _t184 = K_theta_cart5_x_tractor*_t34 - K_theta_cart5_x_tractor_2*_t18*_t30
-            + _t107*_t17 + _t108*_t17;
-    const train5_real_t _t185 = K_theta_cart4_x_tractor*_t28 - K_theta_cart4_x_tractor_2*_t21*_t27
-            + _t105*_t26 + _t106*_t26;
-    const train5_real_t _t186 = K_theta_cart5_x_tractor*_t35 - K_theta_cart5_x_tractor_2*_t27*_t30
-            + _t107*_t26 + _t108*_t26;
-    const train5_real_t _t187 = K_theta_cart5_x_tractor*_t38 - K_theta_cart5_x_tractor_2*_t22*_t36
-            + _t107*_t109 + _t108*_t109;
-    const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t188 = J_x_tractor + _t168*_t44 + _t169*_t50 + _t170*_t61 + _t171*_t75
-            + _t172*_t90;
-    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t189 = K_theta_tractor_x_tractor_2 + _t168*_t46 + _t169*_t55 + _t170*_t68
-            + _t171*_t82 + _t172*_t98;
-    const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t190 = J_theta_tractor + _t173*_t46 + _t174*_t55 + _t175*_t68 + _t176*_t82
-            + _t177*_t98;
-    const train5_real_t J_theta_cart = p->J_theta_cart;
-    const train5_real_t _t191 = J_theta_cart*_t44 + _t168 + _t178*_t50 + _t179*_t61 + _t180*_t75
-            + _t181*_t90;
-    const train5_real_t _t192 = J_theta_cart*_t46 + _t173 + _t178*_t55 + _t179*_t68 + _t180*_t82
-            + _t181*_t98;
-    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
-    const train5_real_t _t193 = J_theta_cart2*_t50 + _t169 + _t178*_t44 + _t182*_t61 + _t183*_t75
-            + _t184*_t90;
-    const train5_real_t _t194 = J_theta_cart2*_t55 + _t174 + _t178*_t46 + _t182*_t68 + _t183*_t82
-            + _t184*_t98;
-    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
-    const train5_real_t _t195 = J_theta_cart3*_t61 + _t170 + _t179*_t44 + _t182*_t50 + _t185*_t75
-            + _t186*_t90;
-    const train5_real_t _t196 = J_theta_cart3*_t68 + _t175 + _t179*_t46 + _t182*_t55 + _t185*_t82
-            + _t186*_t98;
-    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
-    const train5_real_t _t197 = J_theta_cart4*_t75 + _t171 + _t180*_t44 + _t183*_t50 + _t185*_t61
-            + _t187*_t90;
-    const train5_real_t _t198 = J_theta_cart4*_t82 + _t176 + _t180*_t46 + _t183*_t55 + _t185*_t68
-            + _t187*_t98;
-    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
-    const train5_real_t _t199 = J_theta_cart5*_t90 + _t172 + _t181*_t44 + _t184*_t50 + _t186*_t61
-            + _t187*_t75;
-    const train5_real_t _t200 = J_theta_cart5*_t98 + _t177 + _t181*_t46 + _t184*_t55 + _t186*_t68
-            + _t187*_t82;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t201 = J_theta_right*_t124;
-    const train5_real_t _t202 = J_theta_right*_t125;
-    const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t203 = J_theta_left*_t126;
-    const train5_real_t _t204 = J_theta_left*_t127;
-    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t _t205 = J_theta_cart_right*_t130;
-    const train5_real_t _t206 = J_theta_cart_right*_t131;
-    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
-    const train5_real_t _t207 = J_theta_cart_left*_t134;
-    const train5_real_t _t208 = J_theta_cart_left*_t135;
-    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
-    const train5_real_t _t209 = J_theta_cart2_right*_t138;
-    const train5_real_t _t210 = J_theta_cart2_right*_t139;
+    const train5_real_t _t166 = K_theta_cart_x_tractor*_t2 + K_theta_cart_x_tractor_2*_t3;
+    const train5_real_t _t167 = -K_theta_cart_x_tractor*_t3 + K_theta_cart_x_tractor_2*_t2;
     const train5_real_t J_theta_cart2_left = p->J_theta_cart2_left;
-    const train5_real_t _t211 = J_theta_cart2_left*_t142;
-    const train5_real_t _t212 = J_theta_cart2_left*_t143;
-    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
-    const train5_real_t _t213 = J_theta_cart3_right*_t146;
-    const train5_real_t _t214 = J_theta_cart3_right*_t147;
+    const train5_real_t J_theta_cart2_right = p->J_theta_cart2_right;
     const train5_real_t J_theta_cart3_left = p->J_theta_cart3_left;
-    const train5_real_t _t215 = J_theta_cart3_left*_t150;
-    const train5_real_t _t216 = J_theta_cart3_left*_t151;
-    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
-    const train5_real_t _t217 = J_theta_cart4_right*_t154;
-    const train5_real_t _t218 = J_theta_cart4_right*_t155;
+    const train5_real_t J_theta_cart3_right = p->J_theta_cart3_right;
     const train5_real_t J_theta_cart4_left = p->J_theta_cart4_left;
-    const train5_real_t _t219 = J_theta_cart4_left*_t158;
-    const train5_real_t _t220 = J_theta_cart4_left*_t159;
-    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
-    const train5_real_t _t221 = J_theta_cart5_right*_t162;
-    const train5_real_t _t222 = J_theta_cart5_right*_t163;
+    const train5_real_t J_theta_cart4_right = p->J_theta_cart4_right;
     const train5_real_t J_theta_cart5_left = p->J_theta_cart5_left;
-    const train5_real_t _t223 = J_theta_cart5_left*_t166;
-    const train5_real_t _t224 = J_theta_cart5_left*_t167;
-    const train5_real_t _t225 = _t124*_t201 + _t126*_t203 + _t130*_t205 + _t134*_t207 + _t138*_t209
-            + _t142*_t211 + _t146*_t213 + _t150*_t215 + _t154*_t217 + _t158*_t219 + _t162*_t221
-            + _t166*_t223 + _t188 + _t191*_t44 + _t193*_t50 + _t195*_t61 + _t197*_t75 + _t199*_t90;
-    const train5_real_t _t226 = _t124*_t202 + _t126*_t204 + _t130*_t206 + _t134*_t208 + _t138*_t210
-            + _t142*_t212 + _t146*_t214 + _t150*_t216 + _t154*_t218 + _t158*_t220 + _t162*_t222
-            + _t166*_t224 + _t189 + _t192*_t44 + _t194*_t50 + _t196*_t61 + _t198*_t75 + _t200*_t90;
-    const train5_real_t _t227 = _t125*_t202 + _t127*_t204 + _t131*_t206 + _t135*_t208 + _t139*_t210
-            + _t143*_t212 + _t147*_t214 + _t151*_t216 + _t155*_t218 + _t159*_t220 + _t163*_t222
-            + _t167*_t224 + _t190 + _t192*_t46 + _t194*_t55 + _t196*_t68 + _t198*_t82 + _t200*_t98;
-    const train5_real_t _t228 = _t110*_t226 + _t122*_t225;
-    const train5_real_t _t229 = _t111*_t226 + _t123*_t225;
-    const train5_real_t _t230 = _t110*_t227 + _t122*_t226;
-    const train5_real_t _t231 = _t111*_t227 + _t123*_t226;
-    const train5_real_t _t232 = _t110*_t230 + _t122*_t228;
-    const train5_real_t _t233 = _t110*_t231 + _t122*_t229;
-    const train5_real_t _t234 = _t111*_t231 + _t123*_t229;
-    M[0] = _t232;
-    M[1] = _t233;
-    M[2] = _t233;
-    M[3] = _t234;
+    const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
+    const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
+    const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
+    const train5_real_t J_theta_left = p->J_theta_left;
+    const train5_real_t J_theta_right = p->J_theta_right;
+    const train5_real_t J_x_tractor = p->J_x_tractor;
+    const train5_real_t _t168 = J_theta_cart2_left*_t124*_t124 + J_theta_cart2_right*_t123*_t123
+            + J_theta_cart3_left*_t131*_t131 + J_theta_cart3_right*_t130*_t130
+            + J_theta_cart4_left*_t138*_t138 + J_theta_cart4_right*_t137*_t137
+            + J_theta_cart5_left*_t147*_t147 + J_theta_cart5_right*_t146*_t146
+            + J_theta_cart_left*_t117*_t117 + J_theta_cart_right*_t116*_t116 + J_theta_left*_t7*_t7
+            + J_theta_right*_t6*_t6 + J_x_tractor;
+    const train5_real_t J_theta_cart = p->J_theta_cart;
+    const train5_real_t _t169 = J_theta_cart*_t49*_t49 + TRAIN5_LIT(2.0)*_t166*_t49 + _t168;
+    const train5_real_t J_theta_cart2 = p->J_theta_cart2;
+    const train5_real_t _t170 = J_theta_cart2*_t57*_t57 + _t169 + _t51*_t57 + _t54*_t57
+            + _t57*(_t51 + _t54);
+    const train5_real_t J_theta_cart3 = p->J_theta_cart3;
+    const train5_real_t _t171 = J_theta_cart3*_t65*_t65 + _t170 + _t59*_t65 + _t62*_t65
+            + _t65*(_t59 + _t62);
+    const train5_real_t J_theta_cart4 = p->J_theta_cart4;
+    const train5_real_t _t172 = J_theta_cart4*_t73*_t73 + _t171 + _t67*_t73 + _t70*_t73
+            + _t73*(_t67 + _t70);
+    const train5_real_t J_theta_cart5 = p->J_theta_cart5;
+    const train5_real_t _t173 = J_theta_cart5*_t145*_t145 + _t145*_t75 + _t145*_t78
+            + _t145*(_t75 + _t78) + _t172;
+    const train5_real_t _t174 = J_theta_cart2_left*_t124*_t154 + J_theta_cart2_right*_t123*_t153
+            + J_theta_cart3_left*_t131*_t157 + J_theta_cart3_right*_t130*_t156
+            + J_theta_cart4_left*_t138*_t160 + J_theta_cart4_right*_t137*_t159
+            + J_theta_cart5_left*_t147*_t165 + J_theta_cart5_right*_t146*_t164
+            + J_theta_cart_left*_t117*_t151 + J_theta_cart_right*_t116*_t150
+            + J_theta_left*_t149*_t7 + J_theta_right*_t148*_t6;
+    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const train5_real_t _t175 = K_theta_tractor_x_tractor_2 + _t174;
+    const train5_real_t _t176 = J_theta_cart*_t49*_t80 + _t166*_t80 - TRAIN5_LIT(0.3)*_t167*_t49
+            + _t175;
+    const train5_real_t _t177 = J_theta_cart2*_t57*_t87 + _t176 + _t51*_t87 + _t54*_t87 + _t57*_t85;
+    const train5_real_t _t178 = J_theta_cart3*_t65*_t94 + _t177 + _t59*_t94 + _t62*_t94 + _t65*_t92;
+    const train5_real_t _t179 = J_theta_cart4*_t101*_t73 + _t101*_t67 + _t101*_t70 + _t178
+            + _t73*_t99;
+    const train5_real_t _t180 = J_theta_cart5*_t145*_t163 + _t106*_t145 + _t163*_t75 + _t163*_t78
+            + _t179;
+    const train5_real_t _t181 = J_theta_cart2_left*_t154*_t154 + J_theta_cart2_right*_t153*_t153
+            + J_theta_cart3_left*_t157*_t157 + J_theta_cart3_right*_t156*_t156
+            + J_theta_cart4_left*_t160*_t160 + J_theta_cart4_right*_t159*_t159
+            + J_theta_cart5_left*_t165*_t165 + J_theta_cart5_right*_t164*_t164
+            + J_theta_cart_left*_t151*_t151 + J_theta_cart_right*_t150*_t150
+            + J_theta_left*_t149*_t149 + J_theta_right*_t148*_t148;
+    const train5_real_t J_theta_tractor = p->J_theta_tractor;
+    const train5_real_t _t182 = J_theta_tractor + _t181;
+    const train5_real_t _t183 = J_theta_cart*_t80*_t80 - TRAIN5_LIT(0.6)*_t167*_t80 + _t182;
+    const train5_real_t _t184 = J_theta_cart2*_t87*_t87 + _t183 + _t82*_t87 + _t84*_t87 + _t85*_t87;
+    const train5_real_t _t185 = J_theta_cart3*_t94*_t94 + _t184 + _t89*_t94 + _t91*_t94 + _t92*_t94;
+    const train5_real_t _t186 = J_theta_cart4*_t101*_t101 + _t101*_t96 + _t101*_t98 + _t101*_t99
+            + _t185;
+    const train5_real_t _t187 = J_theta_cart5*_t163*_t163 + _t103*_t163 + _t105*_t163 + _t106*_t163
+            + _t186;
+    const train5_real_t _t188 = _t107*_t180 + _t110*_t173;
+    const train5_real_t _t189 = _t108*_t180 + _t111*_t173;
+    const train5_real_t _t190 = _t107*_t187 + _t110*_t180;
+    const train5_real_t _t191 = _t108*_t187 + _t111*_t180;
+    const train5_real_t _t192 = _t107*_t190 + _t110*_t188;
+    const train5_real_t _t193 = _t107*_t191 + _t110*_t189;
+    const train5_real_t _t194 = _t108*_t191 + _t111*_t189;
+    M[0] = _t192;
+    M[1] = _t193;
+    M[2] = _t193;
+    M[3] = _t194;
 }
 
 /* train5_minimal_bias_forces: documented in train5_model.h.
-   operations after CSE: 616 add, 892 mul, 10 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 227 add, 447 mul, 6 div, 10 sin/cos, 0 sqrt */
 void train5_minimal_bias_forces(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, train5_real_t *H)
 {
-    train5_real_t _shared[408];
+    train5_real_t _shared[239];
     train5_staged_quantities(p, q, wheel_rates, _shared);
     const train5_real_t _ms48 = _shared[0];
     const train5_real_t _ms49 = _shared[1];
-    const train5_real_t _ms162 = _shared[52];
-    const train5_real_t _ms163 = _shared[53];
-    const train5_real_t _ms636 = _shared[406];
-    const train5_real_t _ms637 = _shared[407];
-    const train5_real_t _t0 = _ms162*_ms636 + _ms48*_ms637;
-    const train5_real_t _t1 = _ms163*_ms636 + _ms49*_ms637;
+    const train5_real_t _ms162 = _shared[6];
+    const train5_real_t _ms163 = _shared[7];
+    const train5_real_t _ms483 = _shared[231];
+    const train5_real_t _ms490 = _shared[238];
+    const train5_real_t _t0 = _ms162*_ms483 + _ms48*_ms490;
+    const train5_real_t _t1 = _ms163*_ms483 + _ms49*_ms490;
     H[0] = _t0;
     H[1] = _t1;
 }
 
 /* train5_minimal_forward_dynamics: documented in train5_model.h.
-   operations after CSE: 739 add, 1046 mul, 13 div, 10 sin/cos, 0 sqrt */
+   operations after CSE: 333 add, 624 mul, 7 div, 10 sin/cos, 0 sqrt */
 train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *wheel_accels)
 {
@@ -2978,130 +2004,146 @@ train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const 
     (void)theta_tractor;
     (void)thetadot_left;
     (void)thetadot_right;
-    train5_real_t _shared[408];
+    train5_real_t _shared[239];
     train5_staged_quantities(p, q, wheel_rates, _shared);
-    const train5_real_t _ms224 = _shared[54];
-    const train5_real_t _ms225 = _shared[55];
-    const train5_real_t _ms228 = _shared[58];
-    const train5_real_t _ms229 = _shared[59];
-    const train5_real_t _ms232 = _shared[62];
-    const train5_real_t _ms233 = _shared[63];
-    const train5_real_t _ms236 = _shared[66];
-    const train5_real_t _ms237 = _shared[67];
-    const train5_real_t _ms240 = _shared[70];
-    const train5_real_t _ms241 = _shared[71];
-    const train5_real_t _ms248 = _shared[74];
-    const train5_real_t _ms249 = _shared[75];
-    const train5_real_t _ms252 = _shared[78];
-    const train5_real_t _ms253 = _shared[79];
-    const train5_real_t _ms256 = _shared[82];
-    const train5_real_t _ms257 = _shared[83];
-    const train5_real_t _ms260 = _shared[86];
-    const train5_real_t _ms261 = _shared[87];
-    const train5_real_t _ms264 = _shared[90];
-    const train5_real_t _ms265 = _shared[91];
-    const train5_real_t _ms268 = _shared[94];
-    const train5_real_t _ms269 = _shared[95];
-    const train5_real_t _ms272 = _shared[98];
-    const train5_real_t _ms273 = _shared[99];
-    const train5_real_t _ms276 = _shared[102];
-    const train5_real_t _ms277 = _shared[103];
-    const train5_real_t _ms280 = _shared[106];
-    const train5_real_t _ms281 = _shared[107];
-    const train5_real_t _ms284 = _shared[110];
-    const train5_real_t _ms285 = _shared[111];
-    const train5_real_t _ms305 = _shared[119];
-    const train5_real_t _ms306 = _shared[120];
-    const train5_real_t _ms307 = _shared[121];
-    const train5_real_t _ms308 = _shared[122];
-    const train5_real_t _ms309 = _shared[123];
-    const train5_real_t _ms315 = _shared[129];
-    const train5_real_t _ms316 = _shared[130];
-    const train5_real_t _ms317 = _shared[131];
-    const train5_real_t _ms318 = _shared[132];
-    const train5_real_t _ms319 = _shared[133];
-    const train5_real_t _ms320 = _shared[134];
-    const train5_real_t _ms321 = _shared[135];
-    const train5_real_t _ms322 = _shared[136];
-    const train5_real_t _ms323 = _shared[137];
-    const train5_real_t _ms324 = _shared[138];
-    const train5_real_t _ms325 = _shared[139];
-    const train5_real_t _ms326 = _shared[140];
-    const train5_real_t _ms327 = _shared[141];
-    const train5_real_t _ms328 = _shared[142];
-    const train5_real_t _ms329 = _shared[143];
-    const train5_real_t _ms636 = _shared[406];
-    const train5_real_t _ms637 = _shared[407];
-    const train5_real_t _t0 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t1 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t2 = J_x_tractor + _ms224*_ms305 + _ms228*_ms306 + _ms232*_ms307
-            + _ms236*_ms308 + _ms240*_ms309;
-    const train5_real_t _t3 = J_theta_cart*_ms224 + _ms228*_ms320 + _ms232*_ms321 + _ms236*_ms322
-            + _ms240*_ms323 + _ms305;
-    const train5_real_t _t4 = J_theta_cart2*_ms228 + _ms224*_ms320 + _ms232*_ms324 + _ms236*_ms325
-            + _ms240*_ms326 + _ms306;
-    const train5_real_t _t5 = J_theta_cart3*_ms232 + _ms224*_ms321 + _ms228*_ms324 + _ms236*_ms327
-            + _ms240*_ms328 + _ms307;
-    const train5_real_t _t6 = J_theta_cart4*_ms236 + _ms224*_ms322 + _ms228*_ms325 + _ms232*_ms327
-            + _ms240*_ms329 + _ms308;
-    const train5_real_t _t7 = J_theta_cart5*_ms240 + _ms224*_ms323 + _ms228*_ms326 + _ms232*_ms328
-            + _ms236*_ms329 + _ms309;
-    const train5_real_t _t8 = J_theta_right*_t0;
-    const train5_real_t _t9 = J_theta_left*_t1;
-    const train5_real_t _t10 = J_theta_cart_right*_ms248;
-    const train5_real_t _t11 = J_theta_cart_left*_ms252;
-    const train5_real_t _t12 = J_theta_cart2_right*_ms256;
-    const train5_real_t _t13 = J_theta_cart2_left*_ms260;
-    const train5_real_t _t14 = J_theta_cart3_right*_ms264;
-    const train5_real_t _t15 = J_theta_cart3_left*_ms268;
-    const train5_real_t _t16 = J_theta_cart4_right*_ms272;
-    const train5_real_t _t17 = J_theta_cart4_left*_ms276;
-    const train5_real_t _t18 = J_theta_cart5_right*_ms280;
-    const train5_real_t _t19 = J_theta_cart5_left*_ms284;
-    const train5_real_t _t20 = _ms224*_t3 + _ms228*_t4 + _ms232*_t5 + _ms236*_t6 + _ms240*_t7
-            + _ms248*_t10 + _ms252*_t11 + _ms256*_t12 + _ms260*_t13 + _ms264*_t14 + _ms268*_t15
-            + _ms272*_t16 + _ms276*_t17 + _ms280*_t18 + _ms284*_t19 + _t0*_t8 + _t1*_t9 + _t2;
-    const train5_real_t _t21 = K_theta_tractor_x_tractor_2 + _ms225*_ms305 + _ms229*_ms306
-            + _ms233*_ms307 + _ms237*_ms308 + _ms241*_ms309;
-    const train5_real_t _t22 = J_theta_cart*_ms225 + _ms229*_ms320 + _ms233*_ms321 + _ms237*_ms322
-            + _ms241*_ms323 + _ms315;
-    const train5_real_t _t23 = J_theta_cart2*_ms229 + _ms225*_ms320 + _ms233*_ms324 + _ms237*_ms325
-            + _ms241*_ms326 + _ms316;
-    const train5_real_t _t24 = J_theta_cart3*_ms233 + _ms225*_ms321 + _ms229*_ms324 + _ms237*_ms327
-            + _ms241*_ms328 + _ms317;
-    const train5_real_t _t25 = J_theta_cart4*_ms237 + _ms225*_ms322 + _ms229*_ms325 + _ms233*_ms327
-            + _ms241*_ms329 + _ms318;
-    const train5_real_t _t26 = J_theta_cart5*_ms241 + _ms225*_ms323 + _ms229*_ms326 + _ms233*_ms328
-            + _ms237*_ms329 + _ms319;
-    const train5_real_t _t27 = TRAIN5_LIT(0.207)*_t0;
-    const train5_real_t _t28 = J_theta_right*_t27;
+    const train5_real_t _ms225 = _shared[9];
+    const train5_real_t _ms235 = _shared[17];
+    const train5_real_t _ms236 = _shared[18];
+    const train5_real_t _ms237 = _shared[19];
+    const train5_real_t _ms249 = _shared[31];
+    const train5_real_t _ms250 = _shared[32];
+    const train5_real_t _ms251 = _shared[33];
+    const train5_real_t _ms263 = _shared[45];
+    const train5_real_t _ms264 = _shared[46];
+    const train5_real_t _ms265 = _shared[47];
+    const train5_real_t _ms277 = _shared[59];
+    const train5_real_t _ms278 = _shared[60];
+    const train5_real_t _ms279 = _shared[61];
+    const train5_real_t _ms291 = _shared[73];
+    const train5_real_t _ms292 = _shared[74];
+    const train5_real_t _ms293 = _shared[75];
+    const train5_real_t _ms296 = _shared[76];
+    const train5_real_t _ms297 = _shared[77];
+    const train5_real_t _ms298 = _shared[78];
+    const train5_real_t _ms303 = _shared[83];
+    const train5_real_t _ms304 = _shared[84];
+    const train5_real_t _ms305 = _shared[85];
+    const train5_real_t _ms310 = _shared[90];
+    const train5_real_t _ms311 = _shared[91];
+    const train5_real_t _ms312 = _shared[92];
+    const train5_real_t _ms317 = _shared[97];
+    const train5_real_t _ms318 = _shared[98];
+    const train5_real_t _ms319 = _shared[99];
+    const train5_real_t _ms324 = _shared[104];
+    const train5_real_t _ms325 = _shared[105];
+    const train5_real_t _ms326 = _shared[106];
+    const train5_real_t _ms415 = _shared[183];
+    const train5_real_t _ms416 = _shared[184];
+    const train5_real_t _ms417 = _shared[185];
+    const train5_real_t _ms418 = _shared[186];
+    const train5_real_t _ms419 = _shared[187];
+    const train5_real_t _ms420 = _shared[188];
+    const train5_real_t _ms421 = _shared[189];
+    const train5_real_t _ms422 = _shared[190];
+    const train5_real_t _ms423 = _shared[191];
+    const train5_real_t _ms424 = _shared[192];
+    const train5_real_t _ms426 = _shared[194];
+    const train5_real_t _ms428 = _shared[196];
+    const train5_real_t _ms430 = _shared[198];
+    const train5_real_t _ms432 = _shared[200];
+    const train5_real_t _ms434 = _shared[202];
+    const train5_real_t _ms436 = _shared[204];
+    const train5_real_t _ms438 = _shared[206];
+    const train5_real_t _ms440 = _shared[208];
+    const train5_real_t _ms441 = _shared[209];
+    const train5_real_t _ms442 = _shared[210];
+    const train5_real_t _ms443 = _shared[211];
+    const train5_real_t _ms444 = _shared[212];
+    const train5_real_t _ms445 = _shared[213];
+    const train5_real_t _ms446 = _shared[214];
+    const train5_real_t _ms447 = _shared[215];
+    const train5_real_t _ms448 = _shared[216];
+    const train5_real_t _ms483 = _shared[231];
+    const train5_real_t _ms490 = _shared[238];
+    const train5_real_t _t0 = _ms225*radius_left;
+    const train5_real_t _t1 = _ms225*radius_right;
+    const train5_real_t _t2 = _ms417*_ms426;
+    const train5_real_t _t3 = _ms418*_ms428;
+    const train5_real_t _t4 = _ms419*_ms430;
+    const train5_real_t _t5 = _ms420*_ms432;
+    const train5_real_t _t6 = _ms421*_ms434;
+    const train5_real_t _t7 = _ms422*_ms436;
+    const train5_real_t _t8 = _ms423*_ms438;
+    const train5_real_t _t9 = _ms424*_ms440;
+    const train5_real_t _t10 = _ms417*_ms441;
+    const train5_real_t _t11 = _ms418*_ms442;
+    const train5_real_t _t12 = _t10 + _t11;
+    const train5_real_t _t13 = _ms419*_ms443;
+    const train5_real_t _t14 = _ms420*_ms444;
+    const train5_real_t _t15 = _t13 + _t14;
+    const train5_real_t _t16 = _ms421*_ms445;
+    const train5_real_t _t17 = _ms422*_ms446;
+    const train5_real_t _t18 = _t16 + _t17;
+    const train5_real_t _t19 = _ms423*_ms447;
+    const train5_real_t _t20 = _ms424*_ms448;
+    const train5_real_t _t21 = _t19 + _t20;
+    const train5_real_t _t22 = J_theta_cart2_left*_ms251*_ms251 + J_theta_cart2_right*_ms250*_ms250
+            + J_theta_cart3_left*_ms265*_ms265 + J_theta_cart3_right*_ms264*_ms264
+            + J_theta_cart4_left*_ms279*_ms279 + J_theta_cart4_right*_ms278*_ms278
+            + J_theta_cart5_left*_ms293*_ms293 + J_theta_cart5_right*_ms292*_ms292
+            + J_theta_cart_left*_ms237*_ms237 + J_theta_cart_right*_ms236*_ms236
+            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
+    const train5_real_t _t23 = J_theta_cart*_ms235*_ms235 + TRAIN5_LIT(2.0)*_ms235*_ms415 + _t22;
+    const train5_real_t _t24 = J_theta_cart2*_ms249*_ms249 + _ms249*_t2 + _ms249*_t3
+            + _ms249*(_t2 + _t3) + _t23;
+    const train5_real_t _t25 = J_theta_cart3*_ms263*_ms263 + _ms263*_t4 + _ms263*_t5
+            + _ms263*(_t4 + _t5) + _t24;
+    const train5_real_t _t26 = J_theta_cart4*_ms277*_ms277 + _ms277*_t6 + _ms277*_t7
+            + _ms277*(_t6 + _t7) + _t25;
+    const train5_real_t _t27 = J_theta_cart5*_ms291*_ms291 + _ms291*_t8 + _ms291*_t9
+            + _ms291*(_t8 + _t9) + _t26;
+    const train5_real_t _t28 = TRAIN5_LIT(0.207)*_t0;
     const train5_real_t _t29 = -TRAIN5_LIT(0.207)*_t1;
-    const train5_real_t _t30 = J_theta_left*_t29;
-    const train5_real_t _t31 = J_theta_cart_right*_ms249;
-    const train5_real_t _t32 = J_theta_cart_left*_ms253;
-    const train5_real_t _t33 = J_theta_cart2_right*_ms257;
-    const train5_real_t _t34 = J_theta_cart2_left*_ms261;
-    const train5_real_t _t35 = J_theta_cart3_right*_ms265;
-    const train5_real_t _t36 = J_theta_cart3_left*_ms269;
-    const train5_real_t _t37 = J_theta_cart4_right*_ms273;
-    const train5_real_t _t38 = J_theta_cart4_left*_ms277;
-    const train5_real_t _t39 = J_theta_cart5_right*_ms281;
-    const train5_real_t _t40 = J_theta_cart5_left*_ms285;
-    const train5_real_t _t41 = _ms224*_t22 + _ms228*_t23 + _ms232*_t24 + _ms236*_t25 + _ms240*_t26
-            + _ms248*_t31 + _ms252*_t32 + _ms256*_t33 + _ms260*_t34 + _ms264*_t35 + _ms268*_t36
-            + _ms272*_t37 + _ms276*_t38 + _ms280*_t39 + _ms284*_t40 + _t0*_t28 + _t1*_t30 + _t21;
-    const train5_real_t _t42 = J_theta_tractor + _ms225*_ms315 + _ms229*_ms316 + _ms233*_ms317
-            + _ms237*_ms318 + _ms241*_ms319;
-    const train5_real_t _t43 = _ms225*_t22 + _ms229*_t23 + _ms233*_t24 + _ms237*_t25 + _ms241*_t26
-            + _ms249*_t31 + _ms253*_t32 + _ms257*_t33 + _ms261*_t34 + _ms265*_t35 + _ms269*_t36
-            + _ms273*_t37 + _ms277*_t38 + _ms281*_t39 + _ms285*_t40 + _t27*_t28 + _t29*_t30 + _t42;
-    const train5_real_t _t44 = _t20*_t43 - _t41*_t41;
-    const train5_real_t _t45 = -_ms636 + _t0*tau_right + _t1*tau_left;
-    const train5_real_t _t46 = -_ms637 + _t27*tau_right + _t29*tau_left;
+    const train5_real_t _t30 = J_theta_cart2_left*_ms251*_ms305 + J_theta_cart2_right*_ms250*_ms304
+            + J_theta_cart3_left*_ms265*_ms312 + J_theta_cart3_right*_ms264*_ms311
+            + J_theta_cart4_left*_ms279*_ms319 + J_theta_cart4_right*_ms278*_ms318
+            + J_theta_cart5_left*_ms293*_ms326 + J_theta_cart5_right*_ms292*_ms325
+            + J_theta_cart_left*_ms237*_ms298 + J_theta_cart_right*_ms236*_ms297
+            + J_theta_left*_t1*_t29 + J_theta_right*_t0*_t28;
+    const train5_real_t _t31 = K_theta_tractor_x_tractor_2 + _t30;
+    const train5_real_t _t32 = J_theta_cart*_ms235*_ms296 - TRAIN5_LIT(0.3)*_ms235*_ms416
+            + _ms296*_ms415 + _t31;
+    const train5_real_t _t33 = J_theta_cart2*_ms249*_ms303 + _ms249*_t12 + _ms303*_t2 + _ms303*_t3
+            + _t32;
+    const train5_real_t _t34 = J_theta_cart3*_ms263*_ms310 + _ms263*_t15 + _ms310*_t4 + _ms310*_t5
+            + _t33;
+    const train5_real_t _t35 = J_theta_cart4*_ms277*_ms317 + _ms277*_t18 + _ms317*_t6 + _ms317*_t7
+            + _t34;
+    const train5_real_t _t36 = J_theta_cart5*_ms291*_ms324 + _ms291*_t21 + _ms324*_t8 + _ms324*_t9
+            + _t35;
+    const train5_real_t _t37 = J_theta_cart2_left*_ms305*_ms305 + J_theta_cart2_right*_ms304*_ms304
+            + J_theta_cart3_left*_ms312*_ms312 + J_theta_cart3_right*_ms311*_ms311
+            + J_theta_cart4_left*_ms319*_ms319 + J_theta_cart4_right*_ms318*_ms318
+            + J_theta_cart5_left*_ms326*_ms326 + J_theta_cart5_right*_ms325*_ms325
+            + J_theta_cart_left*_ms298*_ms298 + J_theta_cart_right*_ms297*_ms297
+            + J_theta_left*_t29*_t29 + J_theta_right*_t28*_t28;
+    const train5_real_t _t38 = J_theta_tractor + _t37;
+    const train5_real_t _t39 = J_theta_cart*_ms296*_ms296 - TRAIN5_LIT(0.6)*_ms296*_ms416 + _t38;
+    const train5_real_t _t40 = J_theta_cart2*_ms303*_ms303 + _ms303*_t10 + _ms303*_t11 + _ms303*_t12
+            + _t39;
+    const train5_real_t _t41 = J_theta_cart3*_ms310*_ms310 + _ms310*_t13 + _ms310*_t14 + _ms310*_t15
+            + _t40;
+    const train5_real_t _t42 = J_theta_cart4*_ms317*_ms317 + _ms317*_t16 + _ms317*_t17 + _ms317*_t18
+            + _t41;
+    const train5_real_t _t43 = J_theta_cart5*_ms324*_ms324 + _ms324*_t19 + _ms324*_t20 + _ms324*_t21
+            + _t42;
+    const train5_real_t _t44 = _t27*_t43 - _t36*_t36;
+    const train5_real_t _t45 = -_ms483 + _t0*tau_right + _t1*tau_left;
+    const train5_real_t _t46 = -_ms490 + _t28*tau_right + _t29*tau_left;
     const train5_real_t _t47 = TRAIN5_LIT(1.0)/_t44;
-    const train5_real_t _t48 = _t47*(-_t41*_t46 + _t43*_t45);
-    const train5_real_t _t49 = _t47*(_t20*_t46 - _t41*_t45);
-    const train5_real_t _t50 = _t0*_t48 + _t27*_t49;
+    const train5_real_t _t48 = _t47*(-_t36*_t46 + _t43*_t45);
+    const train5_real_t _t49 = _t47*(_t27*_t46 - _t36*_t45);
+    const train5_real_t _t50 = _t0*_t48 + _t28*_t49;
     const train5_real_t _t51 = _t1*_t48 + _t29*_t49;
     if (!(radius_cart2_left > TRAIN5_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
@@ -3196,7 +2238,7 @@ train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const 
     if (!(J_x_tractor > TRAIN5_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    if (!(_t20 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t27 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
     if (!(_t44 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
@@ -3213,7 +2255,7 @@ train5_status_t train5_minimal_forward_dynamics(const train5_params_t *p, const 
 }
 
 /* train5_linearization: documented in train5_model.h.
-   operations after CSE: 4085 add, 5081 mul, 13 div, 22 sin/cos, 0 sqrt */
+   operations after CSE: 2392 add, 3420 mul, 7 div, 22 sin/cos, 0 sqrt */
 void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *A, train5_real_t *B)
 {
@@ -3232,16 +2274,6 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t J_theta_cart5_right = p->J_theta_cart5_right;
     const train5_real_t J_theta_cart_left = p->J_theta_cart_left;
     const train5_real_t J_theta_cart_right = p->J_theta_cart_right;
-    const train5_real_t K_theta_cart_x_tractor = p->K_theta_cart_x_tractor;
-    const train5_real_t K_theta_cart_x_tractor_2 = p->K_theta_cart_x_tractor_2;
-    const train5_real_t K_theta_cart2_x_tractor = p->K_theta_cart2_x_tractor;
-    const train5_real_t K_theta_cart2_x_tractor_2 = p->K_theta_cart2_x_tractor_2;
-    const train5_real_t K_theta_cart3_x_tractor = p->K_theta_cart3_x_tractor;
-    const train5_real_t K_theta_cart3_x_tractor_2 = p->K_theta_cart3_x_tractor_2;
-    const train5_real_t K_theta_cart4_x_tractor = p->K_theta_cart4_x_tractor;
-    const train5_real_t K_theta_cart4_x_tractor_2 = p->K_theta_cart4_x_tractor_2;
-    const train5_real_t K_theta_cart5_x_tractor = p->K_theta_cart5_x_tractor;
-    const train5_real_t K_theta_cart5_x_tractor_2 = p->K_theta_cart5_x_tractor_2;
     const train5_real_t K_theta_tractor_x_tractor = p->K_theta_tractor_x_tractor;
     const train5_real_t radius_left = p->radius_left;
     const train5_real_t radius_right = p->radius_right;
@@ -3251,2583 +2283,1870 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t theta_cart3 = q[5];
     const train5_real_t theta_cart4 = q[6];
     const train5_real_t theta_cart5 = q[7];
-    train5_real_t _shared[408];
+    train5_real_t _shared[239];
     train5_staged_quantities(p, q, wheel_rates, _shared);
     const train5_real_t _ms48 = _shared[0];
     const train5_real_t _ms49 = _shared[1];
-    const train5_real_t _ms84 = _shared[4];
-    const train5_real_t _ms89 = _shared[5];
-    const train5_real_t _ms94 = _shared[6];
-    const train5_real_t _ms99 = _shared[7];
-    const train5_real_t _ms104 = _shared[8];
-    const train5_real_t _ms109 = _shared[9];
-    const train5_real_t _ms114 = _shared[10];
-    const train5_real_t _ms119 = _shared[11];
-    const train5_real_t _ms125 = _shared[15];
-    const train5_real_t _ms126 = _shared[16];
-    const train5_real_t _ms127 = _shared[17];
-    const train5_real_t _ms128 = _shared[18];
-    const train5_real_t _ms129 = _shared[19];
-    const train5_real_t _ms130 = _shared[20];
-    const train5_real_t _ms131 = _shared[21];
-    const train5_real_t _ms132 = _shared[22];
-    const train5_real_t _ms133 = _shared[23];
-    const train5_real_t _ms134 = _shared[24];
-    const train5_real_t _ms135 = _shared[25];
-    const train5_real_t _ms136 = _shared[26];
-    const train5_real_t _ms137 = _shared[27];
-    const train5_real_t _ms138 = _shared[28];
-    const train5_real_t _ms139 = _shared[29];
-    const train5_real_t _ms140 = _shared[30];
-    const train5_real_t _ms141 = _shared[31];
-    const train5_real_t _ms142 = _shared[32];
-    const train5_real_t _ms143 = _shared[33];
-    const train5_real_t _ms144 = _shared[34];
-    const train5_real_t _ms145 = _shared[35];
-    const train5_real_t _ms146 = _shared[36];
-    const train5_real_t _ms148 = _shared[38];
-    const train5_real_t _ms149 = _shared[39];
-    const train5_real_t _ms150 = _shared[40];
-    const train5_real_t _ms151 = _shared[41];
-    const train5_real_t _ms152 = _shared[42];
-    const train5_real_t _ms153 = _shared[43];
-    const train5_real_t _ms154 = _shared[44];
-    const train5_real_t _ms155 = _shared[45];
-    const train5_real_t _ms156 = _shared[46];
-    const train5_real_t _ms157 = _shared[47];
-    const train5_real_t _ms158 = _shared[48];
-    const train5_real_t _ms159 = _shared[49];
-    const train5_real_t _ms160 = _shared[50];
-    const train5_real_t _ms161 = _shared[51];
-    const train5_real_t _ms162 = _shared[52];
-    const train5_real_t _ms163 = _shared[53];
-    const train5_real_t _ms224 = _shared[54];
-    const train5_real_t _ms225 = _shared[55];
-    const train5_real_t _ms228 = _shared[58];
-    const train5_real_t _ms229 = _shared[59];
-    const train5_real_t _ms232 = _shared[62];
-    const train5_real_t _ms233 = _shared[63];
-    const train5_real_t _ms236 = _shared[66];
-    const train5_real_t _ms237 = _shared[67];
-    const train5_real_t _ms240 = _shared[70];
-    const train5_real_t _ms241 = _shared[71];
-    const train5_real_t _ms248 = _shared[74];
-    const train5_real_t _ms249 = _shared[75];
-    const train5_real_t _ms252 = _shared[78];
-    const train5_real_t _ms253 = _shared[79];
-    const train5_real_t _ms256 = _shared[82];
-    const train5_real_t _ms257 = _shared[83];
-    const train5_real_t _ms260 = _shared[86];
-    const train5_real_t _ms261 = _shared[87];
-    const train5_real_t _ms264 = _shared[90];
-    const train5_real_t _ms265 = _shared[91];
-    const train5_real_t _ms268 = _shared[94];
-    const train5_real_t _ms269 = _shared[95];
-    const train5_real_t _ms272 = _shared[98];
-    const train5_real_t _ms273 = _shared[99];
-    const train5_real_t _ms276 = _shared[102];
-    const train5_real_t _ms277 = _shared[103];
-    const train5_real_t _ms280 = _shared[106];
-    const train5_real_t _ms281 = _shared[107];
-    const train5_real_t _ms284 = _shared[110];
-    const train5_real_t _ms285 = _shared[111];
-    const train5_real_t _ms286 = _shared[112];
-    const train5_real_t _ms287 = _shared[113];
-    const train5_real_t _ms288 = _shared[114];
-    const train5_real_t _ms289 = _shared[115];
-    const train5_real_t _ms290 = _shared[116];
-    const train5_real_t _ms291 = _shared[117];
-    const train5_real_t _ms292 = _shared[118];
-    const train5_real_t _ms305 = _shared[119];
-    const train5_real_t _ms306 = _shared[120];
-    const train5_real_t _ms307 = _shared[121];
-    const train5_real_t _ms308 = _shared[122];
-    const train5_real_t _ms309 = _shared[123];
-    const train5_real_t _ms310 = _shared[124];
-    const train5_real_t _ms311 = _shared[125];
-    const train5_real_t _ms312 = _shared[126];
-    const train5_real_t _ms313 = _shared[127];
-    const train5_real_t _ms314 = _shared[128];
-    const train5_real_t _ms315 = _shared[129];
-    const train5_real_t _ms316 = _shared[130];
-    const train5_real_t _ms317 = _shared[131];
-    const train5_real_t _ms318 = _shared[132];
-    const train5_real_t _ms319 = _shared[133];
-    const train5_real_t _ms320 = _shared[134];
-    const train5_real_t _ms321 = _shared[135];
-    const train5_real_t _ms322 = _shared[136];
-    const train5_real_t _ms323 = _shared[137];
-    const train5_real_t _ms324 = _shared[138];
-    const train5_real_t _ms325 = _shared[139];
-    const train5_real_t _ms326 = _shared[140];
-    const train5_real_t _ms327 = _shared[141];
-    const train5_real_t _ms328 = _shared[142];
-    const train5_real_t _ms329 = _shared[143];
-    const train5_real_t _ms333 = _shared[146];
-    const train5_real_t _ms334 = _shared[147];
-    const train5_real_t _ms335 = _shared[148];
-    const train5_real_t _ms336 = _shared[149];
-    const train5_real_t _ms337 = _shared[150];
-    const train5_real_t _ms338 = _shared[151];
-    const train5_real_t _ms339 = _shared[152];
-    const train5_real_t _ms341 = _shared[154];
-    const train5_real_t _ms343 = _shared[156];
-    const train5_real_t _ms345 = _shared[158];
-    const train5_real_t _ms347 = _shared[160];
-    const train5_real_t _ms349 = _shared[162];
-    const train5_real_t _ms351 = _shared[164];
-    const train5_real_t _ms353 = _shared[166];
-    const train5_real_t _ms355 = _shared[168];
-    const train5_real_t _ms357 = _shared[170];
-    const train5_real_t _ms359 = _shared[172];
-    const train5_real_t _ms361 = _shared[174];
-    const train5_real_t _ms363 = _shared[176];
-    const train5_real_t _ms365 = _shared[178];
-    const train5_real_t _ms367 = _shared[180];
-    const train5_real_t _ms369 = _shared[182];
-    const train5_real_t _ms371 = _shared[184];
-    const train5_real_t _ms373 = _shared[186];
-    const train5_real_t _ms375 = _shared[188];
-    const train5_real_t _ms377 = _shared[190];
-    const train5_real_t _ms379 = _shared[192];
-    const train5_real_t _ms381 = _shared[194];
-    const train5_real_t _ms383 = _shared[196];
-    const train5_real_t _ms385 = _shared[198];
-    const train5_real_t _ms387 = _shared[200];
-    const train5_real_t _ms389 = _shared[202];
-    const train5_real_t _ms391 = _shared[204];
-    const train5_real_t _ms393 = _shared[206];
-    const train5_real_t _ms395 = _shared[208];
-    const train5_real_t _ms397 = _shared[210];
-    const train5_real_t _ms399 = _shared[212];
-    const train5_real_t _ms401 = _shared[214];
-    const train5_real_t _ms403 = _shared[216];
-    const train5_real_t _ms405 = _shared[218];
-    const train5_real_t _ms407 = _shared[220];
-    const train5_real_t _ms409 = _shared[222];
-    const train5_real_t _ms411 = _shared[224];
-    const train5_real_t _ms413 = _shared[226];
-    const train5_real_t _ms415 = _shared[228];
-    const train5_real_t _ms417 = _shared[230];
-    const train5_real_t _ms419 = _shared[232];
-    const train5_real_t _ms421 = _shared[234];
-    const train5_real_t _ms423 = _shared[236];
-    const train5_real_t _ms425 = _shared[238];
-    const train5_real_t _ms427 = _shared[240];
-    const train5_real_t _ms429 = _shared[242];
-    const train5_real_t _ms431 = _shared[244];
-    const train5_real_t _ms433 = _shared[246];
-    const train5_real_t _ms435 = _shared[248];
-    const train5_real_t _ms437 = _shared[250];
-    const train5_real_t _ms439 = _shared[252];
-    const train5_real_t _ms441 = _shared[254];
-    const train5_real_t _ms443 = _shared[256];
-    const train5_real_t _ms445 = _shared[258];
-    const train5_real_t _ms447 = _shared[260];
-    const train5_real_t _ms449 = _shared[262];
-    const train5_real_t _ms451 = _shared[264];
-    const train5_real_t _ms453 = _shared[266];
-    const train5_real_t _ms455 = _shared[268];
-    const train5_real_t _ms457 = _shared[270];
-    const train5_real_t _ms459 = _shared[272];
-    const train5_real_t _ms461 = _shared[274];
-    const train5_real_t _ms463 = _shared[276];
-    const train5_real_t _ms465 = _shared[278];
-    const train5_real_t _ms467 = _shared[280];
-    const train5_real_t _ms469 = _shared[282];
-    const train5_real_t _ms471 = _shared[284];
-    const train5_real_t _ms473 = _shared[286];
-    const train5_real_t _ms475 = _shared[288];
-    const train5_real_t _ms477 = _shared[290];
-    const train5_real_t _ms479 = _shared[292];
-    const train5_real_t _ms481 = _shared[294];
-    const train5_real_t _ms483 = _shared[296];
-    const train5_real_t _ms485 = _shared[298];
-    const train5_real_t _ms487 = _shared[300];
-    const train5_real_t _ms489 = _shared[302];
-    const train5_real_t _ms491 = _shared[304];
-    const train5_real_t _ms493 = _shared[306];
-    const train5_real_t _ms495 = _shared[308];
-    const train5_real_t _ms497 = _shared[310];
-    const train5_real_t _ms499 = _shared[312];
-    const train5_real_t _ms501 = _shared[314];
-    const train5_real_t _ms503 = _shared[316];
-    const train5_real_t _ms505 = _shared[318];
-    const train5_real_t _ms507 = _shared[320];
-    const train5_real_t _ms509 = _shared[322];
-    const train5_real_t _ms511 = _shared[324];
-    const train5_real_t _ms513 = _shared[326];
-    const train5_real_t _ms515 = _shared[328];
-    const train5_real_t _ms517 = _shared[330];
-    const train5_real_t _ms519 = _shared[332];
-    const train5_real_t _ms521 = _shared[334];
-    const train5_real_t _ms523 = _shared[336];
-    const train5_real_t _ms525 = _shared[338];
-    const train5_real_t _ms527 = _shared[340];
-    const train5_real_t _ms529 = _shared[342];
-    const train5_real_t _ms531 = _shared[344];
-    const train5_real_t _ms533 = _shared[346];
-    const train5_real_t _ms535 = _shared[348];
-    const train5_real_t _ms537 = _shared[350];
-    const train5_real_t _ms539 = _shared[352];
-    const train5_real_t _ms541 = _shared[354];
-    const train5_real_t _ms543 = _shared[356];
-    const train5_real_t _ms545 = _shared[358];
-    const train5_real_t _ms547 = _shared[360];
-    const train5_real_t _ms549 = _shared[362];
-    const train5_real_t _ms551 = _shared[364];
-    const train5_real_t _ms553 = _shared[366];
-    const train5_real_t _ms555 = _shared[368];
-    const train5_real_t _ms557 = _shared[370];
-    const train5_real_t _ms559 = _shared[372];
-    const train5_real_t _ms561 = _shared[374];
-    const train5_real_t _ms563 = _shared[376];
-    const train5_real_t _ms564 = _shared[377];
-    const train5_real_t _ms565 = _shared[378];
-    const train5_real_t _ms566 = _shared[379];
-    const train5_real_t _ms567 = _shared[380];
-    const train5_real_t _ms568 = _shared[381];
-    const train5_real_t _ms569 = _shared[382];
-    const train5_real_t _ms570 = _shared[383];
-    const train5_real_t _ms571 = _shared[384];
-    const train5_real_t _ms572 = _shared[385];
-    const train5_real_t _ms573 = _shared[386];
-    const train5_real_t _ms574 = _shared[387];
-    const train5_real_t _ms575 = _shared[388];
-    const train5_real_t _ms576 = _shared[389];
-    const train5_real_t _ms577 = _shared[390];
-    const train5_real_t _ms578 = _shared[391];
-    const train5_real_t _ms579 = _shared[392];
-    const train5_real_t _ms580 = _shared[393];
-    const train5_real_t _ms581 = _shared[394];
-    const train5_real_t _ms582 = _shared[395];
-    const train5_real_t _ms583 = _shared[396];
-    const train5_real_t _ms584 = _shared[397];
-    const train5_real_t _ms585 = _shared[398];
-    const train5_real_t _ms586 = _shared[399];
-    const train5_real_t _ms587 = _shared[400];
-    const train5_real_t _ms588 = _shared[401];
-    const train5_real_t _ms589 = _shared[402];
-    const train5_real_t _ms590 = _shared[403];
-    const train5_real_t _ms591 = _shared[404];
-    const train5_real_t _ms592 = _shared[405];
-    const train5_real_t _ms636 = _shared[406];
-    const train5_real_t _ms637 = _shared[407];
-    const train5_real_t _t0 = _ms224*_ms305;
-    const train5_real_t _t1 = _ms228*_ms306;
-    const train5_real_t _t2 = _ms232*_ms307;
-    const train5_real_t _t3 = _ms236*_ms308;
-    const train5_real_t _t4 = _ms240*_ms309;
-    const train5_real_t _t5 = _ms225*_ms305;
-    const train5_real_t _t6 = _ms229*_ms306;
-    const train5_real_t _t7 = _ms233*_ms307;
-    const train5_real_t _t8 = _ms237*_ms308;
-    const train5_real_t _t9 = _ms241*_ms309;
-    const train5_real_t _t10 = J_theta_cart*_ms224 + _ms228*_ms320 + _ms232*_ms321 + _ms236*_ms322
-            + _ms240*_ms323 + _ms305;
-    const train5_real_t _t11 = J_theta_cart*_ms225 + _ms229*_ms320 + _ms233*_ms321 + _ms237*_ms322
-            + _ms241*_ms323 + _ms315;
-    const train5_real_t _t12 = J_theta_cart2*_ms228 + _ms224*_ms320 + _ms232*_ms324 + _ms236*_ms325
-            + _ms240*_ms326 + _ms306;
-    const train5_real_t _t13 = J_theta_cart2*_ms229 + _ms225*_ms320 + _ms233*_ms324 + _ms237*_ms325
-            + _ms241*_ms326 + _ms316;
-    const train5_real_t _t14 = J_theta_cart3*_ms232 + _ms224*_ms321 + _ms228*_ms324 + _ms236*_ms327
-            + _ms240*_ms328 + _ms307;
-    const train5_real_t _t15 = J_theta_cart3*_ms233 + _ms225*_ms321 + _ms229*_ms324 + _ms237*_ms327
-            + _ms241*_ms328 + _ms317;
-    const train5_real_t _t16 = J_theta_cart4*_ms236 + _ms224*_ms322 + _ms228*_ms325 + _ms232*_ms327
-            + _ms240*_ms329 + _ms308;
-    const train5_real_t _t17 = J_theta_cart4*_ms237 + _ms225*_ms322 + _ms229*_ms325 + _ms233*_ms327
-            + _ms241*_ms329 + _ms318;
-    const train5_real_t _t18 = J_theta_cart5*_ms240 + _ms224*_ms323 + _ms228*_ms326 + _ms232*_ms328
-            + _ms236*_ms329 + _ms309;
-    const train5_real_t _t19 = J_theta_cart5*_ms241 + _ms225*_ms323 + _ms229*_ms326 + _ms233*_ms328
-            + _ms237*_ms329 + _ms319;
-    const train5_real_t _t20 = J_theta_cart_right*_ms248;
-    const train5_real_t _t21 = J_theta_cart_right*_ms249;
-    const train5_real_t _t22 = J_theta_cart_left*_ms252;
-    const train5_real_t _t23 = J_theta_cart_left*_ms253;
-    const train5_real_t _t24 = J_theta_cart2_right*_ms256;
-    const train5_real_t _t25 = J_theta_cart2_right*_ms257;
-    const train5_real_t _t26 = J_theta_cart2_left*_ms260;
-    const train5_real_t _t27 = J_theta_cart2_left*_ms261;
-    const train5_real_t _t28 = J_theta_cart3_right*_ms264;
-    const train5_real_t _t29 = J_theta_cart3_right*_ms265;
-    const train5_real_t _t30 = J_theta_cart3_left*_ms268;
-    const train5_real_t _t31 = J_theta_cart3_left*_ms269;
-    const train5_real_t _t32 = J_theta_cart4_right*_ms272;
-    const train5_real_t _t33 = J_theta_cart4_right*_ms273;
-    const train5_real_t _t34 = J_theta_cart4_left*_ms276;
-    const train5_real_t _t35 = J_theta_cart4_left*_ms277;
-    const train5_real_t _t36 = J_theta_cart5_right*_ms280;
-    const train5_real_t _t37 = J_theta_cart5_right*_ms281;
-    const train5_real_t _t38 = J_theta_cart5_left*_ms284;
-    const train5_real_t _t39 = J_theta_cart5_left*_ms285;
-    const train5_real_t _t40 = TRAIN5_COS(theta_tractor);
-    const train5_real_t _t41 = TRAIN5_SIN(theta_tractor);
-    const train5_real_t _t42 = _ms305*_ms339;
-    const train5_real_t _t43 = _ms241*_ms314;
-    const train5_real_t _t44 = _ms225*_ms310;
-    const train5_real_t _t45 = _ms229*_ms311;
-    const train5_real_t _t46 = _ms233*_ms312;
-    const train5_real_t _t47 = _ms237*_ms313;
-    const train5_real_t _t48 = _t43 + _t44 + _t45 + _t46 + _t47;
-    const train5_real_t _t49 = -theta_tractor;
-    const train5_real_t _t50 = _t49 + theta_cart;
-    const train5_real_t _t51 = TRAIN5_SIN(_t50);
-    const train5_real_t _t52 = K_theta_cart_x_tractor*_t51;
-    const train5_real_t _t53 = TRAIN5_COS(_t50);
-    const train5_real_t _t54 = K_theta_cart_x_tractor_2*_t53;
-    const train5_real_t _t55 = J_theta_cart*_ms339;
-    const train5_real_t _t56 = _t49 + theta_cart2;
-    const train5_real_t _t57 = TRAIN5_SIN(_t56);
-    const train5_real_t _t58 = K_theta_cart2_x_tractor*_t57;
-    const train5_real_t _t59 = TRAIN5_COS(_t56);
-    const train5_real_t _t60 = K_theta_cart2_x_tractor_2*_t59;
-    const train5_real_t _t61 = _ms320*_ms339;
-    const train5_real_t _t62 = _t49 + theta_cart3;
-    const train5_real_t _t63 = TRAIN5_SIN(_t62);
-    const train5_real_t _t64 = K_theta_cart3_x_tractor*_t63;
-    const train5_real_t _t65 = TRAIN5_COS(_t62);
-    const train5_real_t _t66 = K_theta_cart3_x_tractor_2*_t65;
-    const train5_real_t _t67 = _ms321*_ms339;
-    const train5_real_t _t68 = _t49 + theta_cart4;
-    const train5_real_t _t69 = TRAIN5_SIN(_t68);
-    const train5_real_t _t70 = K_theta_cart4_x_tractor*_t69;
-    const train5_real_t _t71 = TRAIN5_COS(_t68);
-    const train5_real_t _t72 = K_theta_cart4_x_tractor_2*_t71;
-    const train5_real_t _t73 = _ms322*_ms339;
-    const train5_real_t _t74 = _t49 + theta_cart5;
-    const train5_real_t _t75 = TRAIN5_SIN(_t74);
-    const train5_real_t _t76 = K_theta_cart5_x_tractor*_t75;
-    const train5_real_t _t77 = TRAIN5_COS(_t74);
-    const train5_real_t _t78 = K_theta_cart5_x_tractor_2*_t77;
-    const train5_real_t _t79 = _ms323*_ms339;
-    const train5_real_t _t80 = J_theta_cart_right*_ms415;
-    const train5_real_t _t81 = J_theta_cart_left*_ms419;
-    const train5_real_t _t82 = J_theta_cart2_right*_ms423;
-    const train5_real_t _t83 = J_theta_cart2_left*_ms435;
-    const train5_real_t _t84 = J_theta_cart3_right*_ms447;
-    const train5_real_t _t85 = J_theta_cart3_left*_ms463;
-    const train5_real_t _t86 = J_theta_cart4_right*_ms479;
-    const train5_real_t _t87 = J_theta_cart4_left*_ms499;
-    const train5_real_t _t88 = J_theta_cart5_right*_ms519;
-    const train5_real_t _t89 = J_theta_cart5_left*_ms543;
-    const train5_real_t _t90 = _ms248*_t80;
-    const train5_real_t _t91 = _ms252*_t81;
-    const train5_real_t _t92 = _ms338*_t11;
-    const train5_real_t _t93 = _ms413*_t21;
-    const train5_real_t _t94 = _ms417*_t23;
-    const train5_real_t _t95 = TRAIN5_LIT(0.3)*_t52 + TRAIN5_LIT(0.3)*_t54;
-    const train5_real_t _t96 = _ms225*_t95;
-    const train5_real_t _t97 = TRAIN5_LIT(0.3)*_t58 + TRAIN5_LIT(0.3)*_t60;
-    const train5_real_t _t98 = _ms229*_t97;
-    const train5_real_t _t99 = TRAIN5_LIT(0.3)*_t64 + TRAIN5_LIT(0.3)*_t66;
-    const train5_real_t _t100 = _ms233*_t99;
-    const train5_real_t _t101 = TRAIN5_LIT(0.3)*_t70 + TRAIN5_LIT(0.3)*_t72;
-    const train5_real_t _t102 = _ms237*_t101;
-    const train5_real_t _t103 = TRAIN5_LIT(0.3)*_t76 + TRAIN5_LIT(0.3)*_t78;
-    const train5_real_t _t104 = _ms241*_t103;
-    const train5_real_t _t105 = _ms315*_ms339;
-    const train5_real_t _t106 = _ms249*_t80;
-    const train5_real_t _t107 = _ms253*_t81;
-    const train5_real_t _t108 = _ms339*_t11;
-    const train5_real_t _t109 = _ms415*_t21;
-    const train5_real_t _t110 = _ms419*_t23;
-    const train5_real_t _t111 = TRAIN5_LIT(2.0)*_ms288;
-    const train5_real_t _t112 = K_theta_cart_x_tractor*_t53;
-    const train5_real_t _t113 = K_theta_cart_x_tractor_2*_t51;
-    const train5_real_t _t114 = _t111*_t112 - _t111*_t113;
-    const train5_real_t _t115 = _ms286*_ms338 + _ms287*_ms339;
-    const train5_real_t _t116 = _t114*_t115;
-    const train5_real_t _t117 = TRAIN5_LIT(2.0)*_ms289;
-    const train5_real_t _t118 = K_theta_cart2_x_tractor*_t59;
-    const train5_real_t _t119 = K_theta_cart2_x_tractor_2*_t57;
-    const train5_real_t _t120 = _t117*_t118 - _t117*_t119;
-    const train5_real_t _t121 = TRAIN5_LIT(2.0)*_ms290;
-    const train5_real_t _t122 = K_theta_cart3_x_tractor*_t65;
-    const train5_real_t _t123 = K_theta_cart3_x_tractor_2*_t63;
-    const train5_real_t _t124 = _t121*_t122 - _t121*_t123;
-    const train5_real_t _t125 = TRAIN5_LIT(2.0)*_ms291;
-    const train5_real_t _t126 = K_theta_cart4_x_tractor*_t71;
-    const train5_real_t _t127 = K_theta_cart4_x_tractor_2*_t69;
-    const train5_real_t _t128 = _t125*_t126 - _t125*_t127;
-    const train5_real_t _t129 = TRAIN5_LIT(2.0)*_ms292;
-    const train5_real_t _t130 = K_theta_cart5_x_tractor*_t77;
-    const train5_real_t _t131 = K_theta_cart5_x_tractor_2*_t75;
-    const train5_real_t _t132 = _t129*_t130 - _t129*_t131;
-    const train5_real_t _t133 = _ms289*_ms289;
-    const train5_real_t _t134 = _t133*_t58;
-    const train5_real_t _t135 = _t133*_t60;
-    const train5_real_t _t136 = _ms290*_ms290;
-    const train5_real_t _t137 = _t136*_t64;
-    const train5_real_t _t138 = _t136*_t66;
-    const train5_real_t _t139 = _ms288*_ms288;
-    const train5_real_t _t140 = _t139*_t52;
-    const train5_real_t _t141 = _t139*_t54;
-    const train5_real_t _t142 = _ms292*_ms292;
-    const train5_real_t _t143 = _t142*_t76;
-    const train5_real_t _t144 = _t142*_t78;
-    const train5_real_t _t145 = _t143 + _t144;
-    const train5_real_t _t146 = _ms291*_ms291;
-    const train5_real_t _t147 = _t146*_t70;
-    const train5_real_t _t148 = _t146*_t72;
-    const train5_real_t _t149 = _t147 + _t148;
-    const train5_real_t _t150 = TRAIN5_LIT(0.3)*_ms287*_ms287;
-    const train5_real_t _t151 = _t112*_t150;
-    const train5_real_t _t152 = _t113*_t150;
-    const train5_real_t _t153 = TRAIN5_LIT(1.7)*_ms289;
-    const train5_real_t _t154 = _t153*_t53;
-    const train5_real_t _t155 = TRAIN5_LIT(1.7)*K_theta_cart2_x_tractor*_ms289*_t51*_t59
-            - _t119*_t153*_t51 - _t154*_t58 - _t154*_t60;
-    const train5_real_t _t156 = TRAIN5_LIT(1.7)*_ms290;
-    const train5_real_t _t157 = _t156*_t53;
-    const train5_real_t _t158 = TRAIN5_LIT(1.7)*K_theta_cart3_x_tractor*_ms290*_t51*_t65
-            - _t123*_t156*_t51 - _t157*_t64 - _t157*_t66;
-    const train5_real_t _t159 = TRAIN5_LIT(1.7)*_ms291;
-    const train5_real_t _t160 = _t159*_t53;
-    const train5_real_t _t161 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_ms291*_t51*_t71
-            - _t127*_t159*_t51 - _t160*_t70 - _t160*_t72;
-    const train5_real_t _t162 = TRAIN5_LIT(1.7)*_ms292;
-    const train5_real_t _t163 = _t162*_t53;
-    const train5_real_t _t164 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_ms292*_t51*_t77
-            - _t131*_t162*_t51 - _t163*_t76 - _t163*_t78;
-    const train5_real_t _t165 = _t118*_t150;
-    const train5_real_t _t166 = _t119*_t150;
-    const train5_real_t _t167 = TRAIN5_LIT(1.7)*_ms288;
-    const train5_real_t _t168 = _t167*_t51;
-    const train5_real_t _t169 = _t167*_t53;
-    const train5_real_t _t170 = -_t118*_t168 + _t119*_t168 + _t169*_t58 + _t169*_t60;
-    const train5_real_t _t171 = _t115*_t170;
-    const train5_real_t _t172 = _t156*_t59;
-    const train5_real_t _t173 = TRAIN5_LIT(1.7)*K_theta_cart3_x_tractor*_ms290*_t57*_t65
-            - _t123*_t156*_t57 - _t172*_t64 - _t172*_t66;
-    const train5_real_t _t174 = _t159*_t59;
-    const train5_real_t _t175 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_ms291*_t57*_t71
-            - _t127*_t159*_t57 - _t174*_t70 - _t174*_t72;
-    const train5_real_t _t176 = _t162*_t59;
-    const train5_real_t _t177 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_ms292*_t57*_t77
-            - _t131*_t162*_t57 - _t176*_t76 - _t176*_t78;
-    const train5_real_t _t178 = _t122*_t150;
-    const train5_real_t _t179 = _t123*_t150;
-    const train5_real_t _t180 = -_t122*_t168 + _t123*_t168 + _t169*_t64 + _t169*_t66;
-    const train5_real_t _t181 = _t115*_t180;
-    const train5_real_t _t182 = _t153*_t57;
-    const train5_real_t _t183 = _t153*_t59;
-    const train5_real_t _t184 = -_t122*_t182 + _t123*_t182 + _t183*_t64 + _t183*_t66;
-    const train5_real_t _t185 = _t159*_t65;
-    const train5_real_t _t186 = TRAIN5_LIT(1.7)*K_theta_cart4_x_tractor*_ms291*_t63*_t71
-            - _t127*_t159*_t63 - _t185*_t70 - _t185*_t72;
-    const train5_real_t _t187 = _t162*_t65;
-    const train5_real_t _t188 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_ms292*_t63*_t77
-            - _t131*_t162*_t63 - _t187*_t76 - _t187*_t78;
-    const train5_real_t _t189 = _t126*_t150;
-    const train5_real_t _t190 = _t127*_t150;
-    const train5_real_t _t191 = -_t126*_t168 + _t127*_t168 + _t169*_t70 + _t169*_t72;
-    const train5_real_t _t192 = _t115*_t191;
-    const train5_real_t _t193 = -_t126*_t182 + _t127*_t182 + _t183*_t70 + _t183*_t72;
-    const train5_real_t _t194 = _t156*_t63;
-    const train5_real_t _t195 = _t156*_t65;
-    const train5_real_t _t196 = -_t126*_t194 + _t127*_t194 + _t195*_t70 + _t195*_t72;
-    const train5_real_t _t197 = _t162*_t71;
-    const train5_real_t _t198 = TRAIN5_LIT(1.7)*K_theta_cart5_x_tractor*_ms292*_t69*_t77
-            - _t131*_t162*_t69 - _t197*_t76 - _t197*_t78;
-    const train5_real_t _t199 = _t130*_t150;
-    const train5_real_t _t200 = _t131*_t150;
-    const train5_real_t _t201 = -_t130*_t168 + _t131*_t168 + _t169*_t76 + _t169*_t78;
-    const train5_real_t _t202 = _t115*_t201;
-    const train5_real_t _t203 = -_t130*_t182 + _t131*_t182 + _t183*_t76 + _t183*_t78;
-    const train5_real_t _t204 = -_t130*_t194 + _t131*_t194 + _t195*_t76 + _t195*_t78;
-    const train5_real_t _t205 = _t159*_t69;
-    const train5_real_t _t206 = _t159*_t71;
-    const train5_real_t _t207 = -_t130*_t205 + _t131*_t205 + _t206*_t76 + _t206*_t78;
-    const train5_real_t _t208 = _ms128*_ms224;
-    const train5_real_t _t209 = _ms149*_ms338;
-    const train5_real_t _t210 = _ms128*_ms225;
-    const train5_real_t _t211 = _ms149*_ms339;
-    const train5_real_t _t212 = -_ms286*_t115;
-    const train5_real_t _t213 = _ms345*_t212;
-    const train5_real_t _t214 = -_ms287*_t115;
-    const train5_real_t _t215 = _ms347*_t214;
-    const train5_real_t _t216 = -_t208 + _t209;
-    const train5_real_t _t217 = -TRAIN5_LIT(1.6666666666666667)*_t216;
-    const train5_real_t _t218 = -_t210 + _t211;
-    const train5_real_t _t219 = -TRAIN5_LIT(1.6666666666666667)*_t218;
-    const train5_real_t _t220 = _ms569*_t217 + _ms570*_t219;
-    const train5_real_t _t221 = _ms133*_t217;
-    const train5_real_t _t222 = _ms151*_ms338;
-    const train5_real_t _t223 = _ms132*_ms224 - _t222;
-    const train5_real_t _t224 = _ms133*_t219;
-    const train5_real_t _t225 = _ms151*_ms339;
-    const train5_real_t _t226 = _ms132*_ms225 - _t225;
-    const train5_real_t _t227 = _ms152*_ms341;
-    const train5_real_t _t228 = _ms152*_ms343;
-    const train5_real_t _t229 = _ms357*_t212;
-    const train5_real_t _t230 = _ms359*_t214;
-    const train5_real_t _t231 = _ms138*_t217;
-    const train5_real_t _t232 = _ms154*_ms338;
-    const train5_real_t _t233 = _ms137*_ms224 - _t232;
-    const train5_real_t _t234 = _ms138*_t219;
-    const train5_real_t _t235 = _ms154*_ms339;
-    const train5_real_t _t236 = _ms137*_ms225 - _t235;
-    const train5_real_t _t237 = _ms155*_ms341;
-    const train5_real_t _t238 = _ms155*_ms343;
-    const train5_real_t _t239 = _ms156*_ms353;
-    const train5_real_t _t240 = _ms156*_ms355;
-    const train5_real_t _t241 = _ms373*_t212;
-    const train5_real_t _t242 = _ms375*_t214;
-    const train5_real_t _t243 = _ms144*_t217;
-    const train5_real_t _t244 = _ms158*_ms338;
-    const train5_real_t _t245 = _ms143*_ms224 - _t244;
-    const train5_real_t _t246 = _ms144*_t219;
-    const train5_real_t _t247 = _ms158*_ms339;
-    const train5_real_t _t248 = _ms143*_ms225 - _t247;
-    const train5_real_t _t249 = _ms159*_ms341;
-    const train5_real_t _t250 = _ms159*_ms343;
-    const train5_real_t _t251 = _ms160*_ms353;
-    const train5_real_t _t252 = _ms160*_ms355;
-    const train5_real_t _t253 = _ms161*_ms369;
-    const train5_real_t _t254 = _ms161*_ms371;
-    const train5_real_t _t255 = _ms393*_t212;
-    const train5_real_t _t256 = _ms395*_t214;
-    const train5_real_t _t257 = TRAIN5_LIT(0.2)*_t217;
-    const train5_real_t _t258 = _ms128*_ms338;
-    const train5_real_t _t259 = _ms149*_ms224;
-    const train5_real_t _t260 = _t258 + _t259;
-    const train5_real_t _t261 = TRAIN5_LIT(0.2)*_t219;
-    const train5_real_t _t262 = _ms128*_ms339;
-    const train5_real_t _t263 = _ms149*_ms225;
-    const train5_real_t _t264 = _t262 + _t263;
-    const train5_real_t _t265 = -_ms125 - _t209;
-    const train5_real_t _t266 = -TRAIN5_LIT(1.6666666666666667)*_t265;
-    const train5_real_t _t267 = TRAIN5_LIT(0.2)*_t266;
-    const train5_real_t _t268 = _ms126 + _t258;
-    const train5_real_t _t269 = -_ms127 - _t211;
-    const train5_real_t _t270 = -TRAIN5_LIT(1.6666666666666667)*_t269;
-    const train5_real_t _t271 = TRAIN5_LIT(0.2)*_t270;
-    const train5_real_t _t272 = _ms425*_t212;
-    const train5_real_t _t273 = _ms427*_t214;
-    const train5_real_t _t274 = _t257 - _t260;
-    const train5_real_t _t275 = _ms84*_t274;
-    const train5_real_t _t276 = _t261 - _t264;
-    const train5_real_t _t277 = _ms84*_t276;
-    const train5_real_t _t278 = _ms569*_t275 + _ms570*_t277;
-    const train5_real_t _t279 = _ms437*_t212;
-    const train5_real_t _t280 = _ms439*_t214;
-    const train5_real_t _t281 = -_t257 - _t260;
-    const train5_real_t _t282 = _ms89*_t281;
-    const train5_real_t _t283 = -_t261 - _t264;
-    const train5_real_t _t284 = _ms89*_t283;
-    const train5_real_t _t285 = _ms569*_t282 + _ms570*_t284;
-    const train5_real_t _t286 = -_t221 - _t223;
-    const train5_real_t _t287 = -TRAIN5_LIT(1.6666666666666667)*_t286;
-    const train5_real_t _t288 = TRAIN5_LIT(0.2)*_t287;
-    const train5_real_t _t289 = _ms152*_t217;
-    const train5_real_t _t290 = _ms132*_ms338;
-    const train5_real_t _t291 = _ms151*_ms224;
-    const train5_real_t _t292 = _t290 + _t291;
-    const train5_real_t _t293 = _t289 + _t292;
-    const train5_real_t _t294 = -_t224 - _t226;
-    const train5_real_t _t295 = -TRAIN5_LIT(1.6666666666666667)*_t294;
-    const train5_real_t _t296 = TRAIN5_LIT(0.2)*_t295;
-    const train5_real_t _t297 = _ms152*_t219;
-    const train5_real_t _t298 = _ms132*_ms339;
-    const train5_real_t _t299 = _ms151*_ms225;
-    const train5_real_t _t300 = _t298 + _t299;
-    const train5_real_t _t301 = _t297 + _t300;
-    const train5_real_t _t302 = -_ms133*_t266 + _t227;
-    const train5_real_t _t303 = -TRAIN5_LIT(1.6666666666666667)*_t302;
-    const train5_real_t _t304 = TRAIN5_LIT(0.2)*_t303;
-    const train5_real_t _t305 = _ms133*_ms341;
-    const train5_real_t _t306 = _ms152*_t266 + _t305;
-    const train5_real_t _t307 = -_ms133*_t270 + _t228;
-    const train5_real_t _t308 = -TRAIN5_LIT(1.6666666666666667)*_t307;
-    const train5_real_t _t309 = TRAIN5_LIT(0.2)*_t308;
-    const train5_real_t _t310 = _ms133*_ms343;
-    const train5_real_t _t311 = _ms152*_t270 + _t310;
-    const train5_real_t _t312 = -_ms129 - _t222 - _t227;
-    const train5_real_t _t313 = -TRAIN5_LIT(1.6666666666666667)*_t312;
-    const train5_real_t _t314 = TRAIN5_LIT(0.2)*_t313;
-    const train5_real_t _t315 = _ms130 + _t290 + _t305;
-    const train5_real_t _t316 = -_ms131 - _t225 - _t228;
-    const train5_real_t _t317 = -TRAIN5_LIT(1.6666666666666667)*_t316;
-    const train5_real_t _t318 = TRAIN5_LIT(0.2)*_t317;
-    const train5_real_t _t319 = -_ms150 + _t298 + _t310;
-    const train5_real_t _t320 = _ms449*_t212;
-    const train5_real_t _t321 = _ms451*_t214;
-    const train5_real_t _t322 = _ms465*_t212;
-    const train5_real_t _t323 = _ms467*_t214;
-    const train5_real_t _t324 = -_ms139*_t287 - _t231 - _t233;
-    const train5_real_t _t325 = -TRAIN5_LIT(1.6666666666666667)*_t324;
-    const train5_real_t _t326 = TRAIN5_LIT(0.2)*_t325;
-    const train5_real_t _t327 = _ms155*_t217;
-    const train5_real_t _t328 = _ms137*_ms338;
-    const train5_real_t _t329 = _ms154*_ms224;
-    const train5_real_t _t330 = _t328 + _t329;
-    const train5_real_t _t331 = _ms156*_t287 + _t327 + _t330;
-    const train5_real_t _t332 = -_ms139*_t295 - _t234 - _t236;
-    const train5_real_t _t333 = -TRAIN5_LIT(1.6666666666666667)*_t332;
-    const train5_real_t _t334 = TRAIN5_LIT(0.2)*_t333;
-    const train5_real_t _t335 = _ms155*_t219;
-    const train5_real_t _t336 = _ms137*_ms339;
-    const train5_real_t _t337 = _ms154*_ms225;
-    const train5_real_t _t338 = _t336 + _t337;
-    const train5_real_t _t339 = _ms156*_t295 + _t335 + _t338;
-    const train5_real_t _t340 = -_ms138*_t266 - _ms139*_t303 + _t237;
-    const train5_real_t _t341 = -TRAIN5_LIT(1.6666666666666667)*_t340;
-    const train5_real_t _t342 = TRAIN5_LIT(0.2)*_t341;
-    const train5_real_t _t343 = _ms138*_ms341;
-    const train5_real_t _t344 = _ms155*_t266 + _ms156*_t303 + _t343;
-    const train5_real_t _t345 = -_ms138*_t270 - _ms139*_t308 + _t238;
-    const train5_real_t _t346 = -TRAIN5_LIT(1.6666666666666667)*_t345;
-    const train5_real_t _t347 = TRAIN5_LIT(0.2)*_t346;
-    const train5_real_t _t348 = _ms138*_ms343;
-    const train5_real_t _t349 = _ms155*_t270 + _ms156*_t308 + _t348;
-    const train5_real_t _t350 = -_ms139*_t313 + _t239;
-    const train5_real_t _t351 = -TRAIN5_LIT(1.6666666666666667)*_t350;
-    const train5_real_t _t352 = TRAIN5_LIT(0.2)*_t351;
-    const train5_real_t _t353 = _ms139*_ms353;
-    const train5_real_t _t354 = _ms156*_t313 + _t353;
-    const train5_real_t _t355 = -_ms139*_t317 + _t240;
-    const train5_real_t _t356 = -TRAIN5_LIT(1.6666666666666667)*_t355;
-    const train5_real_t _t357 = TRAIN5_LIT(0.2)*_t356;
-    const train5_real_t _t358 = _ms139*_ms355;
-    const train5_real_t _t359 = _ms156*_t317 + _t358;
-    const train5_real_t _t360 = -_ms134 - _t232 - _t237 - _t239;
-    const train5_real_t _t361 = -TRAIN5_LIT(1.6666666666666667)*_t360;
-    const train5_real_t _t362 = TRAIN5_LIT(0.2)*_t361;
-    const train5_real_t _t363 = _ms135 + _t328 + _t343 + _t353;
-    const train5_real_t _t364 = -_ms136 - _t235 - _t238 - _t240;
-    const train5_real_t _t365 = -TRAIN5_LIT(1.6666666666666667)*_t364;
-    const train5_real_t _t366 = TRAIN5_LIT(0.2)*_t365;
-    const train5_real_t _t367 = -_ms153 + _t336 + _t348 + _t358;
-    const train5_real_t _t368 = _ms481*_t212;
-    const train5_real_t _t369 = _ms483*_t214;
-    const train5_real_t _t370 = _ms501*_t212;
-    const train5_real_t _t371 = _ms503*_t214;
-    const train5_real_t _t372 = -_ms145*_t287 - _ms146*_t325 - _t243 - _t245;
-    const train5_real_t _t373 = -TRAIN5_LIT(1.6666666666666667)*_t372;
-    const train5_real_t _t374 = TRAIN5_LIT(0.2)*_t373;
-    const train5_real_t _t375 = _ms159*_t217;
-    const train5_real_t _t376 = _ms143*_ms338;
-    const train5_real_t _t377 = _ms158*_ms224;
-    const train5_real_t _t378 = _t376 + _t377;
-    const train5_real_t _t379 = _ms160*_t287 + _ms161*_t325 + _t375 + _t378;
-    const train5_real_t _t380 = -_ms145*_t295 - _ms146*_t333 - _t246 - _t248;
-    const train5_real_t _t381 = -TRAIN5_LIT(1.6666666666666667)*_t380;
-    const train5_real_t _t382 = TRAIN5_LIT(0.2)*_t381;
-    const train5_real_t _t383 = _ms159*_t219;
-    const train5_real_t _t384 = _ms143*_ms339;
-    const train5_real_t _t385 = _ms158*_ms225;
-    const train5_real_t _t386 = _t384 + _t385;
-    const train5_real_t _t387 = _ms160*_t295 + _ms161*_t333 + _t383 + _t386;
-    const train5_real_t _t388 = -_ms144*_t266 - _ms145*_t303 - _ms146*_t341 + _t249;
-    const train5_real_t _t389 = -TRAIN5_LIT(1.6666666666666667)*_t388;
-    const train5_real_t _t390 = TRAIN5_LIT(0.2)*_t389;
-    const train5_real_t _t391 = _ms144*_ms341;
-    const train5_real_t _t392 = _ms159*_t266 + _ms160*_t303 + _ms161*_t341 + _t391;
-    const train5_real_t _t393 = -_ms144*_t270 - _ms145*_t308 - _ms146*_t346 + _t250;
-    const train5_real_t _t394 = -TRAIN5_LIT(1.6666666666666667)*_t393;
-    const train5_real_t _t395 = TRAIN5_LIT(0.2)*_t394;
-    const train5_real_t _t396 = _ms144*_ms343;
-    const train5_real_t _t397 = _ms159*_t270 + _ms160*_t308 + _ms161*_t346 + _t396;
-    const train5_real_t _t398 = -_ms145*_t313 - _ms146*_t351 + _t251;
-    const train5_real_t _t399 = -TRAIN5_LIT(1.6666666666666667)*_t398;
-    const train5_real_t _t400 = TRAIN5_LIT(0.2)*_t399;
-    const train5_real_t _t401 = _ms145*_ms353;
-    const train5_real_t _t402 = _ms160*_t313 + _ms161*_t351 + _t401;
-    const train5_real_t _t403 = -_ms145*_t317 - _ms146*_t356 + _t252;
-    const train5_real_t _t404 = -TRAIN5_LIT(1.6666666666666667)*_t403;
-    const train5_real_t _t405 = TRAIN5_LIT(0.2)*_t404;
-    const train5_real_t _t406 = _ms145*_ms355;
-    const train5_real_t _t407 = _ms160*_t317 + _ms161*_t356 + _t406;
-    const train5_real_t _t408 = -_ms146*_t361 + _t253;
-    const train5_real_t _t409 = -TRAIN5_LIT(1.6666666666666667)*_t408;
-    const train5_real_t _t410 = TRAIN5_LIT(0.2)*_t409;
-    const train5_real_t _t411 = _ms146*_ms369;
-    const train5_real_t _t412 = _ms161*_t361 + _t411;
-    const train5_real_t _t413 = -_ms146*_t365 + _t254;
-    const train5_real_t _t414 = -TRAIN5_LIT(1.6666666666666667)*_t413;
-    const train5_real_t _t415 = TRAIN5_LIT(0.2)*_t414;
-    const train5_real_t _t416 = _ms146*_ms371;
-    const train5_real_t _t417 = _ms161*_t365 + _t416;
-    const train5_real_t _t418 = -_ms140 - _t244 - _t249 - _t251 - _t253;
-    const train5_real_t _t419 = -TRAIN5_LIT(1.6666666666666667)*_t418;
-    const train5_real_t _t420 = TRAIN5_LIT(0.2)*_t419;
-    const train5_real_t _t421 = _ms141 + _t376 + _t391 + _t401 + _t411;
-    const train5_real_t _t422 = -_ms142 - _t247 - _t250 - _t252 - _t254;
-    const train5_real_t _t423 = -TRAIN5_LIT(1.6666666666666667)*_t422;
-    const train5_real_t _t424 = TRAIN5_LIT(0.2)*_t423;
-    const train5_real_t _t425 = -_ms157 + _t384 + _t396 + _t406 + _t416;
-    const train5_real_t _t426 = _ms521*_t212;
-    const train5_real_t _t427 = _ms523*_t214;
-    const train5_real_t _t428 = _ms545*_t212;
-    const train5_real_t _t429 = _ms547*_t214;
-    const train5_real_t _t430 = _ms310*_ms566;
-    const train5_real_t _t431 = _ms311*_ms573;
-    const train5_real_t _t432 = _ms312*_ms576;
-    const train5_real_t _t433 = _ms313*_ms579;
-    const train5_real_t _t434 = _ms314*_ms582;
-    const train5_real_t _t435 = J_theta_cart2_left*_ms433;
-    const train5_real_t _t436 = J_theta_cart2_right*_ms421;
-    const train5_real_t _t437 = J_theta_cart3_left*_ms461;
-    const train5_real_t _t438 = J_theta_cart3_right*_ms445;
-    const train5_real_t _t439 = J_theta_cart4_left*_ms497;
-    const train5_real_t _t440 = J_theta_cart4_right*_ms477;
-    const train5_real_t _t441 = J_theta_cart5_left*_ms541;
-    const train5_real_t _t442 = J_theta_cart5_right*_ms517;
-    const train5_real_t _t443 = -_ms252*_ms564 - _ms253*_ms565 + _ms417*_t212 + _ms419*_t214;
-    const train5_real_t _t444 = _t22*_t443;
-    const train5_real_t _t445 = J_theta_cart_left*_ms417;
-    const train5_real_t _t446 = _ms584*_t445;
-    const train5_real_t _t447 = -_ms248*_ms564 - _ms249*_ms565 + _ms413*_t212 + _ms415*_t214;
-    const train5_real_t _t448 = _t20*_t447;
-    const train5_real_t _t449 = J_theta_cart_right*_ms413;
-    const train5_real_t _t450 = _ms583*_t449;
-    const train5_real_t _t451 = _ms567*_t0;
-    const train5_real_t _t452 = _ms567*_t1;
-    const train5_real_t _t453 = _ms567*_t2;
-    const train5_real_t _t454 = _ms567*_t3;
-    const train5_real_t _t455 = _ms567*_t4;
-    const train5_real_t _t456 = -_ms224*_ms564 - _ms225*_ms565 + _ms338*_t212 + _ms339*_t214;
-    const train5_real_t _t457 = _t10*_t456;
-    const train5_real_t _t458 = J_theta_cart*_ms566 + _ms310*_ms567 + _ms320*_ms573 + _ms321*_ms576
-            + _ms322*_ms579 + _ms323*_ms582 + _ms333;
-    const train5_real_t _t459 = _ms338*_t458;
-    const train5_real_t _t460 = J_theta_cart2*_ms573 + _ms311*_ms567 + _ms320*_ms566 + _ms324*_ms576
-            + _ms325*_ms579 + _ms326*_ms582 + _ms334;
-    const train5_real_t _t461 = J_theta_cart3*_ms576 + _ms312*_ms567 + _ms321*_ms566 + _ms324*_ms573
-            + _ms327*_ms579 + _ms328*_ms582 + _ms335;
-    const train5_real_t _t462 = J_theta_cart4*_ms579 + _ms313*_ms567 + _ms322*_ms566 + _ms325*_ms573
-            + _ms327*_ms576 + _ms329*_ms582 + _ms336;
-    const train5_real_t _t463 = J_theta_cart5*_ms582 + _ms314*_ms567 + _ms323*_ms566 + _ms326*_ms573
-            + _ms328*_ms576 + _ms329*_ms579 + _ms337;
-    const train5_real_t _t464 = TRAIN5_LIT(0.3)*_t133;
-    const train5_real_t _t465 = _t118*_t464;
-    const train5_real_t _t466 = _t119*_t464;
-    const train5_real_t _t467 = TRAIN5_LIT(0.3)*_t136;
-    const train5_real_t _t468 = _t122*_t467;
-    const train5_real_t _t469 = _t123*_t467;
-    const train5_real_t _t470 = TRAIN5_LIT(0.3)*_t146;
-    const train5_real_t _t471 = _t126*_t470;
-    const train5_real_t _t472 = _t127*_t470;
-    const train5_real_t _t473 = TRAIN5_LIT(0.3)*_t142;
-    const train5_real_t _t474 = _t130*_t473;
-    const train5_real_t _t475 = _t131*_t473;
-    const train5_real_t _t476 = TRAIN5_LIT(0.3)*_t139;
-    const train5_real_t _t477 = _t112*_t476;
-    const train5_real_t _t478 = _t113*_t476;
-    const train5_real_t _t479 = TRAIN5_LIT(0.6)*_ms288;
-    const train5_real_t _t480 = -_t479*_t52 - _t479*_t54;
-    const train5_real_t _t481 = _t115*_t480;
-    const train5_real_t _t482 = TRAIN5_LIT(0.6)*_ms289;
-    const train5_real_t _t483 = -_t482*_t58 - _t482*_t60;
-    const train5_real_t _t484 = TRAIN5_LIT(0.6)*_ms290;
-    const train5_real_t _t485 = -_t484*_t64 - _t484*_t66;
-    const train5_real_t _t486 = TRAIN5_LIT(0.6)*_ms291;
-    const train5_real_t _t487 = -_t486*_t70 - _t486*_t72;
-    const train5_real_t _t488 = TRAIN5_LIT(0.6)*_ms292;
-    const train5_real_t _t489 = -_t488*_t76 - _t488*_t78;
-    const train5_real_t _t490 = _ms566*_t95;
-    const train5_real_t _t491 = _ms573*_t97;
-    const train5_real_t _t492 = _ms576*_t99;
-    const train5_real_t _t493 = _ms579*_t101;
-    const train5_real_t _t494 = _ms582*_t103;
-    const train5_real_t _t495 = _t23*_t443;
-    const train5_real_t _t496 = _ms584*_t81;
-    const train5_real_t _t497 = _t21*_t447;
-    const train5_real_t _t498 = _ms583*_t80;
-    const train5_real_t _t499 = _ms567*_t5;
-    const train5_real_t _t500 = _ms567*_t6;
-    const train5_real_t _t501 = _ms567*_t7;
-    const train5_real_t _t502 = _ms567*_t8;
-    const train5_real_t _t503 = _ms567*_t9;
-    const train5_real_t _t504 = _t11*_t456;
-    const train5_real_t _t505 = _ms339*_t458;
-    const train5_real_t _t506 = _ms305*_ms338;
-    const train5_real_t _t507 = _ms224*_ms310;
-    const train5_real_t _t508 = _ms228*_ms311;
-    const train5_real_t _t509 = _ms232*_ms312;
-    const train5_real_t _t510 = _ms236*_ms313;
-    const train5_real_t _t511 = _ms240*_ms314;
-    const train5_real_t _t512 = _t507 + _t508 + _t509 + _t510 + _t511;
-    const train5_real_t _t513 = J_theta_cart*_ms338;
-    const train5_real_t _t514 = _ms320*_ms338;
-    const train5_real_t _t515 = _ms321*_ms338;
-    const train5_real_t _t516 = _ms322*_ms338;
-    const train5_real_t _t517 = _ms323*_ms338;
-    const train5_real_t _t518 = _ms248*_t449;
-    const train5_real_t _t519 = _ms252*_t445;
-    const train5_real_t _t520 = _ms338*_t10;
-    const train5_real_t _t521 = _ms413*_t20;
-    const train5_real_t _t522 = _ms417*_t22;
-    const train5_real_t _t523 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t524 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
-    const train5_real_t _t525 = K_theta_tractor_x_tractor_2 + _t5 + _t6 + _t7 + _t8 + _t9;
-    const train5_real_t _t526 = TRAIN5_LIT(0.207)*_t523;
-    const train5_real_t J_theta_right = p->J_theta_right;
-    const train5_real_t _t527 = J_theta_right*_t526;
-    const train5_real_t _t528 = -TRAIN5_LIT(0.207)*_t524;
+    const train5_real_t _ms122 = _shared[2];
+    const train5_real_t _ms123 = _shared[3];
+    const train5_real_t _ms124 = _shared[4];
+    const train5_real_t _ms147 = _shared[5];
+    const train5_real_t _ms162 = _shared[6];
+    const train5_real_t _ms163 = _shared[7];
+    const train5_real_t _ms224 = _shared[8];
+    const train5_real_t _ms225 = _shared[9];
+    const train5_real_t _ms228 = _shared[10];
+    const train5_real_t _ms229 = _shared[11];
+    const train5_real_t _ms230 = _shared[12];
+    const train5_real_t _ms231 = _shared[13];
+    const train5_real_t _ms232 = _shared[14];
+    const train5_real_t _ms234 = _shared[16];
+    const train5_real_t _ms235 = _shared[17];
+    const train5_real_t _ms236 = _shared[18];
+    const train5_real_t _ms237 = _shared[19];
+    const train5_real_t _ms238 = _shared[20];
+    const train5_real_t _ms239 = _shared[21];
+    const train5_real_t _ms240 = _shared[22];
+    const train5_real_t _ms241 = _shared[23];
+    const train5_real_t _ms242 = _shared[24];
+    const train5_real_t _ms243 = _shared[25];
+    const train5_real_t _ms244 = _shared[26];
+    const train5_real_t _ms245 = _shared[27];
+    const train5_real_t _ms246 = _shared[28];
+    const train5_real_t _ms248 = _shared[30];
+    const train5_real_t _ms249 = _shared[31];
+    const train5_real_t _ms250 = _shared[32];
+    const train5_real_t _ms251 = _shared[33];
+    const train5_real_t _ms252 = _shared[34];
+    const train5_real_t _ms253 = _shared[35];
+    const train5_real_t _ms254 = _shared[36];
+    const train5_real_t _ms255 = _shared[37];
+    const train5_real_t _ms256 = _shared[38];
+    const train5_real_t _ms257 = _shared[39];
+    const train5_real_t _ms258 = _shared[40];
+    const train5_real_t _ms259 = _shared[41];
+    const train5_real_t _ms260 = _shared[42];
+    const train5_real_t _ms262 = _shared[44];
+    const train5_real_t _ms263 = _shared[45];
+    const train5_real_t _ms264 = _shared[46];
+    const train5_real_t _ms265 = _shared[47];
+    const train5_real_t _ms266 = _shared[48];
+    const train5_real_t _ms267 = _shared[49];
+    const train5_real_t _ms268 = _shared[50];
+    const train5_real_t _ms269 = _shared[51];
+    const train5_real_t _ms270 = _shared[52];
+    const train5_real_t _ms271 = _shared[53];
+    const train5_real_t _ms272 = _shared[54];
+    const train5_real_t _ms273 = _shared[55];
+    const train5_real_t _ms274 = _shared[56];
+    const train5_real_t _ms276 = _shared[58];
+    const train5_real_t _ms277 = _shared[59];
+    const train5_real_t _ms278 = _shared[60];
+    const train5_real_t _ms279 = _shared[61];
+    const train5_real_t _ms280 = _shared[62];
+    const train5_real_t _ms281 = _shared[63];
+    const train5_real_t _ms282 = _shared[64];
+    const train5_real_t _ms283 = _shared[65];
+    const train5_real_t _ms284 = _shared[66];
+    const train5_real_t _ms285 = _shared[67];
+    const train5_real_t _ms286 = _shared[68];
+    const train5_real_t _ms287 = _shared[69];
+    const train5_real_t _ms288 = _shared[70];
+    const train5_real_t _ms290 = _shared[72];
+    const train5_real_t _ms291 = _shared[73];
+    const train5_real_t _ms292 = _shared[74];
+    const train5_real_t _ms293 = _shared[75];
+    const train5_real_t _ms296 = _shared[76];
+    const train5_real_t _ms297 = _shared[77];
+    const train5_real_t _ms298 = _shared[78];
+    const train5_real_t _ms299 = _shared[79];
+    const train5_real_t _ms300 = _shared[80];
+    const train5_real_t _ms301 = _shared[81];
+    const train5_real_t _ms302 = _shared[82];
+    const train5_real_t _ms303 = _shared[83];
+    const train5_real_t _ms304 = _shared[84];
+    const train5_real_t _ms305 = _shared[85];
+    const train5_real_t _ms306 = _shared[86];
+    const train5_real_t _ms307 = _shared[87];
+    const train5_real_t _ms308 = _shared[88];
+    const train5_real_t _ms309 = _shared[89];
+    const train5_real_t _ms310 = _shared[90];
+    const train5_real_t _ms311 = _shared[91];
+    const train5_real_t _ms312 = _shared[92];
+    const train5_real_t _ms313 = _shared[93];
+    const train5_real_t _ms314 = _shared[94];
+    const train5_real_t _ms315 = _shared[95];
+    const train5_real_t _ms316 = _shared[96];
+    const train5_real_t _ms317 = _shared[97];
+    const train5_real_t _ms318 = _shared[98];
+    const train5_real_t _ms319 = _shared[99];
+    const train5_real_t _ms320 = _shared[100];
+    const train5_real_t _ms321 = _shared[101];
+    const train5_real_t _ms322 = _shared[102];
+    const train5_real_t _ms323 = _shared[103];
+    const train5_real_t _ms324 = _shared[104];
+    const train5_real_t _ms325 = _shared[105];
+    const train5_real_t _ms326 = _shared[106];
+    const train5_real_t _ms327 = _shared[107];
+    const train5_real_t _ms328 = _shared[108];
+    const train5_real_t _ms329 = _shared[109];
+    const train5_real_t _ms330 = _shared[110];
+    const train5_real_t _ms331 = _shared[111];
+    const train5_real_t _ms332 = _shared[112];
+    const train5_real_t _ms333 = _shared[113];
+    const train5_real_t _ms347 = _shared[115];
+    const train5_real_t _ms348 = _shared[116];
+    const train5_real_t _ms349 = _shared[117];
+    const train5_real_t _ms350 = _shared[118];
+    const train5_real_t _ms351 = _shared[119];
+    const train5_real_t _ms352 = _shared[120];
+    const train5_real_t _ms361 = _shared[129];
+    const train5_real_t _ms362 = _shared[130];
+    const train5_real_t _ms363 = _shared[131];
+    const train5_real_t _ms364 = _shared[132];
+    const train5_real_t _ms365 = _shared[133];
+    const train5_real_t _ms366 = _shared[134];
+    const train5_real_t _ms367 = _shared[135];
+    const train5_real_t _ms368 = _shared[136];
+    const train5_real_t _ms369 = _shared[137];
+    const train5_real_t _ms371 = _shared[139];
+    const train5_real_t _ms376 = _shared[144];
+    const train5_real_t _ms377 = _shared[145];
+    const train5_real_t _ms378 = _shared[146];
+    const train5_real_t _ms381 = _shared[149];
+    const train5_real_t _ms382 = _shared[150];
+    const train5_real_t _ms385 = _shared[153];
+    const train5_real_t _ms386 = _shared[154];
+    const train5_real_t _ms387 = _shared[155];
+    const train5_real_t _ms390 = _shared[158];
+    const train5_real_t _ms391 = _shared[159];
+    const train5_real_t _ms394 = _shared[162];
+    const train5_real_t _ms395 = _shared[163];
+    const train5_real_t _ms396 = _shared[164];
+    const train5_real_t _ms399 = _shared[167];
+    const train5_real_t _ms400 = _shared[168];
+    const train5_real_t _ms403 = _shared[171];
+    const train5_real_t _ms404 = _shared[172];
+    const train5_real_t _ms405 = _shared[173];
+    const train5_real_t _ms408 = _shared[176];
+    const train5_real_t _ms409 = _shared[177];
+    const train5_real_t _ms412 = _shared[180];
+    const train5_real_t _ms413 = _shared[181];
+    const train5_real_t _ms414 = _shared[182];
+    const train5_real_t _ms415 = _shared[183];
+    const train5_real_t _ms416 = _shared[184];
+    const train5_real_t _ms417 = _shared[185];
+    const train5_real_t _ms418 = _shared[186];
+    const train5_real_t _ms419 = _shared[187];
+    const train5_real_t _ms420 = _shared[188];
+    const train5_real_t _ms421 = _shared[189];
+    const train5_real_t _ms422 = _shared[190];
+    const train5_real_t _ms423 = _shared[191];
+    const train5_real_t _ms424 = _shared[192];
+    const train5_real_t _ms425 = _shared[193];
+    const train5_real_t _ms426 = _shared[194];
+    const train5_real_t _ms427 = _shared[195];
+    const train5_real_t _ms428 = _shared[196];
+    const train5_real_t _ms429 = _shared[197];
+    const train5_real_t _ms430 = _shared[198];
+    const train5_real_t _ms431 = _shared[199];
+    const train5_real_t _ms432 = _shared[200];
+    const train5_real_t _ms433 = _shared[201];
+    const train5_real_t _ms434 = _shared[202];
+    const train5_real_t _ms435 = _shared[203];
+    const train5_real_t _ms436 = _shared[204];
+    const train5_real_t _ms437 = _shared[205];
+    const train5_real_t _ms438 = _shared[206];
+    const train5_real_t _ms439 = _shared[207];
+    const train5_real_t _ms440 = _shared[208];
+    const train5_real_t _ms441 = _shared[209];
+    const train5_real_t _ms442 = _shared[210];
+    const train5_real_t _ms443 = _shared[211];
+    const train5_real_t _ms444 = _shared[212];
+    const train5_real_t _ms445 = _shared[213];
+    const train5_real_t _ms446 = _shared[214];
+    const train5_real_t _ms447 = _shared[215];
+    const train5_real_t _ms448 = _shared[216];
+    const train5_real_t _ms469 = _shared[217];
+    const train5_real_t _ms470 = _shared[218];
+    const train5_real_t _ms471 = _shared[219];
+    const train5_real_t _ms472 = _shared[220];
+    const train5_real_t _ms473 = _shared[221];
+    const train5_real_t _ms474 = _shared[222];
+    const train5_real_t _ms475 = _shared[223];
+    const train5_real_t _ms476 = _shared[224];
+    const train5_real_t _ms483 = _shared[231];
+    const train5_real_t _ms490 = _shared[238];
+    const train5_real_t _t0 = _ms225*radius_left;
+    const train5_real_t _t1 = _ms225*radius_right;
+    const train5_real_t _t2 = TRAIN5_LIT(2.0)*_ms415;
+    const train5_real_t _t3 = _ms417*_ms426;
+    const train5_real_t _t4 = _ms418*_ms428;
+    const train5_real_t _t5 = _t3 + _t4;
+    const train5_real_t _t6 = _ms419*_ms430;
+    const train5_real_t _t7 = _ms420*_ms432;
+    const train5_real_t _t8 = _t6 + _t7;
+    const train5_real_t _t9 = _ms421*_ms434;
+    const train5_real_t _t10 = _ms422*_ms436;
+    const train5_real_t _t11 = _t10 + _t9;
+    const train5_real_t _t12 = _ms423*_ms438;
+    const train5_real_t _t13 = _ms424*_ms440;
+    const train5_real_t _t14 = _t12 + _t13;
+    const train5_real_t _t15 = J_theta_cart2_left*_ms251;
+    const train5_real_t _t16 = J_theta_cart2_right*_ms250;
+    const train5_real_t _t17 = J_theta_cart3_left*_ms265;
+    const train5_real_t _t18 = J_theta_cart3_right*_ms264;
+    const train5_real_t _t19 = J_theta_cart4_left*_ms279;
+    const train5_real_t _t20 = J_theta_cart4_right*_ms278;
+    const train5_real_t _t21 = J_theta_cart5_left*_ms293;
+    const train5_real_t _t22 = J_theta_cart5_right*_ms292;
+    const train5_real_t _t23 = J_theta_cart_left*_ms237;
+    const train5_real_t _t24 = J_theta_cart_right*_ms236;
+    const train5_real_t _t25 = _ms296*_ms415;
+    const train5_real_t _t26 = TRAIN5_LIT(0.3)*_ms416;
+    const train5_real_t _t27 = J_theta_cart*_ms296;
+    const train5_real_t _t28 = J_theta_cart2*_ms303;
+    const train5_real_t _t29 = _ms417*_ms441;
+    const train5_real_t _t30 = _ms418*_ms442;
+    const train5_real_t _t31 = _t29 + _t30;
+    const train5_real_t _t32 = J_theta_cart3*_ms310;
+    const train5_real_t _t33 = _ms419*_ms443;
+    const train5_real_t _t34 = _ms420*_ms444;
+    const train5_real_t _t35 = _t33 + _t34;
+    const train5_real_t _t36 = J_theta_cart4*_ms317;
+    const train5_real_t _t37 = _ms421*_ms445;
+    const train5_real_t _t38 = _ms422*_ms446;
+    const train5_real_t _t39 = _t37 + _t38;
+    const train5_real_t _t40 = J_theta_cart5*_ms324;
+    const train5_real_t _t41 = _ms423*_ms447;
+    const train5_real_t _t42 = _ms424*_ms448;
+    const train5_real_t _t43 = _t41 + _t42;
+    const train5_real_t _t44 = _ms296*_ms416;
+    const train5_real_t _t45 = TRAIN5_COS(theta_tractor);
+    const train5_real_t _t46 = TRAIN5_SIN(theta_tractor);
+    const train5_real_t _t47 = _ms228*_ms234;
+    const train5_real_t _t48 = -theta_tractor;
+    const train5_real_t _t49 = _t48 + theta_cart;
+    const train5_real_t _t50 = TRAIN5_COS(_t49);
+    const train5_real_t _t51 = TRAIN5_LIT(0.85)*_ms235;
+    const train5_real_t _t52 = TRAIN5_SIN(_t49);
+    const train5_real_t _t53 = _t48 + theta_cart2;
+    const train5_real_t _t54 = TRAIN5_COS(_t53);
+    const train5_real_t _t55 = TRAIN5_SIN(_t53);
+    const train5_real_t _t56 = -_ms123*_t47;
+    const train5_real_t _t57 = -TRAIN5_LIT(0.85)*_t50*_t56 - _t51*_t52;
+    const train5_real_t _t58 = _t54*_t57;
+    const train5_real_t _t59 = -_t50*_t51 + TRAIN5_LIT(0.85)*_t52*_t56;
+    const train5_real_t _t60 = _t55*_t59;
+    const train5_real_t _t61 = _ms242*_ms248;
+    const train5_real_t _t62 = TRAIN5_LIT(0.85)*_ms296;
+    const train5_real_t _t63 = _ms147*_t47;
+    const train5_real_t _t64 = -TRAIN5_LIT(0.85)*_t50*_t63 - _t52*_t62;
+    const train5_real_t _t65 = _t54*_t64;
+    const train5_real_t _t66 = -_t50*_t62 + TRAIN5_LIT(0.85)*_t52*_t63;
+    const train5_real_t _t67 = _t55*_t66;
+    const train5_real_t _t68 = TRAIN5_LIT(0.85)*_ms249;
+    const train5_real_t _t69 = _t54*_t68;
+    const train5_real_t _t70 = -_ms238*_t54 - _ms239*_t55 - _t58 + _t60;
+    const train5_real_t _t71 = _t61*_t70;
+    const train5_real_t _t72 = TRAIN5_LIT(0.85)*_t71;
+    const train5_real_t _t73 = _t55*_t68;
+    const train5_real_t _t74 = _t48 + theta_cart3;
+    const train5_real_t _t75 = TRAIN5_COS(_t74);
+    const train5_real_t _t76 = TRAIN5_SIN(_t74);
+    const train5_real_t _t77 = _ms256*_ms262;
+    const train5_real_t _t78 = TRAIN5_LIT(0.85)*_ms303;
+    const train5_real_t _t79 = _t54*_t78;
+    const train5_real_t _t80 = -_ms299*_t54 - _ms300*_t55 - _t65 + _t67;
+    const train5_real_t _t81 = _t61*_t80;
+    const train5_real_t _t82 = TRAIN5_LIT(0.85)*_t81;
+    const train5_real_t _t83 = _t55*_t78;
+    const train5_real_t _t84 = _ms241*_t61;
+    const train5_real_t _t85 = TRAIN5_LIT(0.85)*_t84;
+    const train5_real_t _t86 = _ms302*_t61;
+    const train5_real_t _t87 = TRAIN5_LIT(0.85)*_t86;
+    const train5_real_t _t88 = TRAIN5_LIT(0.85)*_ms263;
+    const train5_real_t _t89 = _t75*_t88;
+    const train5_real_t _t90 = _t55*_t72 + _t59 - _t69;
+    const train5_real_t _t91 = -_t54*_t72 + _t57 - _t73;
+    const train5_real_t _t92 = -_ms252*_t75 - _ms253*_t76 - _t75*_t91 + _t76*_t90;
+    const train5_real_t _t93 = _t77*_t92;
+    const train5_real_t _t94 = TRAIN5_LIT(0.85)*_t93;
+    const train5_real_t _t95 = _t76*_t88;
+    const train5_real_t _t96 = _t48 + theta_cart4;
+    const train5_real_t _t97 = TRAIN5_COS(_t96);
+    const train5_real_t _t98 = TRAIN5_SIN(_t96);
+    const train5_real_t _t99 = _ms270*_ms276;
+    const train5_real_t _t100 = TRAIN5_LIT(0.85)*_ms310;
+    const train5_real_t _t101 = _t100*_t75;
+    const train5_real_t _t102 = _t55*_t82 + _t66 - _t79;
+    const train5_real_t _t103 = -_t54*_t82 + _t64 - _t83;
+    const train5_real_t _t104 = -_ms306*_t75 - _ms307*_t76 + _t102*_t76 - _t103*_t75;
+    const train5_real_t _t105 = _t104*_t77;
+    const train5_real_t _t106 = TRAIN5_LIT(0.85)*_t105;
+    const train5_real_t _t107 = _t100*_t76;
+    const train5_real_t _t108 = _t58 - _t60;
+    const train5_real_t _t109 = _t108*_t61;
+    const train5_real_t _t110 = TRAIN5_LIT(0.85)*_t109*_t55 - _t59;
+    const train5_real_t _t111 = -TRAIN5_LIT(0.85)*_t109*_t54 - _t57;
+    const train5_real_t _t112 = _t110*_t76 - _t111*_t75;
+    const train5_real_t _t113 = _t112*_t77;
+    const train5_real_t _t114 = TRAIN5_LIT(0.85)*_t113;
+    const train5_real_t _t115 = _t65 - _t67;
+    const train5_real_t _t116 = _t115*_t61;
+    const train5_real_t _t117 = TRAIN5_LIT(0.85)*_t116*_t55 - _t66;
+    const train5_real_t _t118 = -TRAIN5_LIT(0.85)*_t116*_t54 - _t64;
+    const train5_real_t _t119 = _t117*_t76 - _t118*_t75;
+    const train5_real_t _t120 = _t119*_t77;
+    const train5_real_t _t121 = TRAIN5_LIT(0.85)*_t120;
+    const train5_real_t _t122 = _t55*_t85 + _t69;
+    const train5_real_t _t123 = -_t54*_t85 + _t73;
+    const train5_real_t _t124 = _t122*_t76 - _t123*_t75;
+    const train5_real_t _t125 = _t124*_t77;
+    const train5_real_t _t126 = TRAIN5_LIT(0.85)*_t125;
+    const train5_real_t _t127 = _t55*_t87 + _t79;
+    const train5_real_t _t128 = -_t54*_t87 + _t83;
+    const train5_real_t _t129 = _t127*_t76 - _t128*_t75;
+    const train5_real_t _t130 = _t129*_t77;
+    const train5_real_t _t131 = TRAIN5_LIT(0.85)*_t130;
+    const train5_real_t _t132 = _ms255*_t77;
+    const train5_real_t _t133 = TRAIN5_LIT(0.85)*_t132;
+    const train5_real_t _t134 = _ms309*_t77;
+    const train5_real_t _t135 = TRAIN5_LIT(0.85)*_t134;
+    const train5_real_t _t136 = TRAIN5_LIT(0.85)*_ms277;
+    const train5_real_t _t137 = _t136*_t97;
+    const train5_real_t _t138 = _t76*_t94 - _t89 + _t90;
+    const train5_real_t _t139 = -_t75*_t94 + _t91 - _t95;
+    const train5_real_t _t140 = -_ms266*_t97 - _ms267*_t98 + _t138*_t98 - _t139*_t97;
+    const train5_real_t _t141 = _t140*_t99;
+    const train5_real_t _t142 = TRAIN5_LIT(0.85)*_t141;
+    const train5_real_t _t143 = _t136*_t98;
+    const train5_real_t _t144 = _t48 + theta_cart5;
+    const train5_real_t _t145 = TRAIN5_COS(_t144);
+    const train5_real_t _t146 = TRAIN5_SIN(_t144);
+    const train5_real_t _t147 = _ms284*_ms290;
+    const train5_real_t _t148 = TRAIN5_LIT(0.85)*_ms317;
+    const train5_real_t _t149 = _t148*_t97;
+    const train5_real_t _t150 = -_t101 + _t102 + _t106*_t76;
+    const train5_real_t _t151 = _t103 - _t106*_t75 - _t107;
+    const train5_real_t _t152 = -_ms313*_t97 - _ms314*_t98 + _t150*_t98 - _t151*_t97;
+    const train5_real_t _t153 = _t152*_t99;
+    const train5_real_t _t154 = TRAIN5_LIT(0.85)*_t153;
+    const train5_real_t _t155 = _t148*_t98;
+    const train5_real_t _t156 = _t110 + _t114*_t76;
+    const train5_real_t _t157 = _t111 - _t114*_t75;
+    const train5_real_t _t158 = _t156*_t98 - _t157*_t97;
+    const train5_real_t _t159 = _t158*_t99;
+    const train5_real_t _t160 = TRAIN5_LIT(0.85)*_t159;
+    const train5_real_t _t161 = _t117 + _t121*_t76;
+    const train5_real_t _t162 = _t118 - _t121*_t75;
+    const train5_real_t _t163 = _t161*_t98 - _t162*_t97;
+    const train5_real_t _t164 = _t163*_t99;
+    const train5_real_t _t165 = TRAIN5_LIT(0.85)*_t164;
+    const train5_real_t _t166 = _t122 + _t126*_t76;
+    const train5_real_t _t167 = _t123 - _t126*_t75;
+    const train5_real_t _t168 = _t166*_t98 - _t167*_t97;
+    const train5_real_t _t169 = _t168*_t99;
+    const train5_real_t _t170 = TRAIN5_LIT(0.85)*_t169;
+    const train5_real_t _t171 = _t127 + _t131*_t76;
+    const train5_real_t _t172 = _t128 - _t131*_t75;
+    const train5_real_t _t173 = _t171*_t98 - _t172*_t97;
+    const train5_real_t _t174 = _t173*_t99;
+    const train5_real_t _t175 = TRAIN5_LIT(0.85)*_t174;
+    const train5_real_t _t176 = _t133*_t76 + _t89;
+    const train5_real_t _t177 = -_t133*_t75 + _t95;
+    const train5_real_t _t178 = _t176*_t98 - _t177*_t97;
+    const train5_real_t _t179 = _t178*_t99;
+    const train5_real_t _t180 = TRAIN5_LIT(0.85)*_t179;
+    const train5_real_t _t181 = _t101 + _t135*_t76;
+    const train5_real_t _t182 = _t107 - _t135*_t75;
+    const train5_real_t _t183 = _t181*_t98 - _t182*_t97;
+    const train5_real_t _t184 = _t183*_t99;
+    const train5_real_t _t185 = TRAIN5_LIT(0.85)*_t184;
+    const train5_real_t _t186 = _ms269*_t99;
+    const train5_real_t _t187 = TRAIN5_LIT(0.85)*_t186;
+    const train5_real_t _t188 = _ms316*_t99;
+    const train5_real_t _t189 = TRAIN5_LIT(0.85)*_t188;
+    const train5_real_t _t190 = _ms230*_ms234;
+    const train5_real_t _t191 = _ms229*_ms234;
+    const train5_real_t _t192 = _ms232*_ms234;
+    const train5_real_t _t193 = _ms231*_ms234;
+    const train5_real_t _t194 = _t54*_t59 + _t55*_t57;
+    const train5_real_t _t195 = _ms243*_ms248;
+    const train5_real_t _t196 = _ms244*_ms248;
+    const train5_real_t _t197 = _t54*_t66 + _t55*_t64;
+    const train5_real_t _t198 = _ms245*_ms248;
+    const train5_real_t _t199 = _ms246*_ms248;
+    const train5_real_t _t200 = _ms257*_ms262;
+    const train5_real_t _t201 = _ms258*_ms262;
+    const train5_real_t _t202 = _ms259*_ms262;
+    const train5_real_t _t203 = _ms260*_ms262;
+    const train5_real_t _t204 = _ms271*_ms276;
+    const train5_real_t _t205 = _ms272*_ms276;
+    const train5_real_t _t206 = _ms273*_ms276;
+    const train5_real_t _t207 = _ms274*_ms276;
+    const train5_real_t _t208 = _ms285*_ms290;
+    const train5_real_t _t209 = _ms286*_ms290;
+    const train5_real_t _t210 = _ms287*_ms290;
+    const train5_real_t _t211 = _ms288*_ms290;
+    const train5_real_t _t212 = _ms249*_ms431;
+    const train5_real_t _t213 = _ms263*_ms435;
+    const train5_real_t _t214 = _ms277*_ms439;
+    const train5_real_t _t215 = _ms249*_ms429;
+    const train5_real_t _t216 = _ms263*_ms433;
+    const train5_real_t _t217 = _ms277*_ms437;
+    const train5_real_t _t218 = _ms303*_ms431;
+    const train5_real_t _t219 = _ms310*_ms435;
+    const train5_real_t _t220 = _ms317*_ms439;
+    const train5_real_t _t221 = _ms303*_ms429;
+    const train5_real_t _t222 = _ms310*_ms433;
+    const train5_real_t _t223 = _ms317*_ms437;
+    const train5_real_t _t224 = _ms238*_t55 - _ms239*_t54 + _t194;
+    const train5_real_t _t225 = _t198*_t70 + _t199*_t224;
+    const train5_real_t _t226 = J_theta_cart2_left*_t225;
+    const train5_real_t _t227 = _t195*_t70 + _t196*_t224;
+    const train5_real_t _t228 = J_theta_cart2_right*_t227;
+    const train5_real_t _t229 = _ms252*_t76 - _ms253*_t75 + _t75*_t90 + _t76*_t91;
+    const train5_real_t _t230 = _t202*_t92 + _t203*_t229;
+    const train5_real_t _t231 = J_theta_cart3_left*_t230;
+    const train5_real_t _t232 = _t200*_t92 + _t201*_t229;
+    const train5_real_t _t233 = J_theta_cart3_right*_t232;
+    const train5_real_t _t234 = _ms266*_t98 - _ms267*_t97 + _t138*_t97 + _t139*_t98;
+    const train5_real_t _t235 = _t140*_t206 + _t207*_t234;
+    const train5_real_t _t236 = J_theta_cart4_left*_t235;
+    const train5_real_t _t237 = _t140*_t204 + _t205*_t234;
+    const train5_real_t _t238 = J_theta_cart4_right*_t237;
+    const train5_real_t _t239 = -_t137 + _t138 + _t142*_t98;
+    const train5_real_t _t240 = _t139 - _t142*_t97 - _t143;
+    const train5_real_t _t241 = -_ms280*_t145 - _ms281*_t146 - _t145*_t240 + _t146*_t239;
+    const train5_real_t _t242 = _ms280*_t146 - _ms281*_t145 + _t145*_t239 + _t146*_t240;
+    const train5_real_t _t243 = _t210*_t241 + _t211*_t242;
+    const train5_real_t _t244 = J_theta_cart5_left*_t243;
+    const train5_real_t _t245 = _t208*_t241 + _t209*_t242;
+    const train5_real_t _t246 = J_theta_cart5_right*_t245;
+    const train5_real_t _t247 = -_ms124*_t192 + _ms147*_ms231*_ms234;
+    const train5_real_t _t248 = _t23*_t247;
+    const train5_real_t _t249 = -_ms122*_t192 - _ms123*_t193;
+    const train5_real_t _t250 = J_theta_cart_left*_t249;
+    const train5_real_t _t251 = _ms298*_t250;
+    const train5_real_t _t252 = -_ms124*_t190 + _ms147*_ms229*_ms234;
+    const train5_real_t _t253 = _t24*_t252;
+    const train5_real_t _t254 = -_ms122*_t190 - _ms123*_t191;
+    const train5_real_t _t255 = J_theta_cart_right*_t254;
+    const train5_real_t _t256 = _ms297*_t255;
+    const train5_real_t _t257 = -_t26 + _t27;
+    const train5_real_t _t258 = J_theta_cart*_ms235;
+    const train5_real_t _t259 = _ms415 + _t258;
+    const train5_real_t _t260 = TRAIN5_LIT(0.3)*_ms415;
+    const train5_real_t _t261 = _ms235*_t260 + _t257*_t56 + _t259*_t63 + _t44;
+    const train5_real_t _t262 = _ms418*(_ms249*_ms441 + _ms303*_ms426);
+    const train5_real_t _t263 = _t28 + _t31;
+    const train5_real_t _t264 = J_theta_cart2*_ms249;
+    const train5_real_t _t265 = _t264 + _t5;
+    const train5_real_t _t266 = _ms417*(_ms249*_ms442 + _ms303*_ms428);
+    const train5_real_t _t267 = _ms249*_ms417;
+    const train5_real_t _t268 = _ms249*_ms418;
+    const train5_real_t _t269 = _ms303*_ms417;
+    const train5_real_t _t270 = _ms303*_ms418;
+    const train5_real_t _t271 = _ms235*_ms427 + _ms425*_t56;
+    const train5_real_t _t272 = -_ms235*_ms425 + _ms427*_t56;
+    const train5_real_t _t273 = _ms296*_ms427 + _ms425*_t63;
+    const train5_real_t _t274 = -_ms296*_ms425 + _ms427*_t63;
+    const train5_real_t _t275 = _t267*_t273 + _t268*_t274 + _t269*_t271 + _t270*_t272;
+    const train5_real_t _t276 = _ms263*_ms419;
+    const train5_real_t _t277 = _ms263*_ms420;
+    const train5_real_t _t278 = _ms310*_ms419;
+    const train5_real_t _t279 = _ms310*_ms420;
+    const train5_real_t _t280 = _ms420*(_ms263*_ms443 + _ms310*_ms430);
+    const train5_real_t _t281 = _ms419*(_ms263*_ms444 + _ms310*_ms432);
+    const train5_real_t _t282 = _t32 + _t35;
+    const train5_real_t _t283 = J_theta_cart3*_ms263;
+    const train5_real_t _t284 = _t283 + _t8;
+    const train5_real_t _t285 = _ms277*_ms421;
+    const train5_real_t _t286 = _ms277*_ms422;
+    const train5_real_t _t287 = _ms317*_ms421;
+    const train5_real_t _t288 = _ms317*_ms422;
+    const train5_real_t _t289 = _ms422*(_ms277*_ms445 + _ms317*_ms434);
+    const train5_real_t _t290 = _ms421*(_ms277*_ms446 + _ms317*_ms436);
+    const train5_real_t _t291 = _t36 + _t39;
+    const train5_real_t _t292 = J_theta_cart4*_ms277;
+    const train5_real_t _t293 = _t11 + _t292;
+    const train5_real_t _t294 = _ms291*_ms423;
+    const train5_real_t _t295 = _ms291*_ms424;
+    const train5_real_t _t296 = _ms324*_ms423;
+    const train5_real_t _t297 = _ms324*_ms424;
+    const train5_real_t _t298 = _ms424*(_ms291*_ms447 + _ms324*_ms438);
+    const train5_real_t _t299 = _ms423*(_ms291*_ms448 + _ms324*_ms440);
+    const train5_real_t _t300 = _t40 + _t43;
+    const train5_real_t _t301 = J_theta_cart5*_ms291;
+    const train5_real_t _t302 = _t14 + _t301;
+    const train5_real_t _t303 = J_theta_cart2_left*_ms305;
+    const train5_real_t _t304 = TRAIN5_LIT(2.0)*_t303;
+    const train5_real_t _t305 = J_theta_cart2_right*_ms304;
+    const train5_real_t _t306 = TRAIN5_LIT(2.0)*_t305;
+    const train5_real_t _t307 = J_theta_cart3_left*_ms312;
+    const train5_real_t _t308 = TRAIN5_LIT(2.0)*_t307;
+    const train5_real_t _t309 = J_theta_cart3_right*_ms311;
+    const train5_real_t _t310 = TRAIN5_LIT(2.0)*_t309;
+    const train5_real_t _t311 = J_theta_cart4_left*_ms319;
+    const train5_real_t _t312 = TRAIN5_LIT(2.0)*_t311;
+    const train5_real_t _t313 = J_theta_cart4_right*_ms318;
+    const train5_real_t _t314 = TRAIN5_LIT(2.0)*_t313;
+    const train5_real_t _t315 = J_theta_cart5_left*_ms326;
+    const train5_real_t _t316 = TRAIN5_LIT(2.0)*_t315;
+    const train5_real_t _t317 = J_theta_cart5_right*_ms325;
+    const train5_real_t _t318 = TRAIN5_LIT(2.0)*_t317;
+    const train5_real_t _t319 = J_theta_cart_left*_ms298;
+    const train5_real_t _t320 = TRAIN5_LIT(2.0)*_t247*_t319;
+    const train5_real_t _t321 = J_theta_cart_right*_ms297;
+    const train5_real_t _t322 = TRAIN5_LIT(2.0)*_t252*_t321;
+    const train5_real_t _t323 = TRAIN5_LIT(0.6)*_t25 + _t63*(-TRAIN5_LIT(0.6)*_ms416
+            + TRAIN5_LIT(2.0)*_t27);
+    const train5_real_t _t324 = TRAIN5_LIT(2.0)*_t28 + TRAIN5_LIT(2.0)*_t29 + TRAIN5_LIT(2.0)*_t30;
+    const train5_real_t _t325 = _ms417*_ms442;
+    const train5_real_t _t326 = TRAIN5_LIT(2.0)*_ms303;
+    const train5_real_t _t327 = _t325*_t326;
+    const train5_real_t _t328 = _ms418*_ms441;
+    const train5_real_t _t329 = _t326*_t328;
+    const train5_real_t _t330 = TRAIN5_LIT(2.0)*_t269*_t273 + TRAIN5_LIT(2.0)*_t270*_t274;
+    const train5_real_t _t331 = _ms419*_ms444;
+    const train5_real_t _t332 = TRAIN5_LIT(2.0)*_ms310;
+    const train5_real_t _t333 = _t331*_t332;
+    const train5_real_t _t334 = TRAIN5_LIT(2.0)*_t278;
+    const train5_real_t _t335 = _ms420*_ms443;
+    const train5_real_t _t336 = _t332*_t335;
+    const train5_real_t _t337 = TRAIN5_LIT(2.0)*_t279;
+    const train5_real_t _t338 = TRAIN5_LIT(2.0)*_t32 + TRAIN5_LIT(2.0)*_t33 + TRAIN5_LIT(2.0)*_t34;
+    const train5_real_t _t339 = _ms421*_ms446;
+    const train5_real_t _t340 = TRAIN5_LIT(2.0)*_ms317;
+    const train5_real_t _t341 = _t339*_t340;
+    const train5_real_t _t342 = TRAIN5_LIT(2.0)*_t287;
+    const train5_real_t _t343 = _ms422*_ms445;
+    const train5_real_t _t344 = _t340*_t343;
+    const train5_real_t _t345 = TRAIN5_LIT(2.0)*_t288;
+    const train5_real_t _t346 = TRAIN5_LIT(2.0)*_t36 + TRAIN5_LIT(2.0)*_t37 + TRAIN5_LIT(2.0)*_t38;
+    const train5_real_t _t347 = _ms423*_ms448;
+    const train5_real_t _t348 = TRAIN5_LIT(2.0)*_ms324;
+    const train5_real_t _t349 = _t347*_t348;
+    const train5_real_t _t350 = TRAIN5_LIT(2.0)*_t296;
+    const train5_real_t _t351 = _ms424*_ms447;
+    const train5_real_t _t352 = _t348*_t351;
+    const train5_real_t _t353 = TRAIN5_LIT(2.0)*_t297;
+    const train5_real_t _t354 = TRAIN5_LIT(2.0)*_t40 + TRAIN5_LIT(2.0)*_t41 + TRAIN5_LIT(2.0)*_t42;
+    const train5_real_t _t355 = TRAIN5_LIT(2.0)*_ms333;
+    const train5_real_t _t356 = TRAIN5_LIT(0.85)*_ms329;
+    const train5_real_t _t357 = TRAIN5_LIT(0.85)*_ms330;
+    const train5_real_t _t358 = _t357*_t54;
+    const train5_real_t _t359 = _ms327*_t71 + _ms328*_t81;
+    const train5_real_t _t360 = TRAIN5_LIT(0.85)*_t359;
+    const train5_real_t _t361 = TRAIN5_LIT(0.85)*_ms331;
+    const train5_real_t _t362 = _t361*_t75;
+    const train5_real_t _t363 = _ms327*_t93 + _ms328*_t105;
+    const train5_real_t _t364 = TRAIN5_LIT(0.85)*_t363;
+    const train5_real_t _t365 = TRAIN5_LIT(0.85)*_ms332;
+    const train5_real_t _t366 = _t365*_t97;
+    const train5_real_t _t367 = _ms327*_t141 + _ms328*_t153;
+    const train5_real_t _t368 = TRAIN5_LIT(0.85)*_t367;
+    const train5_real_t _t369 = _t357*_t55;
+    const train5_real_t _t370 = _t361*_t76;
+    const train5_real_t _t371 = _t365*_t98;
+    const train5_real_t _t372 = _ms368*_t145;
+    const train5_real_t _t373 = _ms369*_t146;
+    const train5_real_t _t374 = -_t372 - _t373;
+    const train5_real_t _t375 = _ms327*_t56 + _ms328*_t63;
+    const train5_real_t _t376 = -_t356*_t52 - TRAIN5_LIT(0.85)*_t375*_t50;
+    const train5_real_t _t377 = -_t360*_t54 - _t369 + _t376;
+    const train5_real_t _t378 = -_t364*_t75 - _t370 + _t377;
+    const train5_real_t _t379 = -_t368*_t97 - _t371 + _t378;
+    const train5_real_t _t380 = _ms333*_t379;
+    const train5_real_t _t381 = _ms368*_t146;
+    const train5_real_t _t382 = _ms369*_t145;
+    const train5_real_t _t383 = _ms333*_t381 - _ms333*_t382;
+    const train5_real_t _t384 = TRAIN5_LIT(2.0)*_ms332;
+    const train5_real_t _t385 = TRAIN5_LIT(0.85)*_t98;
+    const train5_real_t _t386 = _ms350*_t385;
+    const train5_real_t _t387 = TRAIN5_LIT(0.85)*_t97;
+    const train5_real_t _t388 = TRAIN5_LIT(2.0)*_ms331;
+    const train5_real_t _t389 = TRAIN5_LIT(0.85)*_t76;
+    const train5_real_t _t390 = _ms349*_t389;
+    const train5_real_t _t391 = TRAIN5_LIT(0.85)*_t75;
+    const train5_real_t _t392 = TRAIN5_LIT(2.0)*_ms330;
+    const train5_real_t _t393 = TRAIN5_LIT(0.85)*_t55;
+    const train5_real_t _t394 = _ms348*_t393;
+    const train5_real_t _t395 = TRAIN5_LIT(0.85)*_t54;
+    const train5_real_t _t396 = TRAIN5_LIT(2.0)*_ms329;
+    const train5_real_t _t397 = TRAIN5_LIT(0.85)*_t52;
+    const train5_real_t _t398 = TRAIN5_LIT(0.85)*_t50;
+    const train5_real_t _t399 = _ms361*_t50;
+    const train5_real_t _t400 = _ms327*_t52;
+    const train5_real_t _t401 = _ms327*_t50;
+    const train5_real_t _t402 = _ms361*_t52;
+    const train5_real_t _t403 = -_t401 - _t402;
+    const train5_real_t _t404 = _ms362*_t54;
+    const train5_real_t _t405 = _ms363*_t55;
+    const train5_real_t _t406 = -_t404 - _t405;
+    const train5_real_t _t407 = -_t356*_t50 + TRAIN5_LIT(0.85)*_t375*_t52;
+    const train5_real_t _t408 = _ms330*_t407;
+    const train5_real_t _t409 = _ms330*_t376;
+    const train5_real_t _t410 = _t408*_t54 + _t409*_t55;
+    const train5_real_t _t411 = _ms362*_t55;
+    const train5_real_t _t412 = _ms363*_t54;
+    const train5_real_t _t413 = _ms330*_t411 - _ms330*_t412;
+    const train5_real_t _t414 = _ms329*_t399 - _ms329*_t400 + _t375*_t403;
+    const train5_real_t _t415 = -_ms352*_t50 - _ms371*_t52 - _t414;
+    const train5_real_t _t416 = _t415*_t47;
+    const train5_real_t _t417 = _t375*_t396;
+    const train5_real_t _t418 = -_ms347*_t398 + TRAIN5_LIT(0.85)*_t417*_t52;
+    const train5_real_t _t419 = -_ms376*_t397 - _t398*_t416 + _t418;
+    const train5_real_t _t420 = _t419*_t54;
+    const train5_real_t _t421 = _ms347*_t397 + _t398*_t417;
+    const train5_real_t _t422 = -_ms376*_t398 + _t397*_t416 + _t421;
+    const train5_real_t _t423 = _t422*_t55;
+    const train5_real_t _t424 = _ms381*_t54 + _ms382*_t55;
+    const train5_real_t _t425 = _ms385*_t395;
+    const train5_real_t _t426 = _ms364*_t75;
+    const train5_real_t _t427 = _ms365*_t76;
+    const train5_real_t _t428 = -_t426 - _t427;
+    const train5_real_t _t429 = _ms331*_t377;
+    const train5_real_t _t430 = _ms364*_t76;
+    const train5_real_t _t431 = _ms365*_t75;
+    const train5_real_t _t432 = _ms331*_t430 - _ms331*_t431;
+    const train5_real_t _t433 = _ms348*_t395;
+    const train5_real_t _t434 = _ms385*_t393;
+    const train5_real_t _t435 = _ms390*_t75 + _ms391*_t76;
+    const train5_real_t _t436 = _ms394*_t391;
+    const train5_real_t _t437 = _ms366*_t97;
+    const train5_real_t _t438 = _ms367*_t98;
+    const train5_real_t _t439 = -_t437 - _t438;
+    const train5_real_t _t440 = _ms332*_t378;
+    const train5_real_t _t441 = _ms366*_t98;
+    const train5_real_t _t442 = _ms367*_t97;
+    const train5_real_t _t443 = _ms332*_t441 - _ms332*_t442;
+    const train5_real_t _t444 = _ms349*_t391;
+    const train5_real_t _t445 = _ms394*_t389;
+    const train5_real_t _t446 = _ms399*_t97 + _ms400*_t98;
+    const train5_real_t _t447 = _ms403*_t387;
+    const train5_real_t _t448 = _ms350*_t387;
+    const train5_real_t _t449 = _ms403*_t385;
+    const train5_real_t _t450 = _ms408*_t145 + _ms409*_t146;
+    const train5_real_t _t451 = _ms348*_ms429 + _ms385*_ms431;
+    const train5_real_t _t452 = _ms349*_ms433 + _ms394*_ms435;
+    const train5_real_t _t453 = _ms350*_ms437 + _ms403*_ms439;
+    const train5_real_t _t454 = _ms348*_ms431;
+    const train5_real_t _t455 = _ms385*_ms429;
+    const train5_real_t _t456 = _ms349*_ms435;
+    const train5_real_t _t457 = _ms394*_ms433;
+    const train5_real_t _t458 = _ms350*_ms439;
+    const train5_real_t _t459 = _ms403*_ms437;
+    const train5_real_t _t460 = -_t399 + _t400;
+    const train5_real_t _t461 = _t411 - _t412;
+    const train5_real_t _t462 = -_t408*_t55 + _t409*_t54;
+    const train5_real_t _t463 = _ms330*_t404 + _ms330*_t405;
+    const train5_real_t _t464 = _t419*_t55 + _t422*_t54;
+    const train5_real_t _t465 = _ms381*_t55 - _ms382*_t54;
+    const train5_real_t _t466 = _t430 - _t431;
+    const train5_real_t _t467 = _ms331*_t426 + _ms331*_t427;
+    const train5_real_t _t468 = _ms390*_t76 - _ms391*_t75;
+    const train5_real_t _t469 = _t441 - _t442;
+    const train5_real_t _t470 = _ms332*_t437 + _ms332*_t438;
+    const train5_real_t _t471 = _ms399*_t98 - _ms400*_t97;
+    const train5_real_t _t472 = _t381 - _t382;
+    const train5_real_t _t473 = _ms333*_t372 + _ms333*_t373;
+    const train5_real_t _t474 = _ms408*_t146 - _ms409*_t145;
+    const train5_real_t _t475 = -_ms329*_t401 - _ms329*_t402 + _t375*_t460;
+    const train5_real_t _t476 = _ms352*_t52 - _ms371*_t50 - _t475;
+    const train5_real_t _t477 = _t192*_t476 + _t193*_t415;
+    const train5_real_t _t478 = _t23*_t477;
+    const train5_real_t _t479 = _ms378*_t250;
+    const train5_real_t _t480 = _t190*_t476 + _t191*_t415;
+    const train5_real_t _t481 = _t24*_t480;
+    const train5_real_t _t482 = _ms377*_t255;
+    const train5_real_t _t483 = _ms416*_t417;
+    const train5_real_t _t484 = _ms416*(_ms235*_ms352 + _ms376);
+    const train5_real_t _t485 = _t259*_t416;
+    const train5_real_t _t486 = _ms415*(_ms235*_ms371 - _ms347);
+    const train5_real_t _t487 = J_theta_cart*_ms376 + _ms352*_ms415 + _ms371*_ms416;
+    const train5_real_t _t488 = _t487*_t56;
+    const train5_real_t _t489 = _ms347*_ms425 + _ms376*_ms427 + _ms425*_t416 - _ms427*_t417;
+    const train5_real_t _t490 = _t267*_t489;
+    const train5_real_t _t491 = _ms347*_ms427 - _ms376*_ms425 + _ms425*_t417 + _ms427*_t416;
+    const train5_real_t _t492 = _t268*_t491;
+    const train5_real_t _t493 = _ms348*_ms417 + _ms385*_ms418;
+    const train5_real_t _t494 = _t272*_t493;
+    const train5_real_t _t495 = -_ms348*_ms418 + _ms385*_ms417;
+    const train5_real_t _t496 = _t271*_t495;
+    const train5_real_t _t497 = _ms417*_ms428;
+    const train5_real_t _t498 = _ms418*_ms426;
+    const train5_real_t _t499 = _t497 - _t498;
+    const train5_real_t _t500 = _ms418*(_ms249*_ms469 + _ms348*_ms428 + _ms385*_ms426);
+    const train5_real_t _t501 = J_theta_cart2*_ms385 + _ms417*_ms469 + _ms418*_ms470;
+    const train5_real_t _t502 = _ms417*(_ms249*_ms470 - _ms348*_ms426 + _ms385*_ms428);
+    const train5_real_t _t503 = _ms349*_ms419 + _ms394*_ms420;
+    const train5_real_t _t504 = -_ms349*_ms420 + _ms394*_ms419;
+    const train5_real_t _t505 = _ms419*_ms432;
+    const train5_real_t _t506 = _ms420*_ms430;
+    const train5_real_t _t507 = _t505 - _t506;
+    const train5_real_t _t508 = _ms420*(_ms263*_ms471 + _ms349*_ms432 + _ms394*_ms430);
+    const train5_real_t _t509 = J_theta_cart3*_ms394 + _ms419*_ms471 + _ms420*_ms472;
+    const train5_real_t _t510 = _ms419*(_ms263*_ms472 - _ms349*_ms430 + _ms394*_ms432);
+    const train5_real_t _t511 = _ms350*_ms421 + _ms403*_ms422;
+    const train5_real_t _t512 = -_ms350*_ms422 + _ms403*_ms421;
+    const train5_real_t _t513 = _ms421*_ms436;
+    const train5_real_t _t514 = _ms422*_ms434;
+    const train5_real_t _t515 = _t513 - _t514;
+    const train5_real_t _t516 = _ms422*(_ms277*_ms473 + _ms350*_ms436 + _ms403*_ms434);
+    const train5_real_t _t517 = J_theta_cart4*_ms403 + _ms421*_ms473 + _ms422*_ms474;
+    const train5_real_t _t518 = _ms421*(_ms277*_ms474 - _ms350*_ms434 + _ms403*_ms436);
+    const train5_real_t _t519 = _ms351*_ms423 + _ms412*_ms424;
+    const train5_real_t _t520 = -_ms351*_ms424 + _ms412*_ms423;
+    const train5_real_t _t521 = _ms423*_ms440;
+    const train5_real_t _t522 = _ms424*_ms438;
+    const train5_real_t _t523 = _t521 - _t522;
+    const train5_real_t _t524 = _ms424*(_ms291*_ms475 + _ms351*_ms440 + _ms412*_ms438);
+    const train5_real_t _t525 = J_theta_cart5*_ms412 + _ms423*_ms475 + _ms424*_ms476;
+    const train5_real_t _t526 = _ms423*(_ms291*_ms476 - _ms351*_ms438 + _ms412*_ms440);
+    const train5_real_t _t527 = J_theta_cart2_left*_ms387;
+    const train5_real_t _t528 = J_theta_cart2_right*_ms386;
+    const train5_real_t _t529 = J_theta_cart3_left*_ms396;
+    const train5_real_t _t530 = J_theta_cart3_right*_ms395;
+    const train5_real_t _t531 = J_theta_cart4_left*_ms405;
+    const train5_real_t _t532 = J_theta_cart4_right*_ms404;
+    const train5_real_t _t533 = J_theta_cart5_left*_ms414;
+    const train5_real_t _t534 = J_theta_cart5_right*_ms413;
+    const train5_real_t _t535 = _t319*_t477;
+    const train5_real_t _t536 = J_theta_cart_left*_ms378*_t247;
+    const train5_real_t _t537 = _t321*_t480;
+    const train5_real_t _t538 = J_theta_cart_right*_ms377*_t252;
+    const train5_real_t _t539 = _t260*_t417;
+    const train5_real_t _t540 = _ms416*(_ms296*_ms352 - TRAIN5_LIT(0.3)*_ms347);
+    const train5_real_t _t541 = _t257*_t416;
+    const train5_real_t _t542 = _ms415*(_ms296*_ms371 - TRAIN5_LIT(0.3)*_ms376);
+    const train5_real_t _t543 = _t487*_t63;
+    const train5_real_t _t544 = _t269*_t489;
+    const train5_real_t _t545 = _t270*_t491;
+    const train5_real_t _t546 = _t274*_t493;
+    const train5_real_t _t547 = _t273*_t495;
+    const train5_real_t _t548 = _t325 - _t328;
+    const train5_real_t _t549 = _ms418*(_ms303*_ms469 + _ms348*_ms442 + _ms385*_ms441);
+    const train5_real_t _t550 = _ms417*(_ms303*_ms470 - _ms348*_ms441 + _ms385*_ms442);
+    const train5_real_t _t551 = _t331 - _t335;
+    const train5_real_t _t552 = _ms420*(_ms310*_ms471 + _ms349*_ms444 + _ms394*_ms443);
+    const train5_real_t _t553 = _ms419*(_ms310*_ms472 - _ms349*_ms443 + _ms394*_ms444);
+    const train5_real_t _t554 = _t339 - _t343;
+    const train5_real_t _t555 = _ms422*(_ms317*_ms473 + _ms350*_ms446 + _ms403*_ms445);
+    const train5_real_t _t556 = _ms421*(_ms317*_ms474 - _ms350*_ms445 + _ms403*_ms446);
+    const train5_real_t _t557 = _t347 - _t351;
+    const train5_real_t _t558 = _ms424*(_ms324*_ms475 + _ms351*_ms448 + _ms412*_ms447);
+    const train5_real_t _t559 = _ms423*(_ms324*_ms476 - _ms351*_ms447 + _ms412*_ms448);
+    const train5_real_t _t560 = TRAIN5_LIT(2.0)*_t15;
+    const train5_real_t _t561 = TRAIN5_LIT(2.0)*_t16;
+    const train5_real_t _t562 = TRAIN5_LIT(2.0)*_t17;
+    const train5_real_t _t563 = TRAIN5_LIT(2.0)*_t18;
+    const train5_real_t _t564 = TRAIN5_LIT(2.0)*_t19;
+    const train5_real_t _t565 = TRAIN5_LIT(2.0)*_t20;
+    const train5_real_t _t566 = TRAIN5_LIT(2.0)*_t21;
+    const train5_real_t _t567 = TRAIN5_LIT(2.0)*_t22;
+    const train5_real_t _t568 = TRAIN5_LIT(2.0)*_t23*_t249;
+    const train5_real_t _t569 = TRAIN5_LIT(2.0)*_t24*_t254;
+    const train5_real_t _t570 = _ms235*_ms416;
+    const train5_real_t _t571 = _t56*(_t2 + TRAIN5_LIT(2.0)*_t258) + TRAIN5_LIT(2.0)*_t570;
+    const train5_real_t _t572 = TRAIN5_LIT(2.0)*_ms249;
+    const train5_real_t _t573 = _t497*_t572;
+    const train5_real_t _t574 = TRAIN5_LIT(2.0)*_t267*_t271;
+    const train5_real_t _t575 = _t498*_t572;
+    const train5_real_t _t576 = TRAIN5_LIT(2.0)*_t268*_t272;
+    const train5_real_t _t577 = TRAIN5_LIT(2.0)*_t264 + TRAIN5_LIT(2.0)*_t3 + TRAIN5_LIT(2.0)*_t4;
+    const train5_real_t _t578 = TRAIN5_LIT(2.0)*_ms263;
+    const train5_real_t _t579 = _t505*_t578;
+    const train5_real_t _t580 = TRAIN5_LIT(2.0)*_t276;
+    const train5_real_t _t581 = _t506*_t578;
+    const train5_real_t _t582 = TRAIN5_LIT(2.0)*_t277;
+    const train5_real_t _t583 = TRAIN5_LIT(2.0)*_t283 + TRAIN5_LIT(2.0)*_t6 + TRAIN5_LIT(2.0)*_t7;
+    const train5_real_t _t584 = TRAIN5_LIT(2.0)*_ms277;
+    const train5_real_t _t585 = _t513*_t584;
+    const train5_real_t _t586 = TRAIN5_LIT(2.0)*_t285;
+    const train5_real_t _t587 = _t514*_t584;
+    const train5_real_t _t588 = TRAIN5_LIT(2.0)*_t286;
+    const train5_real_t _t589 = TRAIN5_LIT(2.0)*_t10 + TRAIN5_LIT(2.0)*_t292 + TRAIN5_LIT(2.0)*_t9;
+    const train5_real_t _t590 = TRAIN5_LIT(2.0)*_ms291;
+    const train5_real_t _t591 = _t521*_t590;
+    const train5_real_t _t592 = TRAIN5_LIT(2.0)*_t294;
+    const train5_real_t _t593 = _t522*_t590;
+    const train5_real_t _t594 = TRAIN5_LIT(2.0)*_t295;
+    const train5_real_t _t595 = TRAIN5_LIT(2.0)*_t12 + TRAIN5_LIT(2.0)*_t13 + TRAIN5_LIT(2.0)*_t301;
+    const train5_real_t _t596 = TRAIN5_LIT(0.207)*_t0;
+    const train5_real_t _t597 = -TRAIN5_LIT(0.207)*_t1;
     const train5_real_t J_theta_left = p->J_theta_left;
-    const train5_real_t _t529 = J_theta_left*_t528;
-    const train5_real_t _t530 = _ms224*_t11 + _ms228*_t13 + _ms232*_t15 + _ms236*_t17 + _ms240*_t19
-            + _ms248*_t21 + _ms252*_t23 + _ms256*_t25 + _ms260*_t27 + _ms264*_t29 + _ms268*_t31
-            + _ms272*_t33 + _ms276*_t35 + _ms280*_t37 + _ms284*_t39 + _t523*_t527 + _t524*_t529
-            + _t525;
-    const train5_real_t _t531 = TRAIN5_LIT(2.0)*_t530;
+    const train5_real_t J_theta_right = p->J_theta_right;
+    const train5_real_t _t598 = J_theta_left*_t1*_t597 + J_theta_right*_t0*_t596 + _ms297*_t24
+            + _ms298*_t23 + _ms304*_t16 + _ms305*_t15 + _ms311*_t18 + _ms312*_t17 + _ms318*_t20
+            + _ms319*_t19 + _ms325*_t22 + _ms326*_t21;
+    const train5_real_t K_theta_tractor_x_tractor_2 = p->K_theta_tractor_x_tractor_2;
+    const train5_real_t _t599 = K_theta_tractor_x_tractor_2 + _t598;
+    const train5_real_t _t600 = -_ms235*_t26 + _ms235*_t27 + _t25 + _t599;
+    const train5_real_t _t601 = _ms249*_t28 + _ms249*_t31 + _ms303*_t3 + _ms303*_t4 + _t600;
+    const train5_real_t _t602 = _ms263*_t32 + _ms263*_t35 + _ms310*_t6 + _ms310*_t7 + _t601;
+    const train5_real_t _t603 = _ms277*_t36 + _ms277*_t39 + _ms317*_t10 + _ms317*_t9 + _t602;
+    const train5_real_t _t604 = _ms291*_t40 + _ms291*_t43 + _ms324*_t12 + _ms324*_t13 + _t603;
+    const train5_real_t _t605 = TRAIN5_LIT(2.0)*_t604;
     const train5_real_t J_x_tractor = p->J_x_tractor;
-    const train5_real_t _t532 = J_x_tractor + _t0 + _t1 + _t2 + _t3 + _t4;
-    const train5_real_t _t533 = J_theta_right*_t523;
-    const train5_real_t _t534 = J_theta_left*_t524;
-    const train5_real_t _t535 = _ms224*_t10 + _ms228*_t12 + _ms232*_t14 + _ms236*_t16 + _ms240*_t18
-            + _ms248*_t20 + _ms252*_t22 + _ms256*_t24 + _ms260*_t26 + _ms264*_t28 + _ms268*_t30
-            + _ms272*_t32 + _ms276*_t34 + _ms280*_t36 + _ms284*_t38 + _t523*_t533 + _t524*_t534
-            + _t532;
+    const train5_real_t _t606 = J_theta_cart2_left*_ms251*_ms251 + J_theta_cart2_right*_ms250*_ms250
+            + J_theta_cart3_left*_ms265*_ms265 + J_theta_cart3_right*_ms264*_ms264
+            + J_theta_cart4_left*_ms279*_ms279 + J_theta_cart4_right*_ms278*_ms278
+            + J_theta_cart5_left*_ms293*_ms293 + J_theta_cart5_right*_ms292*_ms292
+            + J_theta_cart_left*_ms237*_ms237 + J_theta_cart_right*_ms236*_ms236
+            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
+    const train5_real_t _t607 = J_theta_cart*_ms235*_ms235 + _ms235*_t2 + _t606;
+    const train5_real_t _t608 = J_theta_cart2*_ms249*_ms249 + _ms249*_t3 + _ms249*_t4 + _ms249*_t5
+            + _t607;
+    const train5_real_t _t609 = J_theta_cart3*_ms263*_ms263 + _ms263*_t6 + _ms263*_t7 + _ms263*_t8
+            + _t608;
+    const train5_real_t _t610 = J_theta_cart4*_ms277*_ms277 + _ms277*_t10 + _ms277*_t11 + _ms277*_t9
+            + _t609;
+    const train5_real_t _t611 = J_theta_cart5*_ms291*_ms291 + _ms291*_t12 + _ms291*_t13
+            + _ms291*_t14 + _t610;
+    const train5_real_t _t612 = J_theta_cart2_left*_ms305*_ms305 + J_theta_cart2_right*_ms304*_ms304
+            + J_theta_cart3_left*_ms312*_ms312 + J_theta_cart3_right*_ms311*_ms311
+            + J_theta_cart4_left*_ms319*_ms319 + J_theta_cart4_right*_ms318*_ms318
+            + J_theta_cart5_left*_ms326*_ms326 + J_theta_cart5_right*_ms325*_ms325
+            + J_theta_cart_left*_ms298*_ms298 + J_theta_cart_right*_ms297*_ms297
+            + J_theta_left*_t597*_t597 + J_theta_right*_t596*_t596;
     const train5_real_t J_theta_tractor = p->J_theta_tractor;
-    const train5_real_t _t536 = J_theta_tractor + _ms225*_ms315 + _ms229*_ms316 + _ms233*_ms317
-            + _ms237*_ms318 + _ms241*_ms319;
-    const train5_real_t _t537 = _ms225*_t11 + _ms229*_t13 + _ms233*_t15 + _ms237*_t17 + _ms241*_t19
-            + _ms249*_t21 + _ms253*_t23 + _ms257*_t25 + _ms261*_t27 + _ms265*_t29 + _ms269*_t31
-            + _ms273*_t33 + _ms277*_t35 + _ms281*_t37 + _ms285*_t39 + _t526*_t527 + _t528*_t529
-            + _t536;
-    const train5_real_t _t538 = -_t530*_t530 + _t535*_t537;
-    const train5_real_t _t539 = TRAIN5_LIT(1.0)/_t538;
-    const train5_real_t _t540 = _t539*_t539;
-    const train5_real_t _t541 = _t539;
-    const train5_real_t _t542 = _t530*_t541;
+    const train5_real_t _t613 = J_theta_tractor + _t612;
+    const train5_real_t _t614 = J_theta_cart*_ms296*_ms296 - TRAIN5_LIT(0.6)*_t44 + _t613;
+    const train5_real_t _t615 = J_theta_cart2*_ms303*_ms303 + _ms303*_t29 + _ms303*_t30
+            + _ms303*_t31 + _t614;
+    const train5_real_t _t616 = J_theta_cart3*_ms310*_ms310 + _ms310*_t33 + _ms310*_t34
+            + _ms310*_t35 + _t615;
+    const train5_real_t _t617 = J_theta_cart4*_ms317*_ms317 + _ms317*_t37 + _ms317*_t38
+            + _ms317*_t39 + _t616;
+    const train5_real_t _t618 = J_theta_cart5*_ms324*_ms324 + _ms324*_t41 + _ms324*_t42
+            + _ms324*_t43 + _t617;
+    const train5_real_t _t619 = -_t604*_t604 + _t611*_t618;
+    const train5_real_t _t620 = TRAIN5_LIT(1.0)/_t619;
+    const train5_real_t _t621 = _t620*_t620;
+    const train5_real_t _t622 = _t620;
+    const train5_real_t _t623 = _t604*_t622;
     const train5_real_t tau_right = tau[0];
     const train5_real_t tau_left = tau[1];
-    const train5_real_t _t543 = -_ms636 + _t523*tau_right + _t524*tau_left;
-    const train5_real_t _t544 = _t541*_t543;
-    const train5_real_t _t545 = _t537*_t541;
-    const train5_real_t _t546 = -_ms637 + _t526*tau_right + _t528*tau_left;
-    const train5_real_t _t547 = _t541*_t546;
-    const train5_real_t _t548 = -_t530*_t546 + _t537*_t543;
-    const train5_real_t _t549 = _t535*_t541;
-    const train5_real_t _t550 = -_t530*_t543 + _t535*_t546;
-    const train5_real_t _t551 = TRAIN5_LIT(0.85)*_t51;
-    const train5_real_t _t552 = TRAIN5_LIT(0.85)*_t53;
-    const train5_real_t _t553 = -_t118*_t551 + _t119*_t551 + _t552*_t58 + _t552*_t60;
-    const train5_real_t _t554 = _ms229*_t553;
-    const train5_real_t _t555 = -_t122*_t551 + _t123*_t551 + _t552*_t64 + _t552*_t66;
-    const train5_real_t _t556 = _ms233*_t555;
-    const train5_real_t _t557 = -_t126*_t551 + _t127*_t551 + _t552*_t70 + _t552*_t72;
-    const train5_real_t _t558 = _ms237*_t557;
-    const train5_real_t _t559 = -_t130*_t551 + _t131*_t551 + _t552*_t76 + _t552*_t78;
-    const train5_real_t _t560 = _ms241*_t559;
-    const train5_real_t _t561 = _ms225*_t553;
-    const train5_real_t _t562 = _ms225*_t555;
-    const train5_real_t _t563 = _ms225*_t557;
-    const train5_real_t _t564 = _ms225*_t559;
-    const train5_real_t _t565 = J_theta_cart2_right*_ms427;
-    const train5_real_t _t566 = J_theta_cart2_left*_ms439;
-    const train5_real_t _t567 = J_theta_cart3_right*_ms451;
-    const train5_real_t _t568 = J_theta_cart3_left*_ms467;
-    const train5_real_t _t569 = J_theta_cart4_right*_ms483;
-    const train5_real_t _t570 = J_theta_cart4_left*_ms503;
-    const train5_real_t _t571 = J_theta_cart5_right*_ms523;
-    const train5_real_t _t572 = J_theta_cart5_left*_ms547;
-    const train5_real_t _t573 = _t133*_t552;
-    const train5_real_t _t574 = _t119*_t573;
-    const train5_real_t _t575 = _t136*_t552;
-    const train5_real_t _t576 = _t123*_t575;
-    const train5_real_t _t577 = _t118*_t573;
-    const train5_real_t _t578 = _t134*_t551;
-    const train5_real_t _t579 = _t135*_t551;
-    const train5_real_t _t580 = _t122*_t575;
-    const train5_real_t _t581 = _t137*_t551;
-    const train5_real_t _t582 = _t138*_t551;
-    const train5_real_t _t583 = _t142*_t552;
-    const train5_real_t _t584 = _t130*_t583 - _t131*_t583 + _t143*_t551 + _t144*_t551;
-    const train5_real_t _t585 = _t146*_t552;
-    const train5_real_t _t586 = _t126*_t585 - _t127*_t585 + _t147*_t551 + _t148*_t551;
-    const train5_real_t _t587 = _t139*_t552;
-    const train5_real_t _t588 = _t139*_t551;
-    const train5_real_t _t589 = _t118*_t587 - _t119*_t587 + _t58*_t588 + _t588*_t60;
-    const train5_real_t _t590 = _t122*_t587 - _t123*_t587 + _t588*_t64 + _t588*_t66;
-    const train5_real_t _t591 = _t126*_t587 - _t127*_t587 + _t588*_t70 + _t588*_t72;
-    const train5_real_t _t592 = _t130*_t587 - _t131*_t587 + _t588*_t76 + _t588*_t78;
-    const train5_real_t _t593 = _ms152*_ms345;
-    const train5_real_t _t594 = _ms152*_ms347;
-    const train5_real_t _t595 = _ms155*_ms345;
-    const train5_real_t _t596 = _ms155*_ms347;
-    const train5_real_t _t597 = _ms156*_ms357;
-    const train5_real_t _t598 = _ms156*_ms359;
-    const train5_real_t _t599 = _ms159*_ms345;
-    const train5_real_t _t600 = _ms159*_ms347;
-    const train5_real_t _t601 = _ms160*_ms357;
-    const train5_real_t _t602 = _ms160*_ms359;
-    const train5_real_t _t603 = _ms161*_ms373;
-    const train5_real_t _t604 = _ms161*_ms375;
-    const train5_real_t _t605 = TRAIN5_LIT(2.0)*_t208 - TRAIN5_LIT(2.0)*_t209;
-    const train5_real_t _t606 = -TRAIN5_LIT(1.6666666666666667)*_t605;
-    const train5_real_t _t607 = TRAIN5_LIT(0.2)*_t606;
-    const train5_real_t _t608 = TRAIN5_LIT(2.0)*_t258 + TRAIN5_LIT(2.0)*_t259;
-    const train5_real_t _t609 = TRAIN5_LIT(2.0)*_t210 - TRAIN5_LIT(2.0)*_t211;
-    const train5_real_t _t610 = -TRAIN5_LIT(1.6666666666666667)*_t609;
-    const train5_real_t _t611 = TRAIN5_LIT(0.2)*_t610;
-    const train5_real_t _t612 = TRAIN5_LIT(2.0)*_t262 + TRAIN5_LIT(2.0)*_t263;
-    const train5_real_t _t613 = TRAIN5_LIT(2.0)*_ms132*_ms224 - _ms133*_t606
-            - TRAIN5_LIT(2.0)*_t222;
-    const train5_real_t _t614 = -TRAIN5_LIT(1.6666666666666667)*_t613;
-    const train5_real_t _t615 = TRAIN5_LIT(0.2)*_t614;
-    const train5_real_t _t616 = _ms152*_t606;
-    const train5_real_t _t617 = TRAIN5_LIT(2.0)*_ms132*_ms225 - _ms133*_t610
-            - TRAIN5_LIT(2.0)*_t225;
-    const train5_real_t _t618 = -TRAIN5_LIT(1.6666666666666667)*_t617;
-    const train5_real_t _t619 = TRAIN5_LIT(0.2)*_t618;
-    const train5_real_t _t620 = _ms152*_t610;
-    const train5_real_t _t621 = -_t221 + _t593;
-    const train5_real_t _t622 = -TRAIN5_LIT(1.6666666666666667)*_t621;
-    const train5_real_t _t623 = TRAIN5_LIT(0.2)*_t622;
-    const train5_real_t _t624 = _ms133*_ms345;
-    const train5_real_t _t625 = _t289 + _t624;
-    const train5_real_t _t626 = -_t224 + _t594;
-    const train5_real_t _t627 = -TRAIN5_LIT(1.6666666666666667)*_t626;
-    const train5_real_t _t628 = TRAIN5_LIT(0.2)*_t627;
-    const train5_real_t _t629 = _ms133*_ms347;
-    const train5_real_t _t630 = _t297 + _t629;
-    const train5_real_t _t631 = -_t223 - _t593;
-    const train5_real_t _t632 = -TRAIN5_LIT(1.6666666666666667)*_t631;
-    const train5_real_t _t633 = TRAIN5_LIT(0.2)*_t632;
-    const train5_real_t _t634 = -_t226 - _t594;
-    const train5_real_t _t635 = -TRAIN5_LIT(1.6666666666666667)*_t634;
-    const train5_real_t _t636 = TRAIN5_LIT(0.2)*_t635;
-    const train5_real_t _t637 = TRAIN5_LIT(2.0)*_ms137*_ms224 - _ms138*_t606 - _ms139*_t614
-            - TRAIN5_LIT(2.0)*_t232;
-    const train5_real_t _t638 = -TRAIN5_LIT(1.6666666666666667)*_t637;
-    const train5_real_t _t639 = TRAIN5_LIT(0.2)*_t638;
-    const train5_real_t _t640 = _ms155*_t606;
-    const train5_real_t _t641 = _ms156*_t614;
-    const train5_real_t _t642 = TRAIN5_LIT(2.0)*_ms137*_ms225 - _ms138*_t610 - _ms139*_t618
-            - TRAIN5_LIT(2.0)*_t235;
-    const train5_real_t _t643 = -TRAIN5_LIT(1.6666666666666667)*_t642;
-    const train5_real_t _t644 = TRAIN5_LIT(0.2)*_t643;
-    const train5_real_t _t645 = _ms155*_t610;
-    const train5_real_t _t646 = _ms156*_t618;
-    const train5_real_t _t647 = -_ms139*_t622 - _t231 + _t595;
-    const train5_real_t _t648 = -TRAIN5_LIT(1.6666666666666667)*_t647;
-    const train5_real_t _t649 = TRAIN5_LIT(0.2)*_t648;
-    const train5_real_t _t650 = _ms138*_ms345;
-    const train5_real_t _t651 = _ms156*_t622 + _t327 + _t650;
-    const train5_real_t _t652 = -_ms139*_t627 - _t234 + _t596;
-    const train5_real_t _t653 = -TRAIN5_LIT(1.6666666666666667)*_t652;
-    const train5_real_t _t654 = TRAIN5_LIT(0.2)*_t653;
-    const train5_real_t _t655 = _ms138*_ms347;
-    const train5_real_t _t656 = _ms156*_t627 + _t335 + _t655;
-    const train5_real_t _t657 = -_ms139*_t632 + _t597;
-    const train5_real_t _t658 = -TRAIN5_LIT(1.6666666666666667)*_t657;
-    const train5_real_t _t659 = TRAIN5_LIT(0.2)*_t658;
-    const train5_real_t _t660 = _ms139*_ms357;
-    const train5_real_t _t661 = _ms156*_t632 + _t660;
-    const train5_real_t _t662 = -_ms139*_t635 + _t598;
-    const train5_real_t _t663 = -TRAIN5_LIT(1.6666666666666667)*_t662;
-    const train5_real_t _t664 = TRAIN5_LIT(0.2)*_t663;
-    const train5_real_t _t665 = _ms139*_ms359;
-    const train5_real_t _t666 = _ms156*_t635 + _t665;
-    const train5_real_t _t667 = -_t233 - _t595 - _t597;
-    const train5_real_t _t668 = -TRAIN5_LIT(1.6666666666666667)*_t667;
-    const train5_real_t _t669 = TRAIN5_LIT(0.2)*_t668;
-    const train5_real_t _t670 = -_t236 - _t596 - _t598;
-    const train5_real_t _t671 = -TRAIN5_LIT(1.6666666666666667)*_t670;
-    const train5_real_t _t672 = TRAIN5_LIT(0.2)*_t671;
-    const train5_real_t _t673 = TRAIN5_LIT(2.0)*_ms143*_ms224 - _ms144*_t606 - _ms145*_t614
-            - _ms146*_t638 - TRAIN5_LIT(2.0)*_t244;
-    const train5_real_t _t674 = -TRAIN5_LIT(1.6666666666666667)*_t673;
-    const train5_real_t _t675 = TRAIN5_LIT(0.2)*_t674;
-    const train5_real_t _t676 = -TRAIN5_LIT(2.0)*_ms143*_ms338 - TRAIN5_LIT(2.0)*_ms158*_ms224
-            + _ms159*_t606 + _ms160*_t614 + _ms161*_t638;
-    const train5_real_t _t677 = TRAIN5_LIT(2.0)*_ms143*_ms225 - _ms144*_t610 - _ms145*_t618
-            - _ms146*_t643 - TRAIN5_LIT(2.0)*_t247;
-    const train5_real_t _t678 = -TRAIN5_LIT(1.6666666666666667)*_t677;
-    const train5_real_t _t679 = TRAIN5_LIT(0.2)*_t678;
-    const train5_real_t _t680 = -TRAIN5_LIT(2.0)*_ms143*_ms339 - TRAIN5_LIT(2.0)*_ms158*_ms225
-            + _ms159*_t610 + _ms160*_t618 + _ms161*_t643;
-    const train5_real_t _t681 = -_ms145*_t622 - _ms146*_t648 - _t243 + _t599;
-    const train5_real_t _t682 = -TRAIN5_LIT(1.6666666666666667)*_t681;
-    const train5_real_t _t683 = TRAIN5_LIT(0.2)*_t682;
-    const train5_real_t _t684 = _ms144*_ms345;
-    const train5_real_t _t685 = _ms160*_t622 + _ms161*_t648 + _t375 + _t684;
-    const train5_real_t _t686 = -_ms145*_t627 - _ms146*_t653 - _t246 + _t600;
-    const train5_real_t _t687 = -TRAIN5_LIT(1.6666666666666667)*_t686;
-    const train5_real_t _t688 = TRAIN5_LIT(0.2)*_t687;
-    const train5_real_t _t689 = _ms144*_ms347;
-    const train5_real_t _t690 = _ms160*_t627 + _ms161*_t653 + _t383 + _t689;
-    const train5_real_t _t691 = -_ms145*_t632 - _ms146*_t658 + _t601;
-    const train5_real_t _t692 = -TRAIN5_LIT(1.6666666666666667)*_t691;
-    const train5_real_t _t693 = TRAIN5_LIT(0.2)*_t692;
-    const train5_real_t _t694 = _ms145*_ms357;
-    const train5_real_t _t695 = _ms160*_t632 + _ms161*_t658 + _t694;
-    const train5_real_t _t696 = -_ms145*_t635 - _ms146*_t663 + _t602;
-    const train5_real_t _t697 = -TRAIN5_LIT(1.6666666666666667)*_t696;
-    const train5_real_t _t698 = TRAIN5_LIT(0.2)*_t697;
-    const train5_real_t _t699 = _ms145*_ms359;
-    const train5_real_t _t700 = _ms160*_t635 + _ms161*_t663 + _t699;
-    const train5_real_t _t701 = -_ms146*_t668 + _t603;
-    const train5_real_t _t702 = -TRAIN5_LIT(1.6666666666666667)*_t701;
-    const train5_real_t _t703 = TRAIN5_LIT(0.2)*_t702;
-    const train5_real_t _t704 = _ms146*_ms373;
-    const train5_real_t _t705 = _ms161*_t668 + _t704;
-    const train5_real_t _t706 = -_ms146*_t671 + _t604;
-    const train5_real_t _t707 = -TRAIN5_LIT(1.6666666666666667)*_t706;
-    const train5_real_t _t708 = TRAIN5_LIT(0.2)*_t707;
-    const train5_real_t _t709 = _ms146*_ms375;
-    const train5_real_t _t710 = _ms161*_t671 + _t709;
-    const train5_real_t _t711 = -_t245 - _t599 - _t601 - _t603;
-    const train5_real_t _t712 = -TRAIN5_LIT(1.6666666666666667)*_t711;
-    const train5_real_t _t713 = TRAIN5_LIT(0.2)*_t712;
-    const train5_real_t _t714 = -_t248 - _t600 - _t602 - _t604;
-    const train5_real_t _t715 = -TRAIN5_LIT(1.6666666666666667)*_t714;
-    const train5_real_t _t716 = TRAIN5_LIT(0.2)*_t715;
-    const train5_real_t _t717 = J_theta_cart2_left*_ms437;
-    const train5_real_t _t718 = J_theta_cart2_right*_ms425;
-    const train5_real_t _t719 = J_theta_cart3_left*_ms465;
-    const train5_real_t _t720 = J_theta_cart3_right*_ms449;
-    const train5_real_t _t721 = J_theta_cart4_left*_ms501;
-    const train5_real_t _t722 = J_theta_cart4_right*_ms481;
-    const train5_real_t _t723 = J_theta_cart5_left*_ms545;
-    const train5_real_t _t724 = J_theta_cart5_right*_ms521;
-    const train5_real_t _t725 = _t553*(_ms224*_ms573 + _ms228*_ms566);
-    const train5_real_t _t726 = _t555*(_ms224*_ms576 + _ms232*_ms566);
-    const train5_real_t _t727 = _t557*(_ms224*_ms579 + _ms236*_ms566);
-    const train5_real_t _t728 = _t559*(_ms224*_ms582 + _ms240*_ms566);
-    const train5_real_t _t729 = _t553*(_ms225*_ms573 + _ms229*_ms566);
-    const train5_real_t _t730 = _t555*(_ms225*_ms576 + _ms233*_ms566);
-    const train5_real_t _t731 = _t557*(_ms225*_ms579 + _ms237*_ms566);
-    const train5_real_t _t732 = _t559*(_ms225*_ms582 + _ms241*_ms566);
-    const train5_real_t _t733 = _ms228*_t553;
-    const train5_real_t _t734 = _ms232*_t555;
-    const train5_real_t _t735 = _ms236*_t557;
-    const train5_real_t _t736 = _ms240*_t559;
-    const train5_real_t _t737 = _ms224*_t553;
-    const train5_real_t _t738 = _ms224*_t555;
-    const train5_real_t _t739 = _ms224*_t557;
-    const train5_real_t _t740 = _ms224*_t559;
-    const train5_real_t _t741 = TRAIN5_LIT(0.85)*_t57;
-    const train5_real_t _t742 = TRAIN5_LIT(0.85)*_t59;
-    const train5_real_t _t743 = -_t122*_t741 + _t123*_t741 + _t64*_t742 + _t66*_t742;
-    const train5_real_t _t744 = _ms233*_t743;
-    const train5_real_t _t745 = -_t126*_t741 + _t127*_t741 + _t70*_t742 + _t72*_t742;
-    const train5_real_t _t746 = _ms237*_t745;
-    const train5_real_t _t747 = -_t130*_t741 + _t131*_t741 + _t742*_t76 + _t742*_t78;
-    const train5_real_t _t748 = _ms241*_t747;
-    const train5_real_t _t749 = _ms229*_t743;
-    const train5_real_t _t750 = _ms229*_t745;
-    const train5_real_t _t751 = _ms229*_t747;
-    const train5_real_t _t752 = J_theta_cart2_right*_ms431;
-    const train5_real_t _t753 = J_theta_cart2_left*_ms443;
-    const train5_real_t _t754 = J_theta_cart3_right*_ms455;
-    const train5_real_t _t755 = J_theta_cart3_left*_ms471;
-    const train5_real_t _t756 = J_theta_cart4_right*_ms487;
-    const train5_real_t _t757 = J_theta_cart4_left*_ms507;
-    const train5_real_t _t758 = J_theta_cart5_right*_ms527;
-    const train5_real_t _t759 = J_theta_cart5_left*_ms551;
-    const train5_real_t _t760 = _t136*_t742;
-    const train5_real_t _t761 = _t123*_t760;
-    const train5_real_t _t762 = _t122*_t760;
-    const train5_real_t _t763 = _t137*_t741;
-    const train5_real_t _t764 = _t138*_t741;
-    const train5_real_t _t765 = _t142*_t742;
-    const train5_real_t _t766 = _t130*_t765 - _t131*_t765 + _t143*_t741 + _t144*_t741;
-    const train5_real_t _t767 = _t146*_t742;
-    const train5_real_t _t768 = _t126*_t767 - _t127*_t767 + _t147*_t741 + _t148*_t741;
-    const train5_real_t _t769 = _t133*_t741;
-    const train5_real_t _t770 = _t64*_t769;
-    const train5_real_t _t771 = _t133*_t742;
-    const train5_real_t _t772 = _t122*_t771;
-    const train5_real_t _t773 = _t66*_t769;
-    const train5_real_t _t774 = _t123*_t771;
-    const train5_real_t _t775 = _t70*_t769;
-    const train5_real_t _t776 = _t126*_t771;
-    const train5_real_t _t777 = _t72*_t769;
-    const train5_real_t _t778 = _t127*_t771;
-    const train5_real_t _t779 = _t76*_t769;
-    const train5_real_t _t780 = _t130*_t771;
-    const train5_real_t _t781 = _t769*_t78;
-    const train5_real_t _t782 = _t131*_t771;
-    const train5_real_t _t783 = _ms133*_ms228;
-    const train5_real_t _t784 = _ms152*_ms349;
-    const train5_real_t _t785 = _ms133*_ms229;
-    const train5_real_t _t786 = _ms152*_ms351;
-    const train5_real_t _t787 = _ms138*_ms228;
-    const train5_real_t _t788 = _ms155*_ms349;
-    const train5_real_t _t789 = _ms138*_ms229;
-    const train5_real_t _t790 = _ms155*_ms351;
-    const train5_real_t _t791 = _ms156*_ms361;
-    const train5_real_t _t792 = _ms156*_ms363;
-    const train5_real_t _t793 = _ms160*_ms361;
-    const train5_real_t _t794 = _ms160*_ms363;
-    const train5_real_t _t795 = _ms161*_ms377;
-    const train5_real_t _t796 = _ms161*_ms379;
-    const train5_real_t _t797 = TRAIN5_LIT(2.0)*_t783 + TRAIN5_LIT(2.0)*_t784;
-    const train5_real_t _t798 = -TRAIN5_LIT(1.6666666666666667)*_t797;
-    const train5_real_t _t799 = TRAIN5_LIT(0.2)*_t798;
-    const train5_real_t _t800 = _ms133*_ms349;
-    const train5_real_t _t801 = TRAIN5_LIT(2.0)*_t800;
-    const train5_real_t _t802 = _ms152*_ms228;
-    const train5_real_t _t803 = TRAIN5_LIT(2.0)*_t785 + TRAIN5_LIT(2.0)*_t786;
-    const train5_real_t _t804 = -TRAIN5_LIT(1.6666666666666667)*_t803;
-    const train5_real_t _t805 = TRAIN5_LIT(0.2)*_t804;
-    const train5_real_t _t806 = _ms133*_ms351;
-    const train5_real_t _t807 = TRAIN5_LIT(2.0)*_t806;
-    const train5_real_t _t808 = _ms152*_ms229;
-    const train5_real_t _t809 = -_t783 - _t784;
-    const train5_real_t _t810 = -TRAIN5_LIT(1.6666666666666667)*_t809;
-    const train5_real_t _t811 = TRAIN5_LIT(0.2)*_t810;
-    const train5_real_t _t812 = -_t785 - _t786;
-    const train5_real_t _t813 = -TRAIN5_LIT(1.6666666666666667)*_t812;
-    const train5_real_t _t814 = TRAIN5_LIT(0.2)*_t813;
-    const train5_real_t _t815 = -_ms139*_t798 + TRAIN5_LIT(2.0)*_t787 + TRAIN5_LIT(2.0)*_t788;
-    const train5_real_t _t816 = -TRAIN5_LIT(1.6666666666666667)*_t815;
-    const train5_real_t _t817 = TRAIN5_LIT(0.2)*_t816;
-    const train5_real_t _t818 = _ms138*_ms349;
-    const train5_real_t _t819 = -TRAIN5_LIT(2.0)*_ms155*_ms228 + _ms156*_t798
-            + TRAIN5_LIT(2.0)*_t818;
-    const train5_real_t _t820 = -_ms139*_t804 + TRAIN5_LIT(2.0)*_t789 + TRAIN5_LIT(2.0)*_t790;
-    const train5_real_t _t821 = -TRAIN5_LIT(1.6666666666666667)*_t820;
-    const train5_real_t _t822 = TRAIN5_LIT(0.2)*_t821;
-    const train5_real_t _t823 = _ms138*_ms351;
-    const train5_real_t _t824 = -TRAIN5_LIT(2.0)*_ms155*_ms229 + _ms156*_t804
-            + TRAIN5_LIT(2.0)*_t823;
-    const train5_real_t _t825 = -_ms139*_t810 + _t791;
-    const train5_real_t _t826 = -TRAIN5_LIT(1.6666666666666667)*_t825;
-    const train5_real_t _t827 = TRAIN5_LIT(0.2)*_t826;
-    const train5_real_t _t828 = _ms139*_ms361;
-    const train5_real_t _t829 = _ms156*_t810 + _t828;
-    const train5_real_t _t830 = -_ms139*_t813 + _t792;
-    const train5_real_t _t831 = -TRAIN5_LIT(1.6666666666666667)*_t830;
-    const train5_real_t _t832 = TRAIN5_LIT(0.2)*_t831;
-    const train5_real_t _t833 = _ms139*_ms363;
-    const train5_real_t _t834 = _ms156*_t813 + _t833;
-    const train5_real_t _t835 = -_t787 - _t788 - _t791;
-    const train5_real_t _t836 = -TRAIN5_LIT(1.6666666666666667)*_t835;
-    const train5_real_t _t837 = TRAIN5_LIT(0.2)*_t836;
-    const train5_real_t _t838 = _ms155*_ms228;
-    const train5_real_t _t839 = -_t789 - _t790 - _t792;
-    const train5_real_t _t840 = -TRAIN5_LIT(1.6666666666666667)*_t839;
-    const train5_real_t _t841 = TRAIN5_LIT(0.2)*_t840;
-    const train5_real_t _t842 = _ms155*_ms229;
-    const train5_real_t _t843 = TRAIN5_LIT(2.0)*_ms144*_ms228 - _ms145*_t798 - _ms146*_t816
-            + TRAIN5_LIT(2.0)*_ms159*_ms349;
-    const train5_real_t _t844 = -TRAIN5_LIT(1.6666666666666667)*_t843;
-    const train5_real_t _t845 = TRAIN5_LIT(0.2)*_t844;
-    const train5_real_t _t846 = _ms144*_ms349;
-    const train5_real_t _t847 = -TRAIN5_LIT(2.0)*_ms159*_ms228 + _ms160*_t798 + _ms161*_t816
-            + TRAIN5_LIT(2.0)*_t846;
-    const train5_real_t _t848 = TRAIN5_LIT(2.0)*_ms144*_ms229 - _ms145*_t804 - _ms146*_t821
-            + TRAIN5_LIT(2.0)*_ms159*_ms351;
-    const train5_real_t _t849 = -TRAIN5_LIT(1.6666666666666667)*_t848;
-    const train5_real_t _t850 = TRAIN5_LIT(0.2)*_t849;
-    const train5_real_t _t851 = _ms144*_ms351;
-    const train5_real_t _t852 = -TRAIN5_LIT(2.0)*_ms159*_ms229 + _ms160*_t804 + _ms161*_t821
-            + TRAIN5_LIT(2.0)*_t851;
-    const train5_real_t _t853 = -_ms145*_t810 - _ms146*_t826 + _t793;
-    const train5_real_t _t854 = -TRAIN5_LIT(1.6666666666666667)*_t853;
-    const train5_real_t _t855 = TRAIN5_LIT(0.2)*_t854;
-    const train5_real_t _t856 = _ms145*_ms361;
-    const train5_real_t _t857 = _ms160*_t810 + _ms161*_t826 + _t856;
-    const train5_real_t _t858 = -_ms145*_t813 - _ms146*_t831 + _t794;
-    const train5_real_t _t859 = -TRAIN5_LIT(1.6666666666666667)*_t858;
-    const train5_real_t _t860 = TRAIN5_LIT(0.2)*_t859;
-    const train5_real_t _t861 = _ms145*_ms363;
-    const train5_real_t _t862 = _ms160*_t813 + _ms161*_t831 + _t861;
-    const train5_real_t _t863 = -_ms146*_t836 + _t795;
-    const train5_real_t _t864 = -TRAIN5_LIT(1.6666666666666667)*_t863;
-    const train5_real_t _t865 = TRAIN5_LIT(0.2)*_t864;
-    const train5_real_t _t866 = _ms146*_ms377;
-    const train5_real_t _t867 = _ms161*_t836 + _t866;
-    const train5_real_t _t868 = -_ms146*_t840 + _t796;
-    const train5_real_t _t869 = -TRAIN5_LIT(1.6666666666666667)*_t868;
-    const train5_real_t _t870 = TRAIN5_LIT(0.2)*_t869;
-    const train5_real_t _t871 = _ms146*_ms379;
-    const train5_real_t _t872 = _ms161*_t840 + _t871;
-    const train5_real_t _t873 = -_ms144*_ms228 - _ms159*_ms349 - _t793 - _t795;
-    const train5_real_t _t874 = -TRAIN5_LIT(1.6666666666666667)*_t873;
-    const train5_real_t _t875 = TRAIN5_LIT(0.2)*_t874;
-    const train5_real_t _t876 = -_ms159*_ms228 + _t846 + _t856 + _t866;
-    const train5_real_t _t877 = -_ms144*_ms229 - _ms159*_ms351 - _t794 - _t796;
-    const train5_real_t _t878 = -TRAIN5_LIT(1.6666666666666667)*_t877;
-    const train5_real_t _t879 = TRAIN5_LIT(0.2)*_t878;
-    const train5_real_t _t880 = -_ms159*_ms229 + _t851 + _t861 + _t871;
-    const train5_real_t _t881 = J_theta_cart2_left*_ms441;
-    const train5_real_t _t882 = J_theta_cart2_right*_ms429;
-    const train5_real_t _t883 = J_theta_cart3_left*_ms469;
-    const train5_real_t _t884 = J_theta_cart3_right*_ms453;
-    const train5_real_t _t885 = J_theta_cart4_left*_ms505;
-    const train5_real_t _t886 = J_theta_cart4_right*_ms485;
-    const train5_real_t _t887 = J_theta_cart5_left*_ms549;
-    const train5_real_t _t888 = J_theta_cart5_right*_ms525;
-    const train5_real_t _t889 = _t743*(_ms228*_ms576 + _ms232*_ms573);
-    const train5_real_t _t890 = _t745*(_ms228*_ms579 + _ms236*_ms573);
-    const train5_real_t _t891 = _t747*(_ms228*_ms582 + _ms240*_ms573);
-    const train5_real_t _t892 = _t743*(_ms229*_ms576 + _ms233*_ms573);
-    const train5_real_t _t893 = _t745*(_ms229*_ms579 + _ms237*_ms573);
-    const train5_real_t _t894 = _t747*(_ms229*_ms582 + _ms241*_ms573);
-    const train5_real_t _t895 = _ms232*_t743;
-    const train5_real_t _t896 = _ms236*_t745;
-    const train5_real_t _t897 = _ms240*_t747;
-    const train5_real_t _t898 = _ms228*_t743;
-    const train5_real_t _t899 = _ms228*_t745;
-    const train5_real_t _t900 = _ms228*_t747;
-    const train5_real_t _t901 = TRAIN5_LIT(0.85)*_t63;
-    const train5_real_t _t902 = TRAIN5_LIT(0.85)*_t65;
-    const train5_real_t _t903 = -_t126*_t901 + _t127*_t901 + _t70*_t902 + _t72*_t902;
-    const train5_real_t _t904 = _ms237*_t903;
-    const train5_real_t _t905 = -_t130*_t901 + _t131*_t901 + _t76*_t902 + _t78*_t902;
-    const train5_real_t _t906 = _ms241*_t905;
-    const train5_real_t _t907 = _ms233*_t903;
-    const train5_real_t _t908 = _ms233*_t905;
-    const train5_real_t _t909 = J_theta_cart3_right*_ms459;
-    const train5_real_t _t910 = J_theta_cart3_left*_ms475;
-    const train5_real_t _t911 = J_theta_cart4_right*_ms491;
-    const train5_real_t _t912 = J_theta_cart4_left*_ms511;
-    const train5_real_t _t913 = J_theta_cart5_right*_ms531;
-    const train5_real_t _t914 = J_theta_cart5_left*_ms555;
-    const train5_real_t _t915 = _t142*_t902;
-    const train5_real_t _t916 = _t130*_t915 - _t131*_t915 + _t143*_t901 + _t144*_t901;
-    const train5_real_t _t917 = _t146*_t902;
-    const train5_real_t _t918 = _t126*_t917 - _t127*_t917 + _t147*_t901 + _t148*_t901;
-    const train5_real_t _t919 = _t136*_t902;
-    const train5_real_t _t920 = _t136*_t901;
-    const train5_real_t _t921 = _t126*_t919 - _t127*_t919 + _t70*_t920 + _t72*_t920;
-    const train5_real_t _t922 = _t130*_t919 - _t131*_t919 + _t76*_t920 + _t78*_t920;
-    const train5_real_t _t923 = _ms139*_ms232;
-    const train5_real_t _t924 = _ms156*_ms365;
-    const train5_real_t _t925 = _ms139*_ms233;
-    const train5_real_t _t926 = _ms156*_ms367;
-    const train5_real_t _t927 = _ms145*_ms232;
-    const train5_real_t _t928 = _ms160*_ms365;
-    const train5_real_t _t929 = _ms145*_ms233;
-    const train5_real_t _t930 = _ms160*_ms367;
-    const train5_real_t _t931 = _ms161*_ms381;
-    const train5_real_t _t932 = _ms161*_ms383;
-    const train5_real_t _t933 = TRAIN5_LIT(2.0)*_t923 + TRAIN5_LIT(2.0)*_t924;
-    const train5_real_t _t934 = -TRAIN5_LIT(1.6666666666666667)*_t933;
-    const train5_real_t _t935 = TRAIN5_LIT(0.2)*_t934;
-    const train5_real_t _t936 = _ms139*_ms365;
-    const train5_real_t _t937 = TRAIN5_LIT(2.0)*_t936;
-    const train5_real_t _t938 = _ms156*_ms232;
-    const train5_real_t _t939 = TRAIN5_LIT(2.0)*_t925 + TRAIN5_LIT(2.0)*_t926;
-    const train5_real_t _t940 = -TRAIN5_LIT(1.6666666666666667)*_t939;
-    const train5_real_t _t941 = TRAIN5_LIT(0.2)*_t940;
-    const train5_real_t _t942 = _ms139*_ms367;
-    const train5_real_t _t943 = TRAIN5_LIT(2.0)*_t942;
-    const train5_real_t _t944 = _ms156*_ms233;
-    const train5_real_t _t945 = -_t923 - _t924;
-    const train5_real_t _t946 = -TRAIN5_LIT(1.6666666666666667)*_t945;
-    const train5_real_t _t947 = TRAIN5_LIT(0.2)*_t946;
-    const train5_real_t _t948 = -_t925 - _t926;
-    const train5_real_t _t949 = -TRAIN5_LIT(1.6666666666666667)*_t948;
-    const train5_real_t _t950 = TRAIN5_LIT(0.2)*_t949;
-    const train5_real_t _t951 = -_ms146*_t934 + TRAIN5_LIT(2.0)*_t927 + TRAIN5_LIT(2.0)*_t928;
-    const train5_real_t _t952 = -TRAIN5_LIT(1.6666666666666667)*_t951;
-    const train5_real_t _t953 = TRAIN5_LIT(0.2)*_t952;
-    const train5_real_t _t954 = _ms145*_ms365;
-    const train5_real_t _t955 = -TRAIN5_LIT(2.0)*_ms160*_ms232 + _ms161*_t934
-            + TRAIN5_LIT(2.0)*_t954;
-    const train5_real_t _t956 = -_ms146*_t940 + TRAIN5_LIT(2.0)*_t929 + TRAIN5_LIT(2.0)*_t930;
-    const train5_real_t _t957 = -TRAIN5_LIT(1.6666666666666667)*_t956;
-    const train5_real_t _t958 = TRAIN5_LIT(0.2)*_t957;
-    const train5_real_t _t959 = _ms145*_ms367;
-    const train5_real_t _t960 = -TRAIN5_LIT(2.0)*_ms160*_ms233 + _ms161*_t940
-            + TRAIN5_LIT(2.0)*_t959;
-    const train5_real_t _t961 = -_ms146*_t946 + _t931;
-    const train5_real_t _t962 = -TRAIN5_LIT(1.6666666666666667)*_t961;
-    const train5_real_t _t963 = TRAIN5_LIT(0.2)*_t962;
-    const train5_real_t _t964 = _ms146*_ms381;
-    const train5_real_t _t965 = _ms161*_t946 + _t964;
-    const train5_real_t _t966 = -_ms146*_t949 + _t932;
-    const train5_real_t _t967 = -TRAIN5_LIT(1.6666666666666667)*_t966;
-    const train5_real_t _t968 = TRAIN5_LIT(0.2)*_t967;
-    const train5_real_t _t969 = _ms146*_ms383;
-    const train5_real_t _t970 = _ms161*_t949 + _t969;
-    const train5_real_t _t971 = -_t927 - _t928 - _t931;
-    const train5_real_t _t972 = -TRAIN5_LIT(1.6666666666666667)*_t971;
-    const train5_real_t _t973 = TRAIN5_LIT(0.2)*_t972;
-    const train5_real_t _t974 = -_ms160*_ms232 + _t954 + _t964;
-    const train5_real_t _t975 = -_t929 - _t930 - _t932;
-    const train5_real_t _t976 = -TRAIN5_LIT(1.6666666666666667)*_t975;
-    const train5_real_t _t977 = TRAIN5_LIT(0.2)*_t976;
-    const train5_real_t _t978 = -_ms160*_ms233 + _t959 + _t969;
-    const train5_real_t _t979 = J_theta_cart3_left*_ms473;
-    const train5_real_t _t980 = J_theta_cart3_right*_ms457;
-    const train5_real_t _t981 = J_theta_cart4_left*_ms509;
-    const train5_real_t _t982 = J_theta_cart4_right*_ms489;
-    const train5_real_t _t983 = J_theta_cart5_left*_ms553;
-    const train5_real_t _t984 = J_theta_cart5_right*_ms529;
-    const train5_real_t _t985 = _t903*(_ms232*_ms579 + _ms236*_ms576);
-    const train5_real_t _t986 = _t905*(_ms232*_ms582 + _ms240*_ms576);
-    const train5_real_t _t987 = _t903*(_ms233*_ms579 + _ms237*_ms576);
-    const train5_real_t _t988 = _t905*(_ms233*_ms582 + _ms241*_ms576);
-    const train5_real_t _t989 = _ms236*_t903;
-    const train5_real_t _t990 = _ms240*_t905;
-    const train5_real_t _t991 = _ms232*_t903;
-    const train5_real_t _t992 = _ms232*_t905;
-    const train5_real_t _t993 = TRAIN5_LIT(0.85)*_t69;
-    const train5_real_t _t994 = TRAIN5_LIT(0.85)*_t71;
-    const train5_real_t _t995 = -_t130*_t993 + _t131*_t993 + _t76*_t994 + _t78*_t994;
-    const train5_real_t _t996 = _ms241*_t995;
-    const train5_real_t _t997 = _ms237*_t995;
-    const train5_real_t _t998 = J_theta_cart4_right*_ms495;
-    const train5_real_t _t999 = J_theta_cart4_left*_ms515;
-    const train5_real_t _t1000 = J_theta_cart5_right*_ms535;
-    const train5_real_t _t1001 = J_theta_cart5_left*_ms559;
-    const train5_real_t _t1002 = _t142*_t994;
-    const train5_real_t _t1003 = _t1002*_t130 - _t1002*_t131 + _t143*_t993 + _t144*_t993;
-    const train5_real_t _t1004 = _t146*_t994;
-    const train5_real_t _t1005 = _t146*_t993;
-    const train5_real_t _t1006 = _t1004*_t130 - _t1004*_t131 + _t1005*_t76 + _t1005*_t78;
-    const train5_real_t _t1007 = _ms146*_ms236;
-    const train5_real_t _t1008 = _ms161*_ms385;
-    const train5_real_t _t1009 = _ms146*_ms237;
-    const train5_real_t _t1010 = _ms161*_ms387;
-    const train5_real_t _t1011 = TRAIN5_LIT(2.0)*_t1007 + TRAIN5_LIT(2.0)*_t1008;
-    const train5_real_t _t1012 = -TRAIN5_LIT(1.6666666666666667)*_t1011;
-    const train5_real_t _t1013 = TRAIN5_LIT(0.2)*_t1012;
-    const train5_real_t _t1014 = _ms146*_ms385;
-    const train5_real_t _t1015 = TRAIN5_LIT(2.0)*_t1014;
-    const train5_real_t _t1016 = _ms161*_ms236;
-    const train5_real_t _t1017 = TRAIN5_LIT(2.0)*_t1009 + TRAIN5_LIT(2.0)*_t1010;
-    const train5_real_t _t1018 = -TRAIN5_LIT(1.6666666666666667)*_t1017;
-    const train5_real_t _t1019 = TRAIN5_LIT(0.2)*_t1018;
-    const train5_real_t _t1020 = _ms146*_ms387;
-    const train5_real_t _t1021 = TRAIN5_LIT(2.0)*_t1020;
-    const train5_real_t _t1022 = _ms161*_ms237;
-    const train5_real_t _t1023 = -_t1007 - _t1008;
-    const train5_real_t _t1024 = -TRAIN5_LIT(1.6666666666666667)*_t1023;
-    const train5_real_t _t1025 = TRAIN5_LIT(0.2)*_t1024;
-    const train5_real_t _t1026 = -_t1009 - _t1010;
-    const train5_real_t _t1027 = -TRAIN5_LIT(1.6666666666666667)*_t1026;
-    const train5_real_t _t1028 = TRAIN5_LIT(0.2)*_t1027;
-    const train5_real_t _t1029 = J_theta_cart4_left*_ms513;
-    const train5_real_t _t1030 = J_theta_cart4_right*_ms493;
-    const train5_real_t _t1031 = J_theta_cart5_left*_ms557;
-    const train5_real_t _t1032 = J_theta_cart5_right*_ms533;
-    const train5_real_t _t1033 = _t995*(_ms236*_ms582 + _ms240*_ms579);
-    const train5_real_t _t1034 = _t995*(_ms237*_ms582 + _ms241*_ms579);
-    const train5_real_t _t1035 = _ms240*_t995;
-    const train5_real_t _t1036 = _ms236*_t995;
-    const train5_real_t _t1037 = J_theta_cart5_right*_ms539;
-    const train5_real_t _t1038 = J_theta_cart5_left*_ms563;
-    const train5_real_t _t1039 = J_theta_cart5_left*_ms561;
-    const train5_real_t _t1040 = J_theta_cart5_right*_ms537;
-    const train5_real_t _t1041 = TRAIN5_LIT(2.0)*_ms287;
-    const train5_real_t _t1042 = _ms48*_t1041;
-    const train5_real_t _t1043 = TRAIN5_LIT(0.6)*_ms287;
-    const train5_real_t _t1044 = _t1043*_t52 + _t1043*_t54;
-    const train5_real_t _t1045 = _t1043*_t58 + _t1043*_t60;
-    const train5_real_t _t1046 = _t1043*_t64 + _t1043*_t66;
-    const train5_real_t _t1047 = _t1043*_t70 + _t1043*_t72;
-    const train5_real_t _t1048 = _t1043*_t76 + _t1043*_t78;
-    const train5_real_t _t1049 = _ms286*_ms48;
-    const train5_real_t _t1050 = _ms162*_ms224 + _ms225*_ms48;
-    const train5_real_t _t1051 = _ms286*_t1050;
-    const train5_real_t _t1052 = -_ms288;
-    const train5_real_t _t1053 = _ms287 + _t1052;
-    const train5_real_t _t1054 = _ms287*_t1050;
-    const train5_real_t _t1055 = _t1041 + _t1052;
-    const train5_real_t _t1056 = -K_theta_tractor_x_tractor + _t48;
-    const train5_real_t _t1057 = _ms49*_t1041;
-    const train5_real_t _t1058 = _ms286*_ms49;
-    const train5_real_t _t1059 = _ms163*_ms224 + _ms225*_ms49;
-    const train5_real_t _t1060 = _ms286*_t1059;
-    const train5_real_t _t1061 = _ms287*_t1059;
-    const train5_real_t _t1062 = _ms162*_t523 + _ms48*_t526;
-    const train5_real_t _t1063 = _ms162*_t524 + _ms48*_t528;
-    const train5_real_t _t1064 = _ms163*_t523 + _ms49*_t526;
-    const train5_real_t _t1065 = _ms163*_t524 + _ms49*_t528;
-    const train5_real_t _t1066 = _ms286*_t40;
-    const train5_real_t _t1067 = _ms286*_t41;
-    const train5_real_t _t1068 = _ms162*_t40;
-    const train5_real_t _t1069 = _ms163*_t40;
-    const train5_real_t _t1070 = _ms162*_t41;
-    const train5_real_t _t1071 = _ms163*_t41;
-    const train5_real_t _t1072 = _ms286*_ms341 + _ms287*_ms343;
-    const train5_real_t _t1073 = _ms286*_ms345 + _ms287*_ms347;
-    const train5_real_t _t1074 = _ms286*_ms349 + _ms287*_ms351;
-    const train5_real_t _t1075 = _ms162*_ms228 + _ms229*_ms48;
-    const train5_real_t _t1076 = _ms163*_ms228 + _ms229*_ms49;
-    const train5_real_t _t1077 = _ms286*_ms353 + _ms287*_ms355;
-    const train5_real_t _t1078 = _ms286*_ms357 + _ms287*_ms359;
-    const train5_real_t _t1079 = _ms286*_ms361 + _ms287*_ms363;
-    const train5_real_t _t1080 = _ms286*_ms365 + _ms287*_ms367;
-    const train5_real_t _t1081 = _ms162*_ms232 + _ms233*_ms48;
-    const train5_real_t _t1082 = _ms163*_ms232 + _ms233*_ms49;
-    const train5_real_t _t1083 = _ms286*_ms369 + _ms287*_ms371;
-    const train5_real_t _t1084 = _ms286*_ms373 + _ms287*_ms375;
-    const train5_real_t _t1085 = _ms286*_ms377 + _ms287*_ms379;
-    const train5_real_t _t1086 = _ms286*_ms381 + _ms287*_ms383;
-    const train5_real_t _t1087 = _ms286*_ms385 + _ms287*_ms387;
-    const train5_real_t _t1088 = _ms162*_ms236 + _ms237*_ms48;
-    const train5_real_t _t1089 = _ms163*_ms236 + _ms237*_ms49;
-    const train5_real_t _t1090 = _ms286*_ms389 + _ms287*_ms391;
-    const train5_real_t _t1091 = _ms286*_ms393 + _ms287*_ms395;
-    const train5_real_t _t1092 = _ms286*_ms397 + _ms287*_ms399;
-    const train5_real_t _t1093 = _ms286*_ms401 + _ms287*_ms403;
-    const train5_real_t _t1094 = _ms286*_ms405 + _ms287*_ms407;
-    const train5_real_t _t1095 = _ms286*_ms409 + _ms287*_ms411;
-    const train5_real_t _t1096 = _ms162*_ms240 + _ms241*_ms48;
-    const train5_real_t _t1097 = _ms163*_ms240 + _ms241*_ms49;
-    const train5_real_t _t1098 = _ms286*_ms413 + _ms287*_ms415;
-    const train5_real_t _t1099 = _ms162*_ms248 + _ms249*_ms48;
-    const train5_real_t _t1100 = _ms163*_ms248 + _ms249*_ms49;
-    const train5_real_t _t1101 = _ms286*_ms417 + _ms287*_ms419;
-    const train5_real_t _t1102 = _ms162*_ms252 + _ms253*_ms48;
-    const train5_real_t _t1103 = _ms163*_ms252 + _ms253*_ms49;
-    const train5_real_t _t1104 = _ms286*_ms421 + _ms287*_ms423;
-    const train5_real_t _t1105 = _ms286*_ms425 + _ms287*_ms427;
-    const train5_real_t _t1106 = _ms286*_ms429 + _ms287*_ms431;
-    const train5_real_t _t1107 = _ms162*_ms256 + _ms257*_ms48;
-    const train5_real_t _t1108 = _ms163*_ms256 + _ms257*_ms49;
-    const train5_real_t _t1109 = _ms286*_ms433 + _ms287*_ms435;
-    const train5_real_t _t1110 = _ms286*_ms437 + _ms287*_ms439;
-    const train5_real_t _t1111 = _ms286*_ms441 + _ms287*_ms443;
-    const train5_real_t _t1112 = _ms162*_ms260 + _ms261*_ms48;
-    const train5_real_t _t1113 = _ms163*_ms260 + _ms261*_ms49;
-    const train5_real_t _t1114 = _ms286*_ms445 + _ms287*_ms447;
-    const train5_real_t _t1115 = _ms286*_ms449 + _ms287*_ms451;
-    const train5_real_t _t1116 = _ms286*_ms453 + _ms287*_ms455;
-    const train5_real_t _t1117 = _ms286*_ms457 + _ms287*_ms459;
-    const train5_real_t _t1118 = _ms162*_ms264 + _ms265*_ms48;
-    const train5_real_t _t1119 = _ms163*_ms264 + _ms265*_ms49;
-    const train5_real_t _t1120 = _ms286*_ms461 + _ms287*_ms463;
-    const train5_real_t _t1121 = _ms286*_ms465 + _ms287*_ms467;
-    const train5_real_t _t1122 = _ms286*_ms469 + _ms287*_ms471;
-    const train5_real_t _t1123 = _ms286*_ms473 + _ms287*_ms475;
-    const train5_real_t _t1124 = _ms162*_ms268 + _ms269*_ms48;
-    const train5_real_t _t1125 = _ms163*_ms268 + _ms269*_ms49;
-    const train5_real_t _t1126 = _ms286*_ms477 + _ms287*_ms479;
-    const train5_real_t _t1127 = _ms286*_ms481 + _ms287*_ms483;
-    const train5_real_t _t1128 = _ms286*_ms485 + _ms287*_ms487;
-    const train5_real_t _t1129 = _ms286*_ms489 + _ms287*_ms491;
-    const train5_real_t _t1130 = _ms286*_ms493 + _ms287*_ms495;
-    const train5_real_t _t1131 = _ms162*_ms272 + _ms273*_ms48;
-    const train5_real_t _t1132 = _ms163*_ms272 + _ms273*_ms49;
-    const train5_real_t _t1133 = _ms286*_ms497 + _ms287*_ms499;
-    const train5_real_t _t1134 = _ms286*_ms501 + _ms287*_ms503;
-    const train5_real_t _t1135 = _ms286*_ms505 + _ms287*_ms507;
-    const train5_real_t _t1136 = _ms286*_ms509 + _ms287*_ms511;
-    const train5_real_t _t1137 = _ms286*_ms513 + _ms287*_ms515;
-    const train5_real_t _t1138 = _ms162*_ms276 + _ms277*_ms48;
-    const train5_real_t _t1139 = _ms163*_ms276 + _ms277*_ms49;
-    const train5_real_t _t1140 = _ms286*_ms517 + _ms287*_ms519;
-    const train5_real_t _t1141 = _ms286*_ms521 + _ms287*_ms523;
-    const train5_real_t _t1142 = _ms286*_ms525 + _ms287*_ms527;
-    const train5_real_t _t1143 = _ms286*_ms529 + _ms287*_ms531;
-    const train5_real_t _t1144 = _ms286*_ms533 + _ms287*_ms535;
-    const train5_real_t _t1145 = _ms286*_ms537 + _ms287*_ms539;
-    const train5_real_t _t1146 = _ms162*_ms280 + _ms281*_ms48;
-    const train5_real_t _t1147 = _ms163*_ms280 + _ms281*_ms49;
-    const train5_real_t _t1148 = _ms286*_ms541 + _ms287*_ms543;
-    const train5_real_t _t1149 = _ms286*_ms545 + _ms287*_ms547;
-    const train5_real_t _t1150 = _ms286*_ms549 + _ms287*_ms551;
-    const train5_real_t _t1151 = _ms286*_ms553 + _ms287*_ms555;
-    const train5_real_t _t1152 = _ms286*_ms557 + _ms287*_ms559;
-    const train5_real_t _t1153 = _ms286*_ms561 + _ms287*_ms563;
-    const train5_real_t _t1154 = _ms162*_ms284 + _ms285*_ms48;
-    const train5_real_t _t1155 = _ms163*_ms284 + _ms285*_ms49;
-    const train5_real_t _t1156 = _ms306*_ms343 + _ms307*_ms355 + _ms308*_ms371 + _ms309*_ms391
-            + _t42 + _t48;
-    const train5_real_t _t1157 = _ms320*_ms343 + _ms321*_ms355 + _ms322*_ms371 + _ms323*_ms391
-            + _t55 + _t95;
-    const train5_real_t _t1158 = J_theta_cart2*_ms343 + _ms324*_ms355 + _ms325*_ms371
-            + _ms326*_ms391 + _t61 + _t97;
-    const train5_real_t _t1159 = J_theta_cart3*_ms355 + _ms324*_ms343 + _ms327*_ms371
-            + _ms328*_ms391 + _t67 + _t99;
-    const train5_real_t _t1160 = J_theta_cart4*_ms371 + _ms325*_ms343 + _ms327*_ms355
-            + _ms329*_ms391 + _t101 + _t73;
-    const train5_real_t _t1161 = J_theta_cart5*_ms391 + _ms326*_ms343 + _ms328*_ms355
-            + _ms329*_ms371 + _t103 + _t79;
-    const train5_real_t _t1162 = _ms224*_t1157 + _ms228*_t1158 + _ms232*_t1159 + _ms236*_t1160
-            + _ms240*_t1161 + _ms256*_t82 + _ms260*_t83 + _ms264*_t84 + _ms268*_t85 + _ms272*_t86
-            + _ms276*_t87 + _ms280*_t88 + _ms284*_t89 + _ms341*_t13 + _ms353*_t15 + _ms369*_t17
-            + _ms389*_t19 + _ms421*_t25 + _ms433*_t27 + _ms445*_t29 + _ms461*_t31 + _ms477*_t33
-            + _ms497*_t35 + _ms517*_t37 + _ms541*_t39 + _t1156 + _t90 + _t91 + _t92 + _t93 + _t94;
-    const train5_real_t _t1163 = _ms316*_ms343 + _ms317*_ms355 + _ms318*_ms371 + _ms319*_ms391
-            + _t100 + _t102 + _t104 + _t105 + _t96 + _t98;
-    const train5_real_t _t1164 = _ms225*_t1157 + _ms229*_t1158 + _ms233*_t1159 + _ms237*_t1160
-            + _ms241*_t1161 + _ms257*_t82 + _ms261*_t83 + _ms265*_t84 + _ms269*_t85 + _ms273*_t86
-            + _ms277*_t87 + _ms281*_t88 + _ms285*_t89 + _ms343*_t13 + _ms355*_t15 + _ms371*_t17
-            + _ms391*_t19 + _ms423*_t25 + _ms435*_t27 + _ms447*_t29 + _ms463*_t31 + _ms479*_t33
-            + _ms499*_t35 + _ms519*_t37 + _ms543*_t39 + _t106 + _t107 + _t108 + _t109 + _t110
-            + _t1163;
-    const train5_real_t _t1165 = _t1072*_t120 + _t1077*_t124 + _t1083*_t128 + _t1090*_t132 + _t116
-            + _t134 + _t135 + _t137 + _t138 + _t140 + _t141 + _t145 + _t149;
-    const train5_real_t _t1166 = _t1072*_t155 + _t1077*_t158 + _t1083*_t161 + _t1090*_t164 - _t151
-            + _t152;
-    const train5_real_t _t1167 = _t1077*_t173 + _t1083*_t175 + _t1090*_t177 - _t165 + _t166 + _t171;
-    const train5_real_t _t1168 = _t1072*_t184 + _t1083*_t186 + _t1090*_t188 - _t178 + _t179 + _t181;
-    const train5_real_t _t1169 = _t1072*_t193 + _t1077*_t196 + _t1090*_t198 - _t189 + _t190 + _t192;
-    const train5_real_t _t1170 = _t1072*_t203 + _t1077*_t204 + _t1083*_t207 - _t199 + _t200 + _t202;
-    const train5_real_t _t1171 = _ms286*_t1072;
-    const train5_real_t _t1172 = _ms287*_t1072;
-    const train5_real_t _t1173 = -_ms228*_ms567 - _ms229*_ms568 + _ms349*_t1171 + _ms351*_t1172
-            + _ms571*_t266 + _ms572*_t270 - _t213 - _t215 + _t220;
-    const train5_real_t _t1174 = _ms286*_t1077;
-    const train5_real_t _t1175 = _ms287*_t1077;
-    const train5_real_t _t1176 = -_ms232*_ms567 - _ms233*_ms568 + _ms361*_t1171 + _ms363*_t1172
-            + _ms365*_t1174 + _ms367*_t1175 + _ms569*_t287 + _ms570*_t295 + _ms571*_t303
-            + _ms572*_t308 + _ms574*_t313 + _ms575*_t317 - _t229 - _t230;
-    const train5_real_t _t1177 = _ms286*_t1083;
-    const train5_real_t _t1178 = _ms287*_t1083;
-    const train5_real_t _t1179 = -_ms236*_ms567 - _ms237*_ms568 + _ms377*_t1171 + _ms379*_t1172
-            + _ms381*_t1174 + _ms383*_t1175 + _ms385*_t1177 + _ms387*_t1178 + _ms569*_t325
-            + _ms570*_t333 + _ms571*_t341 + _ms572*_t346 + _ms574*_t351 + _ms575*_t356
-            + _ms577*_t361 + _ms578*_t365 - _t241 - _t242;
-    const train5_real_t _t1180 = _ms286*_t1090;
-    const train5_real_t _t1181 = _ms287*_t1090;
-    const train5_real_t _t1182 = -_ms240*_ms567 - _ms241*_ms568 + _ms397*_t1171 + _ms399*_t1172
-            + _ms401*_t1174 + _ms403*_t1175 + _ms405*_t1177 + _ms407*_t1178 + _ms409*_t1180
-            + _ms411*_t1181 + _ms569*_t373 + _ms570*_t381 + _ms571*_t389 + _ms572*_t394
-            + _ms574*_t399 + _ms575*_t404 + _ms577*_t409 + _ms578*_t414 + _ms580*_t419
-            + _ms581*_t423 - _t255 - _t256;
-    const train5_real_t _t1183 = _t267 + _t268;
-    const train5_real_t _t1184 = _ms84*_t1183;
-    const train5_real_t _t1185 = -_ms148 + _t262 + _t271;
-    const train5_real_t _t1186 = _ms84*_t1185;
-    const train5_real_t _t1187 = -_ms256*_ms567 - _ms257*_ms568 + _ms429*_t1171 + _ms431*_t1172
-            + _ms571*_t1184 + _ms572*_t1186 - _t272 - _t273 + _t278;
-    const train5_real_t _t1188 = -_t267 + _t268;
-    const train5_real_t _t1189 = _ms89*_t1188;
-    const train5_real_t _t1190 = -_ms148 + _t262 - _t271;
-    const train5_real_t _t1191 = _ms89*_t1190;
-    const train5_real_t _t1192 = -_ms260*_ms567 - _ms261*_ms568 + _ms441*_t1171 + _ms443*_t1172
-            + _ms571*_t1189 + _ms572*_t1191 - _t279 - _t280 + _t285;
-    const train5_real_t _t1193 = _t288 - _t293;
-    const train5_real_t _t1194 = _ms94*_t1193;
-    const train5_real_t _t1195 = _t296 - _t301;
-    const train5_real_t _t1196 = _ms94*_t1195;
-    const train5_real_t _t1197 = _t304 - _t306;
-    const train5_real_t _t1198 = _ms94*_t1197;
-    const train5_real_t _t1199 = _t309 - _t311;
-    const train5_real_t _t1200 = _ms94*_t1199;
-    const train5_real_t _t1201 = _t314 + _t315;
-    const train5_real_t _t1202 = _ms94*_t1201;
-    const train5_real_t _t1203 = _t318 + _t319;
-    const train5_real_t _t1204 = _ms94*_t1203;
-    const train5_real_t _t1205 = -_ms264*_ms567 - _ms265*_ms568 + _ms453*_t1171 + _ms455*_t1172
-            + _ms457*_t1174 + _ms459*_t1175 + _ms569*_t1194 + _ms570*_t1196 + _ms571*_t1198
-            + _ms572*_t1200 + _ms574*_t1202 + _ms575*_t1204 - _t320 - _t321;
-    const train5_real_t _t1206 = -_t288 - _t293;
-    const train5_real_t _t1207 = _ms99*_t1206;
-    const train5_real_t _t1208 = -_t296 - _t301;
-    const train5_real_t _t1209 = _ms99*_t1208;
-    const train5_real_t _t1210 = -_t304 - _t306;
-    const train5_real_t _t1211 = _ms99*_t1210;
-    const train5_real_t _t1212 = -_t309 - _t311;
-    const train5_real_t _t1213 = _ms99*_t1212;
-    const train5_real_t _t1214 = -_t314 + _t315;
-    const train5_real_t _t1215 = _ms99*_t1214;
-    const train5_real_t _t1216 = -_t318 + _t319;
-    const train5_real_t _t1217 = _ms99*_t1216;
-    const train5_real_t _t1218 = -_ms268*_ms567 - _ms269*_ms568 + _ms469*_t1171 + _ms471*_t1172
-            + _ms473*_t1174 + _ms475*_t1175 + _ms569*_t1207 + _ms570*_t1209 + _ms571*_t1211
-            + _ms572*_t1213 + _ms574*_t1215 + _ms575*_t1217 - _t322 - _t323;
-    const train5_real_t _t1219 = _t326 - _t331;
-    const train5_real_t _t1220 = _ms104*_t1219;
-    const train5_real_t _t1221 = _t334 - _t339;
-    const train5_real_t _t1222 = _ms104*_t1221;
-    const train5_real_t _t1223 = _t342 - _t344;
-    const train5_real_t _t1224 = _ms104*_t1223;
-    const train5_real_t _t1225 = _t347 - _t349;
-    const train5_real_t _t1226 = _ms104*_t1225;
-    const train5_real_t _t1227 = _t352 - _t354;
-    const train5_real_t _t1228 = _ms104*_t1227;
-    const train5_real_t _t1229 = _t357 - _t359;
-    const train5_real_t _t1230 = _ms104*_t1229;
-    const train5_real_t _t1231 = _t362 + _t363;
-    const train5_real_t _t1232 = _ms104*_t1231;
-    const train5_real_t _t1233 = _t366 + _t367;
-    const train5_real_t _t1234 = _ms104*_t1233;
-    const train5_real_t _t1235 = -_ms272*_ms567 - _ms273*_ms568 + _ms485*_t1171 + _ms487*_t1172
-            + _ms489*_t1174 + _ms491*_t1175 + _ms493*_t1177 + _ms495*_t1178 + _ms569*_t1220
-            + _ms570*_t1222 + _ms571*_t1224 + _ms572*_t1226 + _ms574*_t1228 + _ms575*_t1230
-            + _ms577*_t1232 + _ms578*_t1234 - _t368 - _t369;
-    const train5_real_t _t1236 = -_t326 - _t331;
-    const train5_real_t _t1237 = _ms109*_t1236;
-    const train5_real_t _t1238 = -_t334 - _t339;
-    const train5_real_t _t1239 = _ms109*_t1238;
-    const train5_real_t _t1240 = -_t342 - _t344;
-    const train5_real_t _t1241 = _ms109*_t1240;
-    const train5_real_t _t1242 = -_t347 - _t349;
-    const train5_real_t _t1243 = _ms109*_t1242;
-    const train5_real_t _t1244 = -_t352 - _t354;
-    const train5_real_t _t1245 = _ms109*_t1244;
-    const train5_real_t _t1246 = -_t357 - _t359;
-    const train5_real_t _t1247 = _ms109*_t1246;
-    const train5_real_t _t1248 = -_t362 + _t363;
-    const train5_real_t _t1249 = _ms109*_t1248;
-    const train5_real_t _t1250 = -_t366 + _t367;
-    const train5_real_t _t1251 = _ms109*_t1250;
-    const train5_real_t _t1252 = -_ms276*_ms567 - _ms277*_ms568 + _ms505*_t1171 + _ms507*_t1172
-            + _ms509*_t1174 + _ms511*_t1175 + _ms513*_t1177 + _ms515*_t1178 + _ms569*_t1237
-            + _ms570*_t1239 + _ms571*_t1241 + _ms572*_t1243 + _ms574*_t1245 + _ms575*_t1247
-            + _ms577*_t1249 + _ms578*_t1251 - _t370 - _t371;
-    const train5_real_t _t1253 = _t374 - _t379;
-    const train5_real_t _t1254 = _ms114*_t1253;
-    const train5_real_t _t1255 = _t382 - _t387;
-    const train5_real_t _t1256 = _ms114*_t1255;
-    const train5_real_t _t1257 = _t390 - _t392;
-    const train5_real_t _t1258 = _ms114*_t1257;
-    const train5_real_t _t1259 = _t395 - _t397;
-    const train5_real_t _t1260 = _ms114*_t1259;
-    const train5_real_t _t1261 = _t400 - _t402;
-    const train5_real_t _t1262 = _ms114*_t1261;
-    const train5_real_t _t1263 = _t405 - _t407;
-    const train5_real_t _t1264 = _ms114*_t1263;
-    const train5_real_t _t1265 = _t410 - _t412;
-    const train5_real_t _t1266 = _ms114*_t1265;
-    const train5_real_t _t1267 = _t415 - _t417;
-    const train5_real_t _t1268 = _ms114*_t1267;
-    const train5_real_t _t1269 = _t420 + _t421;
-    const train5_real_t _t1270 = _ms114*_t1269;
-    const train5_real_t _t1271 = _t424 + _t425;
-    const train5_real_t _t1272 = _ms114*_t1271;
-    const train5_real_t _t1273 = -_ms280*_ms567 - _ms281*_ms568 + _ms525*_t1171 + _ms527*_t1172
-            + _ms529*_t1174 + _ms531*_t1175 + _ms533*_t1177 + _ms535*_t1178 + _ms537*_t1180
-            + _ms539*_t1181 + _ms569*_t1254 + _ms570*_t1256 + _ms571*_t1258 + _ms572*_t1260
-            + _ms574*_t1262 + _ms575*_t1264 + _ms577*_t1266 + _ms578*_t1268 + _ms580*_t1270
-            + _ms581*_t1272 - _t426 - _t427;
-    const train5_real_t _t1274 = -_t374 - _t379;
-    const train5_real_t _t1275 = _ms119*_t1274;
-    const train5_real_t _t1276 = -_t382 - _t387;
-    const train5_real_t _t1277 = _ms119*_t1276;
-    const train5_real_t _t1278 = -_t390 - _t392;
-    const train5_real_t _t1279 = _ms119*_t1278;
-    const train5_real_t _t1280 = -_t395 - _t397;
-    const train5_real_t _t1281 = _ms119*_t1280;
-    const train5_real_t _t1282 = -_t400 - _t402;
-    const train5_real_t _t1283 = _ms119*_t1282;
-    const train5_real_t _t1284 = -_t405 - _t407;
-    const train5_real_t _t1285 = _ms119*_t1284;
-    const train5_real_t _t1286 = -_t410 - _t412;
-    const train5_real_t _t1287 = _ms119*_t1286;
-    const train5_real_t _t1288 = -_t415 - _t417;
-    const train5_real_t _t1289 = _ms119*_t1288;
-    const train5_real_t _t1290 = -_t420 + _t421;
-    const train5_real_t _t1291 = _ms119*_t1290;
-    const train5_real_t _t1292 = -_t424 + _t425;
-    const train5_real_t _t1293 = _ms119*_t1292;
-    const train5_real_t _t1294 = -_ms284*_ms567 - _ms285*_ms568 + _ms549*_t1171 + _ms551*_t1172
-            + _ms553*_t1174 + _ms555*_t1175 + _ms557*_t1177 + _ms559*_t1178 + _ms561*_t1180
-            + _ms563*_t1181 + _ms569*_t1275 + _ms570*_t1277 + _ms571*_t1279 + _ms572*_t1281
-            + _ms574*_t1283 + _ms575*_t1285 + _ms577*_t1287 + _ms578*_t1289 + _ms580*_t1291
-            + _ms581*_t1293 - _t428 - _t429;
-    const train5_real_t _t1295 = _ms224*_t1166 + _ms228*_t1167 + _ms232*_t1168 + _ms236*_t1169
-            + _ms240*_t1170 + _ms341*_t460 + _ms353*_t461 + _ms369*_t462 + _ms389*_t463
-            + _ms585*_t436 + _ms586*_t435 + _ms587*_t438 + _ms588*_t437 + _ms589*_t440
-            + _ms590*_t439 + _ms591*_t442 + _ms592*_t441 + _t1165 + _t1173*_t12 + _t1176*_t14
-            + _t1179*_t16 + _t1182*_t18 + _t1187*_t24 + _t1192*_t26 + _t1205*_t28 + _t1218*_t30
-            + _t1235*_t32 + _t1252*_t34 + _t1273*_t36 + _t1294*_t38 + _t430 + _t431 + _t432 + _t433
-            + _t434 + _t444 + _t446 + _t448 + _t450 - _t451 - _t452 - _t453 - _t454 - _t455 + _t457
-            + _t459;
-    const train5_real_t _t1296 = _t1072*_t483 + _t1077*_t485 + _t1083*_t487 + _t1090*_t489 + _t465
-            - _t466 + _t468 - _t469 + _t471 - _t472 + _t474 - _t475 + _t477 - _t478 + _t481;
-    const train5_real_t _t1297 = _ms225*_t1166 + _ms229*_t1167 + _ms233*_t1168 + _ms237*_t1169
-            + _ms241*_t1170 + _ms343*_t460 + _ms355*_t461 + _ms371*_t462 + _ms391*_t463
-            + _ms585*_t82 + _ms586*_t83 + _ms587*_t84 + _ms588*_t85 + _ms589*_t86 + _ms590*_t87
-            + _ms591*_t88 + _ms592*_t89 + _t1173*_t13 + _t1176*_t15 + _t1179*_t17 + _t1182*_t19
-            + _t1187*_t25 + _t1192*_t27 + _t1205*_t29 + _t1218*_t31 + _t1235*_t33 + _t1252*_t35
-            + _t1273*_t37 + _t1294*_t39 + _t1296 + _t490 + _t491 + _t492 + _t493 + _t494 + _t495
-            + _t496 + _t497 + _t498 - _t499 - _t500 - _t501 - _t502 - _t503 + _t504 + _t505;
-    const train5_real_t _t1298 = _ms306*_ms341 + _ms307*_ms353 + _ms308*_ms369 + _ms309*_ms389
-            + _t506 + _t512;
-    const train5_real_t _t1299 = _ms310 + _ms320*_ms341 + _ms321*_ms353 + _ms322*_ms369
-            + _ms323*_ms389 + _t513;
-    const train5_real_t _t1300 = J_theta_cart2*_ms341 + _ms311 + _ms324*_ms353 + _ms325*_ms369
-            + _ms326*_ms389 + _t514;
-    const train5_real_t _t1301 = J_theta_cart3*_ms353 + _ms312 + _ms324*_ms341 + _ms327*_ms369
-            + _ms328*_ms389 + _t515;
-    const train5_real_t _t1302 = J_theta_cart4*_ms369 + _ms313 + _ms325*_ms341 + _ms327*_ms353
-            + _ms329*_ms389 + _t516;
-    const train5_real_t _t1303 = J_theta_cart5*_ms389 + _ms314 + _ms326*_ms341 + _ms328*_ms353
-            + _ms329*_ms369 + _t517;
-    const train5_real_t _t1304 = _ms224*_t1299 + _ms228*_t1300 + _ms232*_t1301 + _ms236*_t1302
-            + _ms240*_t1303 + _ms256*_t436 + _ms260*_t435 + _ms264*_t438 + _ms268*_t437
-            + _ms272*_t440 + _ms276*_t439 + _ms280*_t442 + _ms284*_t441 + _ms341*_t12 + _ms353*_t14
-            + _ms369*_t16 + _ms389*_t18 + _ms421*_t24 + _ms433*_t26 + _ms445*_t28 + _ms461*_t30
-            + _ms477*_t32 + _ms497*_t34 + _ms517*_t36 + _ms541*_t38 + _t1298 + _t518 + _t519 + _t520
-            + _t521 + _t522;
-    const train5_real_t _t1305 = -_t1162*_t531 + _t1164*_t535 + _t1304*_t537;
-    const train5_real_t _t1306 = -_t1305*_t540;
-    const train5_real_t _t1307 = -_t1162*_t547 + _t1164*_t544 - _t1295*_t545 + _t1297*_t542
-            + _t1306*_t548;
-    const train5_real_t _t1308 = -_t1162*_t544 + _t1295*_t542 - _t1297*_t549 + _t1304*_t547
-            + _t1306*_t550;
-    const train5_real_t _t1309 = _t1307*_t523 + _t1308*_t526;
-    const train5_real_t _t1310 = _ms306*_ms347 + _ms307*_ms359 + _ms308*_ms375 + _ms309*_ms395
-            - _t42 - _t44;
-    const train5_real_t _t1311 = _ms320*_ms347 + _ms321*_ms359 + _ms322*_ms375 + _ms323*_ms395
-            - _t55 + _t554 + _t556 + _t558 + _t560 - _t95;
-    const train5_real_t _t1312 = J_theta_cart2*_ms347 + _ms324*_ms359 + _ms325*_ms375
-            + _ms326*_ms395 + _t561 - _t61;
-    const train5_real_t _t1313 = J_theta_cart3*_ms359 + _ms324*_ms347 + _ms327*_ms375
-            + _ms328*_ms395 + _t562 - _t67;
-    const train5_real_t _t1314 = J_theta_cart4*_ms375 + _ms325*_ms347 + _ms327*_ms359
-            + _ms329*_ms395 + _t563 - _t73;
-    const train5_real_t _t1315 = J_theta_cart5*_ms395 + _ms326*_ms347 + _ms328*_ms359
-            + _ms329*_ms375 + _t564 - _t79;
-    const train5_real_t _t1316 = _ms224*_t1311 + _ms228*_t1312 + _ms232*_t1313 + _ms236*_t1314
-            + _ms240*_t1315 + _ms256*_t565 + _ms260*_t566 + _ms264*_t567 + _ms268*_t568
-            + _ms272*_t569 + _ms276*_t570 + _ms280*_t571 + _ms284*_t572 + _ms345*_t13 + _ms357*_t15
-            + _ms373*_t17 + _ms393*_t19 + _ms425*_t25 + _ms437*_t27 + _ms449*_t29 + _ms465*_t31
-            + _ms481*_t33 + _ms501*_t35 + _ms521*_t37 + _ms545*_t39 + _t1310 - _t90 - _t91 - _t92
-            - _t93 - _t94;
-    const train5_real_t _t1317 = _ms316*_ms347 + _ms317*_ms359 + _ms318*_ms375 + _ms319*_ms395
-            - _t105 - _t96;
-    const train5_real_t _t1318 = _ms225*_t1311 + _ms229*_t1312 + _ms233*_t1313 + _ms237*_t1314
-            + _ms241*_t1315 + _ms257*_t565 + _ms261*_t566 + _ms265*_t567 + _ms269*_t568
-            + _ms273*_t569 + _ms277*_t570 + _ms281*_t571 + _ms285*_t572 + _ms347*_t13 + _ms359*_t15
-            + _ms375*_t17 + _ms395*_t19 + _ms427*_t25 + _ms439*_t27 + _ms451*_t29 + _ms467*_t31
-            + _ms483*_t33 + _ms503*_t35 + _ms523*_t37 + _ms547*_t39 - _t106 - _t107 - _t108 - _t109
-            - _t110 + _t1317;
-    const train5_real_t _t1319 = _t1073*_t120 + _t1078*_t124 + _t1084*_t128 + _t1091*_t132 - _t116
-            - _t140 - _t141;
-    const train5_real_t _t1320 = _t1073*_t155 + _t1078*_t158 + _t1084*_t161 + _t1091*_t164 + _t151
-            - _t152 - _t574 - _t576 + _t577 + _t578 + _t579 + _t580 + _t581 + _t582 + _t584 + _t586;
-    const train5_real_t _t1321 = _t1078*_t173 + _t1084*_t175 + _t1091*_t177 - _t171 - _t589;
-    const train5_real_t _t1322 = _t1073*_t184 + _t1084*_t186 + _t1091*_t188 - _t181 - _t590;
-    const train5_real_t _t1323 = _t1073*_t193 + _t1078*_t196 + _t1091*_t198 - _t192 - _t591;
-    const train5_real_t _t1324 = _t1073*_t203 + _t1078*_t204 + _t1084*_t207 - _t202 - _t592;
-    const train5_real_t _t1325 = _ms286*_t1073;
-    const train5_real_t _t1326 = _ms287*_t1073;
-    const train5_real_t _t1327 = _ms349*_t1325 + _ms351*_t1326 + _ms567*_t217 + _ms568*_t219
-            + _ms569*_t606 + _ms570*_t610 + _ms571*_t217 + _ms572*_t219 + _t213 + _t215;
-    const train5_real_t _t1328 = _ms286*_t1078;
-    const train5_real_t _t1329 = _ms287*_t1078;
-    const train5_real_t _t1330 = _ms361*_t1325 + _ms363*_t1326 + _ms365*_t1328 + _ms367*_t1329
-            + _ms567*_t287 + _ms568*_t295 + _ms569*_t614 + _ms570*_t618 + _ms571*_t622
-            + _ms572*_t627 + _ms574*_t632 + _ms575*_t635 + _t229 + _t230;
-    const train5_real_t _t1331 = _ms286*_t1084;
-    const train5_real_t _t1332 = _ms287*_t1084;
-    const train5_real_t _t1333 = _ms377*_t1325 + _ms379*_t1326 + _ms381*_t1328 + _ms383*_t1329
-            + _ms385*_t1331 + _ms387*_t1332 + _ms567*_t325 + _ms568*_t333 + _ms569*_t638
-            + _ms570*_t643 + _ms571*_t648 + _ms572*_t653 + _ms574*_t658 + _ms575*_t663
-            + _ms577*_t668 + _ms578*_t671 + _t241 + _t242;
-    const train5_real_t _t1334 = _ms286*_t1091;
-    const train5_real_t _t1335 = _ms287*_t1091;
-    const train5_real_t _t1336 = _ms397*_t1325 + _ms399*_t1326 + _ms401*_t1328 + _ms403*_t1329
-            + _ms405*_t1331 + _ms407*_t1332 + _ms409*_t1334 + _ms411*_t1335 + _ms567*_t373
-            + _ms568*_t381 + _ms569*_t674 + _ms570*_t678 + _ms571*_t682 + _ms572*_t687
-            + _ms574*_t692 + _ms575*_t697 + _ms577*_t702 + _ms578*_t707 + _ms580*_t712
-            + _ms581*_t715 + _t255 + _t256;
-    const train5_real_t _t1337 = _t607 + _t608;
-    const train5_real_t _t1338 = _ms84*_t1337;
-    const train5_real_t _t1339 = _t611 + _t612;
-    const train5_real_t _t1340 = _ms84*_t1339;
-    const train5_real_t _t1341 = _ms429*_t1325 + _ms431*_t1326 + _ms567*_t275 + _ms568*_t277
-            + _ms569*_t1338 + _ms570*_t1340 + _ms571*_t275 + _ms572*_t277 + _t272 + _t273;
-    const train5_real_t _t1342 = -_t607 + _t608;
-    const train5_real_t _t1343 = _ms89*_t1342;
-    const train5_real_t _t1344 = -_t611 + _t612;
-    const train5_real_t _t1345 = _ms89*_t1344;
-    const train5_real_t _t1346 = _ms441*_t1325 + _ms443*_t1326 + _ms567*_t282 + _ms568*_t284
-            + _ms569*_t1343 + _ms570*_t1345 + _ms571*_t282 + _ms572*_t284 + _t279 + _t280;
-    const train5_real_t _t1347 = TRAIN5_LIT(2.0)*_t290 + TRAIN5_LIT(2.0)*_t291 + _t615 - _t616;
-    const train5_real_t _t1348 = _ms94*_t1347;
-    const train5_real_t _t1349 = TRAIN5_LIT(2.0)*_t298 + TRAIN5_LIT(2.0)*_t299 + _t619 - _t620;
-    const train5_real_t _t1350 = _ms94*_t1349;
-    const train5_real_t _t1351 = _t623 - _t625;
-    const train5_real_t _t1352 = _ms94*_t1351;
-    const train5_real_t _t1353 = _t628 - _t630;
-    const train5_real_t _t1354 = _ms94*_t1353;
-    const train5_real_t _t1355 = -_t290 - _t291 + _t624 + _t633;
-    const train5_real_t _t1356 = _ms94*_t1355;
-    const train5_real_t _t1357 = -_t298 - _t299 + _t629 + _t636;
-    const train5_real_t _t1358 = _ms94*_t1357;
-    const train5_real_t _t1359 = _ms453*_t1325 + _ms455*_t1326 + _ms457*_t1328 + _ms459*_t1329
-            + _ms567*_t1194 + _ms568*_t1196 + _ms569*_t1348 + _ms570*_t1350 + _ms571*_t1352
-            + _ms572*_t1354 + _ms574*_t1356 + _ms575*_t1358 + _t320 + _t321;
-    const train5_real_t _t1360 = TRAIN5_LIT(2.0)*_ms132*_ms338 + TRAIN5_LIT(2.0)*_ms151*_ms224
-            - _t615 - _t616;
-    const train5_real_t _t1361 = _ms99*_t1360;
-    const train5_real_t _t1362 = TRAIN5_LIT(2.0)*_ms132*_ms339 + TRAIN5_LIT(2.0)*_ms151*_ms225
-            - _t619 - _t620;
-    const train5_real_t _t1363 = _ms99*_t1362;
-    const train5_real_t _t1364 = -_t623 - _t625;
-    const train5_real_t _t1365 = _ms99*_t1364;
-    const train5_real_t _t1366 = -_t628 - _t630;
-    const train5_real_t _t1367 = _ms99*_t1366;
-    const train5_real_t _t1368 = -_t292 + _t624 - _t633;
-    const train5_real_t _t1369 = _ms99*_t1368;
-    const train5_real_t _t1370 = -_t300 + _t629 - _t636;
-    const train5_real_t _t1371 = _ms99*_t1370;
-    const train5_real_t _t1372 = _ms469*_t1325 + _ms471*_t1326 + _ms473*_t1328 + _ms475*_t1329
-            + _ms567*_t1207 + _ms568*_t1209 + _ms569*_t1361 + _ms570*_t1363 + _ms571*_t1365
-            + _ms572*_t1367 + _ms574*_t1369 + _ms575*_t1371 + _t322 + _t323;
-    const train5_real_t _t1373 = TRAIN5_LIT(2.0)*_t328 + TRAIN5_LIT(2.0)*_t329 + _t639 - _t640
-            - _t641;
-    const train5_real_t _t1374 = _ms104*_t1373;
-    const train5_real_t _t1375 = TRAIN5_LIT(2.0)*_t336 + TRAIN5_LIT(2.0)*_t337 + _t644 - _t645
-            - _t646;
-    const train5_real_t _t1376 = _ms104*_t1375;
-    const train5_real_t _t1377 = _t649 - _t651;
-    const train5_real_t _t1378 = _ms104*_t1377;
-    const train5_real_t _t1379 = _t654 - _t656;
-    const train5_real_t _t1380 = _ms104*_t1379;
-    const train5_real_t _t1381 = _t659 - _t661;
-    const train5_real_t _t1382 = _ms104*_t1381;
-    const train5_real_t _t1383 = _t664 - _t666;
-    const train5_real_t _t1384 = _ms104*_t1383;
-    const train5_real_t _t1385 = -_t328 - _t329 + _t650 + _t660 + _t669;
-    const train5_real_t _t1386 = _ms104*_t1385;
-    const train5_real_t _t1387 = -_t336 - _t337 + _t655 + _t665 + _t672;
-    const train5_real_t _t1388 = _ms104*_t1387;
-    const train5_real_t _t1389 = _ms485*_t1325 + _ms487*_t1326 + _ms489*_t1328 + _ms491*_t1329
-            + _ms493*_t1331 + _ms495*_t1332 + _ms567*_t1220 + _ms568*_t1222 + _ms569*_t1374
-            + _ms570*_t1376 + _ms571*_t1378 + _ms572*_t1380 + _ms574*_t1382 + _ms575*_t1384
-            + _ms577*_t1386 + _ms578*_t1388 + _t368 + _t369;
-    const train5_real_t _t1390 = TRAIN5_LIT(2.0)*_ms137*_ms338 + TRAIN5_LIT(2.0)*_ms154*_ms224
-            - _t639 - _t640 - _t641;
-    const train5_real_t _t1391 = _ms109*_t1390;
-    const train5_real_t _t1392 = TRAIN5_LIT(2.0)*_ms137*_ms339 + TRAIN5_LIT(2.0)*_ms154*_ms225
-            - _t644 - _t645 - _t646;
-    const train5_real_t _t1393 = _ms109*_t1392;
-    const train5_real_t _t1394 = -_t649 - _t651;
-    const train5_real_t _t1395 = _ms109*_t1394;
-    const train5_real_t _t1396 = -_t654 - _t656;
-    const train5_real_t _t1397 = _ms109*_t1396;
-    const train5_real_t _t1398 = -_t659 - _t661;
-    const train5_real_t _t1399 = _ms109*_t1398;
-    const train5_real_t _t1400 = -_t664 - _t666;
-    const train5_real_t _t1401 = _ms109*_t1400;
-    const train5_real_t _t1402 = -_t330 + _t650 + _t660 - _t669;
-    const train5_real_t _t1403 = _ms109*_t1402;
-    const train5_real_t _t1404 = -_t338 + _t655 + _t665 - _t672;
-    const train5_real_t _t1405 = _ms109*_t1404;
-    const train5_real_t _t1406 = _ms505*_t1325 + _ms507*_t1326 + _ms509*_t1328 + _ms511*_t1329
-            + _ms513*_t1331 + _ms515*_t1332 + _ms567*_t1237 + _ms568*_t1239 + _ms569*_t1391
-            + _ms570*_t1393 + _ms571*_t1395 + _ms572*_t1397 + _ms574*_t1399 + _ms575*_t1401
-            + _ms577*_t1403 + _ms578*_t1405 + _t370 + _t371;
-    const train5_real_t _t1407 = _t675 - _t676;
-    const train5_real_t _t1408 = _ms114*_t1407;
-    const train5_real_t _t1409 = _t679 - _t680;
-    const train5_real_t _t1410 = _ms114*_t1409;
-    const train5_real_t _t1411 = _t683 - _t685;
-    const train5_real_t _t1412 = _ms114*_t1411;
-    const train5_real_t _t1413 = _t688 - _t690;
-    const train5_real_t _t1414 = _ms114*_t1413;
-    const train5_real_t _t1415 = _t693 - _t695;
-    const train5_real_t _t1416 = _ms114*_t1415;
-    const train5_real_t _t1417 = _t698 - _t700;
-    const train5_real_t _t1418 = _ms114*_t1417;
-    const train5_real_t _t1419 = _t703 - _t705;
-    const train5_real_t _t1420 = _ms114*_t1419;
-    const train5_real_t _t1421 = _t708 - _t710;
-    const train5_real_t _t1422 = _ms114*_t1421;
-    const train5_real_t _t1423 = -_t376 - _t377 + _t684 + _t694 + _t704 + _t713;
-    const train5_real_t _t1424 = _ms114*_t1423;
-    const train5_real_t _t1425 = -_t384 - _t385 + _t689 + _t699 + _t709 + _t716;
-    const train5_real_t _t1426 = _ms114*_t1425;
-    const train5_real_t _t1427 = _ms525*_t1325 + _ms527*_t1326 + _ms529*_t1328 + _ms531*_t1329
-            + _ms533*_t1331 + _ms535*_t1332 + _ms537*_t1334 + _ms539*_t1335 + _ms567*_t1254
-            + _ms568*_t1256 + _ms569*_t1408 + _ms570*_t1410 + _ms571*_t1412 + _ms572*_t1414
-            + _ms574*_t1416 + _ms575*_t1418 + _ms577*_t1420 + _ms578*_t1422 + _ms580*_t1424
-            + _ms581*_t1426 + _t426 + _t427;
-    const train5_real_t _t1428 = -_t675 - _t676;
-    const train5_real_t _t1429 = _ms119*_t1428;
-    const train5_real_t _t1430 = -_t679 - _t680;
-    const train5_real_t _t1431 = _ms119*_t1430;
-    const train5_real_t _t1432 = -_t683 - _t685;
-    const train5_real_t _t1433 = _ms119*_t1432;
-    const train5_real_t _t1434 = -_t688 - _t690;
-    const train5_real_t _t1435 = _ms119*_t1434;
-    const train5_real_t _t1436 = -_t693 - _t695;
-    const train5_real_t _t1437 = _ms119*_t1436;
-    const train5_real_t _t1438 = -_t698 - _t700;
-    const train5_real_t _t1439 = _ms119*_t1438;
-    const train5_real_t _t1440 = -_t703 - _t705;
-    const train5_real_t _t1441 = _ms119*_t1440;
-    const train5_real_t _t1442 = -_t708 - _t710;
-    const train5_real_t _t1443 = _ms119*_t1442;
-    const train5_real_t _t1444 = -_t378 + _t684 + _t694 + _t704 - _t713;
-    const train5_real_t _t1445 = _ms119*_t1444;
-    const train5_real_t _t1446 = -_t386 + _t689 + _t699 + _t709 - _t716;
-    const train5_real_t _t1447 = _ms119*_t1446;
-    const train5_real_t _t1448 = _ms549*_t1325 + _ms551*_t1326 + _ms553*_t1328 + _ms555*_t1329
-            + _ms557*_t1331 + _ms559*_t1332 + _ms561*_t1334 + _ms563*_t1335 + _ms567*_t1275
-            + _ms568*_t1277 + _ms569*_t1429 + _ms570*_t1431 + _ms571*_t1433 + _ms572*_t1435
-            + _ms574*_t1437 + _ms575*_t1439 + _ms577*_t1441 + _ms578*_t1443 + _ms580*_t1445
-            + _ms581*_t1447 + _t428 + _t429;
-    const train5_real_t _t1449 = _ms224*_t1320 + _ms228*_t1321 + _ms232*_t1322 + _ms236*_t1323
-            + _ms240*_t1324 + _ms345*_t460 + _ms357*_t461 + _ms373*_t462 + _ms393*_t463
-            + _ms585*_t718 + _ms586*_t717 + _ms587*_t720 + _ms588*_t719 + _ms589*_t722
-            + _ms590*_t721 + _ms591*_t724 + _ms592*_t723 + _t12*_t1327 + _t1319 + _t1330*_t14
-            + _t1333*_t16 + _t1336*_t18 + _t1341*_t24 + _t1346*_t26 + _t1359*_t28 + _t1372*_t30
-            + _t1389*_t32 + _t1406*_t34 + _t1427*_t36 + _t1448*_t38 - _t430 - _t444 - _t446 - _t448
-            - _t450 + _t451 - _t457 - _t459 + _t725 + _t726 + _t727 + _t728;
-    const train5_real_t _t1450 = _t1073*_t483 + _t1078*_t485 + _t1084*_t487 + _t1091*_t489 - _t477
-            + _t478 - _t481;
-    const train5_real_t _t1451 = _ms225*_t1320 + _ms229*_t1321 + _ms233*_t1322 + _ms237*_t1323
-            + _ms241*_t1324 + _ms347*_t460 + _ms359*_t461 + _ms375*_t462 + _ms395*_t463
-            + _ms585*_t565 + _ms586*_t566 + _ms587*_t567 + _ms588*_t568 + _ms589*_t569
-            + _ms590*_t570 + _ms591*_t571 + _ms592*_t572 + _t13*_t1327 + _t1330*_t15 + _t1333*_t17
-            + _t1336*_t19 + _t1341*_t25 + _t1346*_t27 + _t1359*_t29 + _t1372*_t31 + _t1389*_t33
-            + _t1406*_t35 + _t1427*_t37 + _t1448*_t39 + _t1450 - _t490 - _t495 - _t496 - _t497
-            - _t498 + _t499 - _t504 - _t505 + _t729 + _t730 + _t731 + _t732;
-    const train5_real_t _t1452 = _ms306*_ms345 + _ms307*_ms357 + _ms308*_ms373 + _ms309*_ms393
-            - _t506 - _t507;
-    const train5_real_t _t1453 = -_ms310 + _ms320*_ms345 + _ms321*_ms357 + _ms322*_ms373
-            + _ms323*_ms393 - _t513 + _t733 + _t734 + _t735 + _t736;
-    const train5_real_t _t1454 = J_theta_cart2*_ms345 + _ms324*_ms357 + _ms325*_ms373
-            + _ms326*_ms393 - _t514 + _t737;
-    const train5_real_t _t1455 = J_theta_cart3*_ms357 + _ms324*_ms345 + _ms327*_ms373
-            + _ms328*_ms393 - _t515 + _t738;
-    const train5_real_t _t1456 = J_theta_cart4*_ms373 + _ms325*_ms345 + _ms327*_ms357
-            + _ms329*_ms393 - _t516 + _t739;
-    const train5_real_t _t1457 = J_theta_cart5*_ms393 + _ms326*_ms345 + _ms328*_ms357
-            + _ms329*_ms373 - _t517 + _t740;
-    const train5_real_t _t1458 = _ms224*_t1453 + _ms228*_t1454 + _ms232*_t1455 + _ms236*_t1456
-            + _ms240*_t1457 + _ms256*_t718 + _ms260*_t717 + _ms264*_t720 + _ms268*_t719
-            + _ms272*_t722 + _ms276*_t721 + _ms280*_t724 + _ms284*_t723 + _ms345*_t12 + _ms357*_t14
-            + _ms373*_t16 + _ms393*_t18 + _ms425*_t24 + _ms437*_t26 + _ms449*_t28 + _ms465*_t30
-            + _ms481*_t32 + _ms501*_t34 + _ms521*_t36 + _ms545*_t38 + _t1452 - _t518 - _t519 - _t520
-            - _t521 - _t522;
-    const train5_real_t _t1459 = -_t1316*_t531 + _t1318*_t535 + _t1458*_t537;
-    const train5_real_t _t1460 = -_t1459*_t540;
-    const train5_real_t _t1461 = -_t1316*_t547 + _t1318*_t544 - _t1449*_t545 + _t1451*_t542
-            + _t1460*_t548;
-    const train5_real_t _t1462 = -_t1316*_t544 + _t1449*_t542 - _t1451*_t549 + _t1458*_t547
-            + _t1460*_t550;
-    const train5_real_t _t1463 = _t1461*_t523 + _t1462*_t526;
-    const train5_real_t _t1464 = _ms306*_ms351 + _ms307*_ms363 + _ms308*_ms379 + _ms309*_ms399
-            - _t45;
-    const train5_real_t _t1465 = _ms320*_ms351 + _ms321*_ms363 + _ms322*_ms379 + _ms323*_ms399
-            - _t554;
-    const train5_real_t _t1466 = J_theta_cart2*_ms351 + _ms324*_ms363 + _ms325*_ms379
-            + _ms326*_ms399 - _t561 + _t744 + _t746 + _t748 - _t97;
-    const train5_real_t _t1467 = J_theta_cart3*_ms363 + _ms324*_ms351 + _ms327*_ms379
-            + _ms328*_ms399 + _t749;
-    const train5_real_t _t1468 = J_theta_cart4*_ms379 + _ms325*_ms351 + _ms327*_ms363
-            + _ms329*_ms399 + _t750;
-    const train5_real_t _t1469 = J_theta_cart5*_ms399 + _ms326*_ms351 + _ms328*_ms363
-            + _ms329*_ms379 + _t751;
-    const train5_real_t _t1470 = _ms224*_t1465 + _ms228*_t1466 + _ms232*_t1467 + _ms236*_t1468
-            + _ms240*_t1469 + _ms256*_t752 + _ms260*_t753 + _ms264*_t754 + _ms268*_t755
-            + _ms272*_t756 + _ms276*_t757 + _ms280*_t758 + _ms284*_t759 + _ms349*_t13 + _ms361*_t15
-            + _ms377*_t17 + _ms397*_t19 + _ms429*_t25 + _ms441*_t27 + _ms453*_t29 + _ms469*_t31
-            + _ms485*_t33 + _ms505*_t35 + _ms525*_t37 + _ms549*_t39 + _t1464;
-    const train5_real_t _t1471 = _ms316*_ms351 + _ms317*_ms363 + _ms318*_ms379 + _ms319*_ms399
-            - _t98;
-    const train5_real_t _t1472 = _ms225*_t1465 + _ms229*_t1466 + _ms233*_t1467 + _ms237*_t1468
-            + _ms241*_t1469 + _ms257*_t752 + _ms261*_t753 + _ms265*_t754 + _ms269*_t755
-            + _ms273*_t756 + _ms277*_t757 + _ms281*_t758 + _ms285*_t759 + _ms351*_t13 + _ms363*_t15
-            + _ms379*_t17 + _ms399*_t19 + _ms431*_t25 + _ms443*_t27 + _ms455*_t29 + _ms471*_t31
-            + _ms487*_t33 + _ms507*_t35 + _ms527*_t37 + _ms551*_t39 + _t1471;
-    const train5_real_t _t1473 = _t1074*_t120 + _t1079*_t124 + _t1085*_t128 + _t1092*_t132 - _t134
-            - _t135;
-    const train5_real_t _t1474 = _t1074*_t155 + _t1079*_t158 + _t1085*_t161 + _t1092*_t164 + _t574
-            - _t577 - _t578 - _t579;
-    const train5_real_t _t1475 = _t1079*_t173 + _t1085*_t175 + _t1092*_t177 + _t165 - _t166 + _t589
-            - _t761 + _t762 + _t763 + _t764 + _t766 + _t768;
-    const train5_real_t _t1476 = _t1074*_t184 + _t1085*_t186 + _t1092*_t188 - _t770 - _t772 - _t773
-            + _t774;
-    const train5_real_t _t1477 = _t1074*_t193 + _t1079*_t196 + _t1092*_t198 - _t775 - _t776 - _t777
-            + _t778;
-    const train5_real_t _t1478 = _t1074*_t203 + _t1079*_t204 + _t1085*_t207 - _t779 - _t780 - _t781
-            + _t782;
-    const train5_real_t _t1479 = _ms286*_t1074;
-    const train5_real_t _t1480 = _ms287*_t1074;
-    const train5_real_t _t1481 = -_ms228*_ms571 - _ms229*_ms572 + _ms349*_t1479 + _ms351*_t1480
-            + _ms567*_t266 + _ms568*_t270 + _t220;
-    const train5_real_t _t1482 = _ms286*_t1079;
-    const train5_real_t _t1483 = _ms287*_t1079;
-    const train5_real_t _t1484 = _ms361*_t1479 + _ms363*_t1480 + _ms365*_t1482 + _ms367*_t1483
-            + _ms567*_t303 + _ms568*_t308 + _ms569*_t622 + _ms570*_t627 + _ms571*_t798
-            + _ms572*_t804 + _ms574*_t810 + _ms575*_t813;
-    const train5_real_t _t1485 = _ms286*_t1085;
-    const train5_real_t _t1486 = _ms287*_t1085;
-    const train5_real_t _t1487 = _ms377*_t1479 + _ms379*_t1480 + _ms381*_t1482 + _ms383*_t1483
-            + _ms385*_t1485 + _ms387*_t1486 + _ms567*_t341 + _ms568*_t346 + _ms569*_t648
-            + _ms570*_t653 + _ms571*_t816 + _ms572*_t821 + _ms574*_t826 + _ms575*_t831
-            + _ms577*_t836 + _ms578*_t840;
-    const train5_real_t _t1488 = _ms286*_t1092;
-    const train5_real_t _t1489 = _ms287*_t1092;
-    const train5_real_t _t1490 = _ms397*_t1479 + _ms399*_t1480 + _ms401*_t1482 + _ms403*_t1483
-            + _ms405*_t1485 + _ms407*_t1486 + _ms409*_t1488 + _ms411*_t1489 + _ms567*_t389
-            + _ms568*_t394 + _ms569*_t682 + _ms570*_t687 + _ms571*_t844 + _ms572*_t849
-            + _ms574*_t854 + _ms575*_t859 + _ms577*_t864 + _ms578*_t869 + _ms580*_t874
-            + _ms581*_t878;
-    const train5_real_t _t1491 = -_ms256*_ms571 - _ms257*_ms572 + _ms429*_t1479 + _ms431*_t1480
-            + _ms567*_t1184 + _ms568*_t1186 + _t278;
-    const train5_real_t _t1492 = -_ms260*_ms571 - _ms261*_ms572 + _ms441*_t1479 + _ms443*_t1480
-            + _ms567*_t1189 + _ms568*_t1191 + _t285;
-    const train5_real_t _t1493 = _t799 - _t801 + TRAIN5_LIT(2.0)*_t802;
-    const train5_real_t _t1494 = _ms94*_t1493;
-    const train5_real_t _t1495 = _t805 - _t807 + TRAIN5_LIT(2.0)*_t808;
-    const train5_real_t _t1496 = _ms94*_t1495;
-    const train5_real_t _t1497 = _t800 - _t802 + _t811;
-    const train5_real_t _t1498 = _ms94*_t1497;
-    const train5_real_t _t1499 = _t806 - _t808 + _t814;
-    const train5_real_t _t1500 = _ms94*_t1499;
-    const train5_real_t _t1501 = _ms453*_t1479 + _ms455*_t1480 + _ms457*_t1482 + _ms459*_t1483
-            + _ms567*_t1198 + _ms568*_t1200 + _ms569*_t1352 + _ms570*_t1354 + _ms571*_t1494
-            + _ms572*_t1496 + _ms574*_t1498 + _ms575*_t1500;
-    const train5_real_t _t1502 = TRAIN5_LIT(2.0)*_ms152*_ms228 - _t799 - _t801;
-    const train5_real_t _t1503 = _ms99*_t1502;
-    const train5_real_t _t1504 = TRAIN5_LIT(2.0)*_ms152*_ms229 - _t805 - _t807;
-    const train5_real_t _t1505 = _ms99*_t1504;
-    const train5_real_t _t1506 = _ms133*_ms349 - _t802 - _t811;
-    const train5_real_t _t1507 = _ms99*_t1506;
-    const train5_real_t _t1508 = _ms133*_ms351 - _t808 - _t814;
-    const train5_real_t _t1509 = _ms99*_t1508;
-    const train5_real_t _t1510 = _ms469*_t1479 + _ms471*_t1480 + _ms473*_t1482 + _ms475*_t1483
-            + _ms567*_t1211 + _ms568*_t1213 + _ms569*_t1365 + _ms570*_t1367 + _ms571*_t1503
-            + _ms572*_t1505 + _ms574*_t1507 + _ms575*_t1509;
-    const train5_real_t _t1511 = _t817 - _t819;
-    const train5_real_t _t1512 = _ms104*_t1511;
-    const train5_real_t _t1513 = _t822 - _t824;
-    const train5_real_t _t1514 = _ms104*_t1513;
-    const train5_real_t _t1515 = _t827 - _t829;
-    const train5_real_t _t1516 = _ms104*_t1515;
-    const train5_real_t _t1517 = _t832 - _t834;
-    const train5_real_t _t1518 = _ms104*_t1517;
-    const train5_real_t _t1519 = _t818 + _t828 + _t837 - _t838;
-    const train5_real_t _t1520 = _ms104*_t1519;
-    const train5_real_t _t1521 = _t823 + _t833 + _t841 - _t842;
-    const train5_real_t _t1522 = _ms104*_t1521;
-    const train5_real_t _t1523 = _ms485*_t1479 + _ms487*_t1480 + _ms489*_t1482 + _ms491*_t1483
-            + _ms493*_t1485 + _ms495*_t1486 + _ms567*_t1224 + _ms568*_t1226 + _ms569*_t1378
-            + _ms570*_t1380 + _ms571*_t1512 + _ms572*_t1514 + _ms574*_t1516 + _ms575*_t1518
-            + _ms577*_t1520 + _ms578*_t1522;
-    const train5_real_t _t1524 = -_t817 - _t819;
-    const train5_real_t _t1525 = _ms109*_t1524;
-    const train5_real_t _t1526 = -_t822 - _t824;
-    const train5_real_t _t1527 = _ms109*_t1526;
-    const train5_real_t _t1528 = -_t827 - _t829;
-    const train5_real_t _t1529 = _ms109*_t1528;
-    const train5_real_t _t1530 = -_t832 - _t834;
-    const train5_real_t _t1531 = _ms109*_t1530;
-    const train5_real_t _t1532 = _ms138*_ms349 + _t828 - _t837 - _t838;
-    const train5_real_t _t1533 = _ms109*_t1532;
-    const train5_real_t _t1534 = _ms138*_ms351 + _t833 - _t841 - _t842;
-    const train5_real_t _t1535 = _ms109*_t1534;
-    const train5_real_t _t1536 = _ms505*_t1479 + _ms507*_t1480 + _ms509*_t1482 + _ms511*_t1483
-            + _ms513*_t1485 + _ms515*_t1486 + _ms567*_t1241 + _ms568*_t1243 + _ms569*_t1395
-            + _ms570*_t1397 + _ms571*_t1525 + _ms572*_t1527 + _ms574*_t1529 + _ms575*_t1531
-            + _ms577*_t1533 + _ms578*_t1535;
-    const train5_real_t _t1537 = _t845 - _t847;
-    const train5_real_t _t1538 = _ms114*_t1537;
-    const train5_real_t _t1539 = _t850 - _t852;
-    const train5_real_t _t1540 = _ms114*_t1539;
-    const train5_real_t _t1541 = _t855 - _t857;
-    const train5_real_t _t1542 = _ms114*_t1541;
-    const train5_real_t _t1543 = _t860 - _t862;
-    const train5_real_t _t1544 = _ms114*_t1543;
-    const train5_real_t _t1545 = _t865 - _t867;
-    const train5_real_t _t1546 = _ms114*_t1545;
-    const train5_real_t _t1547 = _t870 - _t872;
-    const train5_real_t _t1548 = _ms114*_t1547;
-    const train5_real_t _t1549 = _t875 + _t876;
-    const train5_real_t _t1550 = _ms114*_t1549;
-    const train5_real_t _t1551 = _t879 + _t880;
-    const train5_real_t _t1552 = _ms114*_t1551;
-    const train5_real_t _t1553 = _ms525*_t1479 + _ms527*_t1480 + _ms529*_t1482 + _ms531*_t1483
-            + _ms533*_t1485 + _ms535*_t1486 + _ms537*_t1488 + _ms539*_t1489 + _ms567*_t1258
-            + _ms568*_t1260 + _ms569*_t1412 + _ms570*_t1414 + _ms571*_t1538 + _ms572*_t1540
-            + _ms574*_t1542 + _ms575*_t1544 + _ms577*_t1546 + _ms578*_t1548 + _ms580*_t1550
-            + _ms581*_t1552;
-    const train5_real_t _t1554 = -_t845 - _t847;
-    const train5_real_t _t1555 = _ms119*_t1554;
-    const train5_real_t _t1556 = -_t850 - _t852;
-    const train5_real_t _t1557 = _ms119*_t1556;
-    const train5_real_t _t1558 = -_t855 - _t857;
-    const train5_real_t _t1559 = _ms119*_t1558;
-    const train5_real_t _t1560 = -_t860 - _t862;
-    const train5_real_t _t1561 = _ms119*_t1560;
-    const train5_real_t _t1562 = -_t865 - _t867;
-    const train5_real_t _t1563 = _ms119*_t1562;
-    const train5_real_t _t1564 = -_t870 - _t872;
-    const train5_real_t _t1565 = _ms119*_t1564;
-    const train5_real_t _t1566 = -_t875 + _t876;
-    const train5_real_t _t1567 = _ms119*_t1566;
-    const train5_real_t _t1568 = -_t879 + _t880;
-    const train5_real_t _t1569 = _ms119*_t1568;
-    const train5_real_t _t1570 = _ms549*_t1479 + _ms551*_t1480 + _ms553*_t1482 + _ms555*_t1483
-            + _ms557*_t1485 + _ms559*_t1486 + _ms561*_t1488 + _ms563*_t1489 + _ms567*_t1279
-            + _ms568*_t1281 + _ms569*_t1433 + _ms570*_t1435 + _ms571*_t1555 + _ms572*_t1557
-            + _ms574*_t1559 + _ms575*_t1561 + _ms577*_t1563 + _ms578*_t1565 + _ms580*_t1567
-            + _ms581*_t1569;
-    const train5_real_t _t1571 = _ms224*_t1474 + _ms228*_t1475 + _ms232*_t1476 + _ms236*_t1477
-            + _ms240*_t1478 + _ms349*_t460 + _ms361*_t461 + _ms377*_t462 + _ms397*_t463
-            + _ms585*_t882 + _ms586*_t881 + _ms587*_t884 + _ms588*_t883 + _ms589*_t886
-            + _ms590*_t885 + _ms591*_t888 + _ms592*_t887 + _t12*_t1481 + _t14*_t1484 + _t1473
-            + _t1487*_t16 + _t1490*_t18 + _t1491*_t24 + _t1492*_t26 + _t1501*_t28 + _t1510*_t30
-            + _t1523*_t32 + _t1536*_t34 + _t1553*_t36 + _t1570*_t38 - _t431 + _t452 - _t725 + _t889
-            + _t890 + _t891;
-    const train5_real_t _t1572 = _t1074*_t483 + _t1079*_t485 + _t1085*_t487 + _t1092*_t489 - _t465
-            + _t466;
-    const train5_real_t _t1573 = _ms225*_t1474 + _ms229*_t1475 + _ms233*_t1476 + _ms237*_t1477
-            + _ms241*_t1478 + _ms351*_t460 + _ms363*_t461 + _ms379*_t462 + _ms399*_t463
-            + _ms585*_t752 + _ms586*_t753 + _ms587*_t754 + _ms588*_t755 + _ms589*_t756
-            + _ms590*_t757 + _ms591*_t758 + _ms592*_t759 + _t13*_t1481 + _t1484*_t15 + _t1487*_t17
-            + _t1490*_t19 + _t1491*_t25 + _t1492*_t27 + _t1501*_t29 + _t1510*_t31 + _t1523*_t33
-            + _t1536*_t35 + _t1553*_t37 + _t1570*_t39 + _t1572 - _t491 + _t500 - _t729 + _t892
-            + _t893 + _t894;
-    const train5_real_t _t1574 = _ms306*_ms349 + _ms307*_ms361 + _ms308*_ms377 + _ms309*_ms397
-            - _t508;
-    const train5_real_t _t1575 = _ms320*_ms349 + _ms321*_ms361 + _ms322*_ms377 + _ms323*_ms397
-            - _t733;
-    const train5_real_t _t1576 = J_theta_cart2*_ms349 - _ms311 + _ms324*_ms361 + _ms325*_ms377
-            + _ms326*_ms397 - _t737 + _t895 + _t896 + _t897;
-    const train5_real_t _t1577 = J_theta_cart3*_ms361 + _ms324*_ms349 + _ms327*_ms377
-            + _ms328*_ms397 + _t898;
-    const train5_real_t _t1578 = J_theta_cart4*_ms377 + _ms325*_ms349 + _ms327*_ms361
-            + _ms329*_ms397 + _t899;
-    const train5_real_t _t1579 = J_theta_cart5*_ms397 + _ms326*_ms349 + _ms328*_ms361
-            + _ms329*_ms377 + _t900;
-    const train5_real_t _t1580 = _ms224*_t1575 + _ms228*_t1576 + _ms232*_t1577 + _ms236*_t1578
-            + _ms240*_t1579 + _ms256*_t882 + _ms260*_t881 + _ms264*_t884 + _ms268*_t883
-            + _ms272*_t886 + _ms276*_t885 + _ms280*_t888 + _ms284*_t887 + _ms349*_t12 + _ms361*_t14
-            + _ms377*_t16 + _ms397*_t18 + _ms429*_t24 + _ms441*_t26 + _ms453*_t28 + _ms469*_t30
-            + _ms485*_t32 + _ms505*_t34 + _ms525*_t36 + _ms549*_t38 + _t1574;
-    const train5_real_t _t1581 = -_t1470*_t531 + _t1472*_t535 + _t1580*_t537;
-    const train5_real_t _t1582 = -_t1581*_t540;
-    const train5_real_t _t1583 = -_t1470*_t547 + _t1472*_t544 - _t1571*_t545 + _t1573*_t542
-            + _t1582*_t548;
-    const train5_real_t _t1584 = -_t1470*_t544 + _t1571*_t542 - _t1573*_t549 + _t1580*_t547
-            + _t1582*_t550;
-    const train5_real_t _t1585 = _t1583*_t523 + _t1584*_t526;
-    const train5_real_t _t1586 = _ms307*_ms367 + _ms308*_ms383 + _ms309*_ms403 - _t46;
-    const train5_real_t _t1587 = _ms321*_ms367 + _ms322*_ms383 + _ms323*_ms403 - _t556;
-    const train5_real_t _t1588 = _ms324*_ms367 + _ms325*_ms383 + _ms326*_ms403 - _t744;
-    const train5_real_t _t1589 = J_theta_cart3*_ms367 + _ms327*_ms383 + _ms328*_ms403 - _t562
-            - _t749 + _t904 + _t906 - _t99;
-    const train5_real_t _t1590 = J_theta_cart4*_ms383 + _ms327*_ms367 + _ms329*_ms403 + _t907;
-    const train5_real_t _t1591 = J_theta_cart5*_ms403 + _ms328*_ms367 + _ms329*_ms383 + _t908;
-    const train5_real_t _t1592 = _ms224*_t1587 + _ms228*_t1588 + _ms232*_t1589 + _ms236*_t1590
-            + _ms240*_t1591 + _ms264*_t909 + _ms268*_t910 + _ms272*_t911 + _ms276*_t912
-            + _ms280*_t913 + _ms284*_t914 + _ms365*_t15 + _ms381*_t17 + _ms401*_t19 + _ms457*_t29
-            + _ms473*_t31 + _ms489*_t33 + _ms509*_t35 + _ms529*_t37 + _ms553*_t39 + _t1586;
-    const train5_real_t _t1593 = _ms317*_ms367 + _ms318*_ms383 + _ms319*_ms403 - _t100;
-    const train5_real_t _t1594 = _ms225*_t1587 + _ms229*_t1588 + _ms233*_t1589 + _ms237*_t1590
-            + _ms241*_t1591 + _ms265*_t909 + _ms269*_t910 + _ms273*_t911 + _ms277*_t912
-            + _ms281*_t913 + _ms285*_t914 + _ms367*_t15 + _ms383*_t17 + _ms403*_t19 + _ms459*_t29
-            + _ms475*_t31 + _ms491*_t33 + _ms511*_t35 + _ms531*_t37 + _ms555*_t39 + _t1593;
-    const train5_real_t _t1595 = _t1080*_t124 + _t1086*_t128 + _t1093*_t132 - _t137 - _t138;
-    const train5_real_t _t1596 = _t1080*_t158 + _t1086*_t161 + _t1093*_t164 + _t576 - _t580 - _t581
-            - _t582;
-    const train5_real_t _t1597 = _t1080*_t173 + _t1086*_t175 + _t1093*_t177 + _t761 - _t762 - _t763
-            - _t764;
-    const train5_real_t _t1598 = _t1086*_t186 + _t1093*_t188 + _t178 - _t179 + _t590 + _t770 + _t772
-            + _t773 - _t774 + _t916 + _t918;
-    const train5_real_t _t1599 = _t1080*_t196 + _t1093*_t198 - _t921;
-    const train5_real_t _t1600 = _t1080*_t204 + _t1086*_t207 - _t922;
-    const train5_real_t _t1601 = _ms286*_t1080;
-    const train5_real_t _t1602 = _ms287*_t1080;
-    const train5_real_t _t1603 = -_ms232*_ms574 - _ms233*_ms575 + _ms365*_t1601 + _ms367*_t1602
-            + _ms567*_t313 + _ms568*_t317 + _ms569*_t632 + _ms570*_t635 + _ms571*_t810
-            + _ms572*_t813;
-    const train5_real_t _t1604 = _ms286*_t1086;
-    const train5_real_t _t1605 = _ms287*_t1086;
-    const train5_real_t _t1606 = _ms381*_t1601 + _ms383*_t1602 + _ms385*_t1604 + _ms387*_t1605
-            + _ms567*_t351 + _ms568*_t356 + _ms569*_t658 + _ms570*_t663 + _ms571*_t826
-            + _ms572*_t831 + _ms574*_t934 + _ms575*_t940 + _ms577*_t946 + _ms578*_t949;
-    const train5_real_t _t1607 = _ms286*_t1093;
-    const train5_real_t _t1608 = _ms287*_t1093;
-    const train5_real_t _t1609 = _ms401*_t1601 + _ms403*_t1602 + _ms405*_t1604 + _ms407*_t1605
-            + _ms409*_t1607 + _ms411*_t1608 + _ms567*_t399 + _ms568*_t404 + _ms569*_t692
-            + _ms570*_t697 + _ms571*_t854 + _ms572*_t859 + _ms574*_t952 + _ms575*_t957
-            + _ms577*_t962 + _ms578*_t967 + _ms580*_t972 + _ms581*_t976;
-    const train5_real_t _t1610 = -_ms264*_ms574 - _ms265*_ms575 + _ms457*_t1601 + _ms459*_t1602
-            + _ms567*_t1202 + _ms568*_t1204 + _ms569*_t1356 + _ms570*_t1358 + _ms571*_t1498
-            + _ms572*_t1500;
-    const train5_real_t _t1611 = -_ms268*_ms574 - _ms269*_ms575 + _ms473*_t1601 + _ms475*_t1602
-            + _ms567*_t1215 + _ms568*_t1217 + _ms569*_t1369 + _ms570*_t1371 + _ms571*_t1507
-            + _ms572*_t1509;
-    const train5_real_t _t1612 = _t935 - _t937 + TRAIN5_LIT(2.0)*_t938;
-    const train5_real_t _t1613 = _ms104*_t1612;
-    const train5_real_t _t1614 = _t941 - _t943 + TRAIN5_LIT(2.0)*_t944;
-    const train5_real_t _t1615 = _ms104*_t1614;
-    const train5_real_t _t1616 = _t936 - _t938 + _t947;
-    const train5_real_t _t1617 = _ms104*_t1616;
-    const train5_real_t _t1618 = _t942 - _t944 + _t950;
-    const train5_real_t _t1619 = _ms104*_t1618;
-    const train5_real_t _t1620 = _ms489*_t1601 + _ms491*_t1602 + _ms493*_t1604 + _ms495*_t1605
-            + _ms567*_t1228 + _ms568*_t1230 + _ms569*_t1382 + _ms570*_t1384 + _ms571*_t1516
-            + _ms572*_t1518 + _ms574*_t1613 + _ms575*_t1615 + _ms577*_t1617 + _ms578*_t1619;
-    const train5_real_t _t1621 = TRAIN5_LIT(2.0)*_ms156*_ms232 - _t935 - _t937;
-    const train5_real_t _t1622 = _ms109*_t1621;
-    const train5_real_t _t1623 = TRAIN5_LIT(2.0)*_ms156*_ms233 - _t941 - _t943;
-    const train5_real_t _t1624 = _ms109*_t1623;
-    const train5_real_t _t1625 = _ms139*_ms365 - _t938 - _t947;
-    const train5_real_t _t1626 = _ms109*_t1625;
-    const train5_real_t _t1627 = _ms139*_ms367 - _t944 - _t950;
-    const train5_real_t _t1628 = _ms109*_t1627;
-    const train5_real_t _t1629 = _ms509*_t1601 + _ms511*_t1602 + _ms513*_t1604 + _ms515*_t1605
-            + _ms567*_t1245 + _ms568*_t1247 + _ms569*_t1399 + _ms570*_t1401 + _ms571*_t1529
-            + _ms572*_t1531 + _ms574*_t1622 + _ms575*_t1624 + _ms577*_t1626 + _ms578*_t1628;
-    const train5_real_t _t1630 = _t953 - _t955;
-    const train5_real_t _t1631 = _ms114*_t1630;
-    const train5_real_t _t1632 = _t958 - _t960;
-    const train5_real_t _t1633 = _ms114*_t1632;
-    const train5_real_t _t1634 = _t963 - _t965;
-    const train5_real_t _t1635 = _ms114*_t1634;
-    const train5_real_t _t1636 = _t968 - _t970;
-    const train5_real_t _t1637 = _ms114*_t1636;
-    const train5_real_t _t1638 = _t973 + _t974;
-    const train5_real_t _t1639 = _ms114*_t1638;
-    const train5_real_t _t1640 = _t977 + _t978;
-    const train5_real_t _t1641 = _ms114*_t1640;
-    const train5_real_t _t1642 = _ms529*_t1601 + _ms531*_t1602 + _ms533*_t1604 + _ms535*_t1605
-            + _ms537*_t1607 + _ms539*_t1608 + _ms567*_t1262 + _ms568*_t1264 + _ms569*_t1416
-            + _ms570*_t1418 + _ms571*_t1542 + _ms572*_t1544 + _ms574*_t1631 + _ms575*_t1633
-            + _ms577*_t1635 + _ms578*_t1637 + _ms580*_t1639 + _ms581*_t1641;
-    const train5_real_t _t1643 = -_t953 - _t955;
-    const train5_real_t _t1644 = _ms119*_t1643;
-    const train5_real_t _t1645 = -_t958 - _t960;
-    const train5_real_t _t1646 = _ms119*_t1645;
-    const train5_real_t _t1647 = -_t963 - _t965;
-    const train5_real_t _t1648 = _ms119*_t1647;
-    const train5_real_t _t1649 = -_t968 - _t970;
-    const train5_real_t _t1650 = _ms119*_t1649;
-    const train5_real_t _t1651 = -_t973 + _t974;
-    const train5_real_t _t1652 = _ms119*_t1651;
-    const train5_real_t _t1653 = -_t977 + _t978;
-    const train5_real_t _t1654 = _ms119*_t1653;
-    const train5_real_t _t1655 = _ms553*_t1601 + _ms555*_t1602 + _ms557*_t1604 + _ms559*_t1605
-            + _ms561*_t1607 + _ms563*_t1608 + _ms567*_t1283 + _ms568*_t1285 + _ms569*_t1437
-            + _ms570*_t1439 + _ms571*_t1559 + _ms572*_t1561 + _ms574*_t1644 + _ms575*_t1646
-            + _ms577*_t1648 + _ms578*_t1650 + _ms580*_t1652 + _ms581*_t1654;
-    const train5_real_t _t1656 = _ms224*_t1596 + _ms228*_t1597 + _ms232*_t1598 + _ms236*_t1599
-            + _ms240*_t1600 + _ms365*_t461 + _ms381*_t462 + _ms401*_t463 + _ms587*_t980
-            + _ms588*_t979 + _ms589*_t982 + _ms590*_t981 + _ms591*_t984 + _ms592*_t983 + _t14*_t1603
-            + _t1595 + _t16*_t1606 + _t1609*_t18 + _t1610*_t28 + _t1611*_t30 + _t1620*_t32
-            + _t1629*_t34 + _t1642*_t36 + _t1655*_t38 - _t432 + _t453 - _t726 - _t889 + _t985
-            + _t986;
-    const train5_real_t _t1657 = _t1080*_t485 + _t1086*_t487 + _t1093*_t489 - _t468 + _t469;
-    const train5_real_t _t1658 = _ms225*_t1596 + _ms229*_t1597 + _ms233*_t1598 + _ms237*_t1599
-            + _ms241*_t1600 + _ms367*_t461 + _ms383*_t462 + _ms403*_t463 + _ms587*_t909
-            + _ms588*_t910 + _ms589*_t911 + _ms590*_t912 + _ms591*_t913 + _ms592*_t914 + _t15*_t1603
-            + _t1606*_t17 + _t1609*_t19 + _t1610*_t29 + _t1611*_t31 + _t1620*_t33 + _t1629*_t35
-            + _t1642*_t37 + _t1655*_t39 + _t1657 - _t492 + _t501 - _t730 - _t892 + _t987 + _t988;
-    const train5_real_t _t1659 = _ms307*_ms365 + _ms308*_ms381 + _ms309*_ms401 - _t509;
-    const train5_real_t _t1660 = _ms321*_ms365 + _ms322*_ms381 + _ms323*_ms401 - _t734;
-    const train5_real_t _t1661 = _ms324*_ms365 + _ms325*_ms381 + _ms326*_ms401 - _t895;
-    const train5_real_t _t1662 = J_theta_cart3*_ms365 - _ms312 + _ms327*_ms381 + _ms328*_ms401
-            - _t738 - _t898 + _t989 + _t990;
-    const train5_real_t _t1663 = J_theta_cart4*_ms381 + _ms327*_ms365 + _ms329*_ms401 + _t991;
-    const train5_real_t _t1664 = J_theta_cart5*_ms401 + _ms328*_ms365 + _ms329*_ms381 + _t992;
-    const train5_real_t _t1665 = _ms224*_t1660 + _ms228*_t1661 + _ms232*_t1662 + _ms236*_t1663
-            + _ms240*_t1664 + _ms264*_t980 + _ms268*_t979 + _ms272*_t982 + _ms276*_t981
-            + _ms280*_t984 + _ms284*_t983 + _ms365*_t14 + _ms381*_t16 + _ms401*_t18 + _ms457*_t28
-            + _ms473*_t30 + _ms489*_t32 + _ms509*_t34 + _ms529*_t36 + _ms553*_t38 + _t1659;
-    const train5_real_t _t1666 = -_t1592*_t531 + _t1594*_t535 + _t1665*_t537;
-    const train5_real_t _t1667 = -_t1666*_t540;
-    const train5_real_t _t1668 = -_t1592*_t547 + _t1594*_t544 - _t1656*_t545 + _t1658*_t542
-            + _t1667*_t548;
-    const train5_real_t _t1669 = -_t1592*_t544 + _t1656*_t542 - _t1658*_t549 + _t1665*_t547
-            + _t1667*_t550;
-    const train5_real_t _t1670 = _t1668*_t523 + _t1669*_t526;
-    const train5_real_t _t1671 = _ms308*_ms387 + _ms309*_ms407 - _t47;
-    const train5_real_t _t1672 = _ms322*_ms387 + _ms323*_ms407 - _t558;
-    const train5_real_t _t1673 = _ms325*_ms387 + _ms326*_ms407 - _t746;
-    const train5_real_t _t1674 = _ms327*_ms387 + _ms328*_ms407 - _t904;
-    const train5_real_t _t1675 = J_theta_cart4*_ms387 + _ms329*_ms407 - _t101 - _t563 - _t750
-            - _t907 + _t996;
-    const train5_real_t _t1676 = J_theta_cart5*_ms407 + _ms329*_ms387 + _t997;
-    const train5_real_t _t1677 = _ms224*_t1672 + _ms228*_t1673 + _ms232*_t1674 + _ms236*_t1675
-            + _ms240*_t1676 + _ms272*_t998 + _ms276*_t999 + _ms280*_t1000 + _ms284*_t1001
-            + _ms385*_t17 + _ms405*_t19 + _ms493*_t33 + _ms513*_t35 + _ms533*_t37 + _ms557*_t39
-            + _t1671;
-    const train5_real_t _t1678 = _ms318*_ms387 + _ms319*_ms407 - _t102;
-    const train5_real_t _t1679 = _ms225*_t1672 + _ms229*_t1673 + _ms233*_t1674 + _ms237*_t1675
-            + _ms241*_t1676 + _ms273*_t998 + _ms277*_t999 + _ms281*_t1000 + _ms285*_t1001
-            + _ms387*_t17 + _ms407*_t19 + _ms495*_t33 + _ms515*_t35 + _ms535*_t37 + _ms559*_t39
-            + _t1678;
-    const train5_real_t _t1680 = _t1087*_t128 + _t1094*_t132 - _t149;
-    const train5_real_t _t1681 = _t1087*_t161 + _t1094*_t164 - _t586;
-    const train5_real_t _t1682 = _t1087*_t175 + _t1094*_t177 - _t768;
-    const train5_real_t _t1683 = _t1087*_t186 + _t1094*_t188 - _t918;
-    const train5_real_t _t1684 = _t1003 + _t1094*_t198 + _t189 - _t190 + _t591 + _t775 + _t776
-            + _t777 - _t778 + _t921;
-    const train5_real_t _t1685 = -_t1006 + _t1087*_t207;
-    const train5_real_t _t1686 = _ms286*_t1087;
-    const train5_real_t _t1687 = _ms287*_t1087;
-    const train5_real_t _t1688 = -_ms236*_ms577 - _ms237*_ms578 + _ms385*_t1686 + _ms387*_t1687
-            + _ms567*_t361 + _ms568*_t365 + _ms569*_t668 + _ms570*_t671 + _ms571*_t836
-            + _ms572*_t840 + _ms574*_t946 + _ms575*_t949;
-    const train5_real_t _t1689 = _ms286*_t1094;
-    const train5_real_t _t1690 = _ms287*_t1094;
-    const train5_real_t _t1691 = _ms405*_t1686 + _ms407*_t1687 + _ms409*_t1689 + _ms411*_t1690
-            + _ms567*_t409 + _ms568*_t414 + _ms569*_t702 + _ms570*_t707 + _ms571*_t864
-            + _ms572*_t869 + _ms574*_t962 + _ms575*_t967 + _ms577*_t1012 + _ms578*_t1018
-            + _ms580*_t1024 + _ms581*_t1027;
-    const train5_real_t _t1692 = -_ms272*_ms577 - _ms273*_ms578 + _ms493*_t1686 + _ms495*_t1687
-            + _ms567*_t1232 + _ms568*_t1234 + _ms569*_t1386 + _ms570*_t1388 + _ms571*_t1520
-            + _ms572*_t1522 + _ms574*_t1617 + _ms575*_t1619;
-    const train5_real_t _t1693 = -_ms276*_ms577 - _ms277*_ms578 + _ms513*_t1686 + _ms515*_t1687
-            + _ms567*_t1249 + _ms568*_t1251 + _ms569*_t1403 + _ms570*_t1405 + _ms571*_t1533
-            + _ms572*_t1535 + _ms574*_t1626 + _ms575*_t1628;
-    const train5_real_t _t1694 = _t1013 - _t1015 + TRAIN5_LIT(2.0)*_t1016;
-    const train5_real_t _t1695 = _ms114*_t1694;
-    const train5_real_t _t1696 = _t1019 - _t1021 + TRAIN5_LIT(2.0)*_t1022;
-    const train5_real_t _t1697 = _ms114*_t1696;
-    const train5_real_t _t1698 = _t1014 - _t1016 + _t1025;
-    const train5_real_t _t1699 = _ms114*_t1698;
-    const train5_real_t _t1700 = _t1020 - _t1022 + _t1028;
-    const train5_real_t _t1701 = _ms114*_t1700;
-    const train5_real_t _t1702 = _ms533*_t1686 + _ms535*_t1687 + _ms537*_t1689 + _ms539*_t1690
-            + _ms567*_t1266 + _ms568*_t1268 + _ms569*_t1420 + _ms570*_t1422 + _ms571*_t1546
-            + _ms572*_t1548 + _ms574*_t1635 + _ms575*_t1637 + _ms577*_t1695 + _ms578*_t1697
-            + _ms580*_t1699 + _ms581*_t1701;
-    const train5_real_t _t1703 = TRAIN5_LIT(2.0)*_ms161*_ms236 - _t1013 - _t1015;
-    const train5_real_t _t1704 = _ms119*_t1703;
-    const train5_real_t _t1705 = TRAIN5_LIT(2.0)*_ms161*_ms237 - _t1019 - _t1021;
-    const train5_real_t _t1706 = _ms119*_t1705;
-    const train5_real_t _t1707 = _ms146*_ms385 - _t1016 - _t1025;
-    const train5_real_t _t1708 = _ms119*_t1707;
-    const train5_real_t _t1709 = _ms146*_ms387 - _t1022 - _t1028;
-    const train5_real_t _t1710 = _ms119*_t1709;
-    const train5_real_t _t1711 = _ms557*_t1686 + _ms559*_t1687 + _ms561*_t1689 + _ms563*_t1690
-            + _ms567*_t1287 + _ms568*_t1289 + _ms569*_t1441 + _ms570*_t1443 + _ms571*_t1563
-            + _ms572*_t1565 + _ms574*_t1648 + _ms575*_t1650 + _ms577*_t1704 + _ms578*_t1706
-            + _ms580*_t1708 + _ms581*_t1710;
-    const train5_real_t _t1712 = _ms224*_t1681 + _ms228*_t1682 + _ms232*_t1683 + _ms236*_t1684
-            + _ms240*_t1685 + _ms385*_t462 + _ms405*_t463 + _ms589*_t1030 + _ms590*_t1029
-            + _ms591*_t1032 + _ms592*_t1031 + _t1033 + _t16*_t1688 + _t1680 + _t1691*_t18
-            + _t1692*_t32 + _t1693*_t34 + _t1702*_t36 + _t1711*_t38 - _t433 + _t454 - _t727 - _t890
-            - _t985;
-    const train5_real_t _t1713 = _t1087*_t487 + _t1094*_t489 - _t471 + _t472;
-    const train5_real_t _t1714 = _ms225*_t1681 + _ms229*_t1682 + _ms233*_t1683 + _ms237*_t1684
-            + _ms241*_t1685 + _ms387*_t462 + _ms407*_t463 + _ms589*_t998 + _ms590*_t999
-            + _ms591*_t1000 + _ms592*_t1001 + _t1034 + _t1688*_t17 + _t1691*_t19 + _t1692*_t33
-            + _t1693*_t35 + _t1702*_t37 + _t1711*_t39 + _t1713 - _t493 + _t502 - _t731 - _t893
-            - _t987;
-    const train5_real_t _t1715 = _ms308*_ms385 + _ms309*_ms405 - _t510;
-    const train5_real_t _t1716 = _ms322*_ms385 + _ms323*_ms405 - _t735;
-    const train5_real_t _t1717 = _ms325*_ms385 + _ms326*_ms405 - _t896;
-    const train5_real_t _t1718 = _ms327*_ms385 + _ms328*_ms405 - _t989;
-    const train5_real_t _t1719 = J_theta_cart4*_ms385 - _ms313 + _ms329*_ms405 + _t1035 - _t739
-            - _t899 - _t991;
-    const train5_real_t _t1720 = J_theta_cart5*_ms405 + _ms329*_ms385 + _t1036;
-    const train5_real_t _t1721 = _ms224*_t1716 + _ms228*_t1717 + _ms232*_t1718 + _ms236*_t1719
-            + _ms240*_t1720 + _ms272*_t1030 + _ms276*_t1029 + _ms280*_t1032 + _ms284*_t1031
-            + _ms385*_t16 + _ms405*_t18 + _ms493*_t32 + _ms513*_t34 + _ms533*_t36 + _ms557*_t38
-            + _t1715;
-    const train5_real_t _t1722 = -_t1677*_t531 + _t1679*_t535 + _t1721*_t537;
-    const train5_real_t _t1723 = -_t1722*_t540;
-    const train5_real_t _t1724 = -_t1677*_t547 + _t1679*_t544 - _t1712*_t545 + _t1714*_t542
-            + _t1723*_t548;
-    const train5_real_t _t1725 = -_t1677*_t544 + _t1712*_t542 - _t1714*_t549 + _t1721*_t547
-            + _t1723*_t550;
-    const train5_real_t _t1726 = _t1724*_t523 + _t1725*_t526;
-    const train5_real_t _t1727 = _ms309*_ms411 - _t43;
-    const train5_real_t _t1728 = _ms323*_ms411 - _t560;
-    const train5_real_t _t1729 = _ms326*_ms411 - _t748;
-    const train5_real_t _t1730 = _ms328*_ms411 - _t906;
-    const train5_real_t _t1731 = _ms329*_ms411 - _t996;
-    const train5_real_t _t1732 = J_theta_cart5*_ms411 - _t103 - _t564 - _t751 - _t908 - _t997;
-    const train5_real_t _t1733 = _ms224*_t1728 + _ms228*_t1729 + _ms232*_t1730 + _ms236*_t1731
-            + _ms240*_t1732 + _ms280*_t1037 + _ms284*_t1038 + _ms409*_t19 + _ms537*_t37
-            + _ms561*_t39 + _t1727;
-    const train5_real_t _t1734 = _ms319*_ms411 - _t104;
-    const train5_real_t _t1735 = _ms225*_t1728 + _ms229*_t1729 + _ms233*_t1730 + _ms237*_t1731
-            + _ms241*_t1732 + _ms281*_t1037 + _ms285*_t1038 + _ms411*_t19 + _ms539*_t37
-            + _ms563*_t39 + _t1734;
-    const train5_real_t _t1736 = _t1095*_t132 - _t145;
-    const train5_real_t _t1737 = _t1095*_t164 - _t584;
-    const train5_real_t _t1738 = _t1095*_t177 - _t766;
-    const train5_real_t _t1739 = _t1095*_t188 - _t916;
-    const train5_real_t _t1740 = -_t1003 + _t1095*_t198;
-    const train5_real_t _t1741 = _t1006 + _t199 - _t200 + _t592 + _t779 + _t780 + _t781 - _t782
-            + _t922;
-    const train5_real_t _t1742 = _ms286*_t1095;
-    const train5_real_t _t1743 = _ms287*_t1095;
-    const train5_real_t _t1744 = -_ms240*_ms580 - _ms241*_ms581 + _ms409*_t1742 + _ms411*_t1743
-            + _ms567*_t419 + _ms568*_t423 + _ms569*_t712 + _ms570*_t715 + _ms571*_t874
-            + _ms572*_t878 + _ms574*_t972 + _ms575*_t976 + _ms577*_t1024 + _ms578*_t1027;
-    const train5_real_t _t1745 = -_ms280*_ms580 - _ms281*_ms581 + _ms537*_t1742 + _ms539*_t1743
-            + _ms567*_t1270 + _ms568*_t1272 + _ms569*_t1424 + _ms570*_t1426 + _ms571*_t1550
-            + _ms572*_t1552 + _ms574*_t1639 + _ms575*_t1641 + _ms577*_t1699 + _ms578*_t1701;
-    const train5_real_t _t1746 = -_ms284*_ms580 - _ms285*_ms581 + _ms561*_t1742 + _ms563*_t1743
-            + _ms567*_t1291 + _ms568*_t1293 + _ms569*_t1445 + _ms570*_t1447 + _ms571*_t1567
-            + _ms572*_t1569 + _ms574*_t1652 + _ms575*_t1654 + _ms577*_t1708 + _ms578*_t1710;
-    const train5_real_t _t1747 = _ms224*_t1737 + _ms228*_t1738 + _ms232*_t1739 + _ms236*_t1740
-            + _ms240*_t1741 + _ms409*_t463 + _ms591*_t1040 + _ms592*_t1039 - _t1033 + _t1736
-            + _t1744*_t18 + _t1745*_t36 + _t1746*_t38 - _t434 + _t455 - _t728 - _t891 - _t986;
-    const train5_real_t _t1748 = _t1095*_t489 - _t474 + _t475;
-    const train5_real_t _t1749 = _ms225*_t1737 + _ms229*_t1738 + _ms233*_t1739 + _ms237*_t1740
-            + _ms241*_t1741 + _ms411*_t463 + _ms591*_t1037 + _ms592*_t1038 - _t1034 + _t1744*_t19
-            + _t1745*_t37 + _t1746*_t39 + _t1748 - _t494 + _t503 - _t732 - _t894 - _t988;
-    const train5_real_t _t1750 = _ms309*_ms409 - _t511;
-    const train5_real_t _t1751 = _ms323*_ms409 - _t736;
-    const train5_real_t _t1752 = _ms326*_ms409 - _t897;
-    const train5_real_t _t1753 = _ms328*_ms409 - _t990;
-    const train5_real_t _t1754 = _ms329*_ms409 - _t1035;
-    const train5_real_t _t1755 = J_theta_cart5*_ms409 - _ms314 - _t1036 - _t740 - _t900 - _t992;
-    const train5_real_t _t1756 = _ms224*_t1751 + _ms228*_t1752 + _ms232*_t1753 + _ms236*_t1754
-            + _ms240*_t1755 + _ms280*_t1040 + _ms284*_t1039 + _ms409*_t18 + _ms537*_t36
-            + _ms561*_t38 + _t1750;
-    const train5_real_t _t1757 = -_t1733*_t531 + _t1735*_t535 + _t1756*_t537;
-    const train5_real_t _t1758 = -_t1757*_t540;
-    const train5_real_t _t1759 = -_t1733*_t547 + _t1735*_t544 - _t1747*_t545 + _t1749*_t542
-            + _t1758*_t548;
-    const train5_real_t _t1760 = -_t1733*_t544 + _t1747*_t542 - _t1749*_t549 + _t1756*_t547
-            + _t1758*_t550;
-    const train5_real_t _t1761 = _t1759*_t523 + _t1760*_t526;
-    const train5_real_t _t1762 = K_theta_tractor_x_tractor*_t1042 + _t1050*_t114 + _t1075*_t120
-            + _t1081*_t124 + _t1088*_t128 + _t1096*_t132;
-    const train5_real_t _t1763 = _ms48*_t1044 + _t1075*_t155 + _t1081*_t158 + _t1088*_t161
-            + _t1096*_t164;
-    const train5_real_t _t1764 = _ms48*_t1045 + _t1050*_t170 + _t1081*_t173 + _t1088*_t175
-            + _t1096*_t177;
-    const train5_real_t _t1765 = _ms48*_t1046 + _t1050*_t180 + _t1075*_t184 + _t1088*_t186
-            + _t1096*_t188;
-    const train5_real_t _t1766 = _ms48*_t1047 + _t1050*_t191 + _t1075*_t193 + _t1081*_t196
-            + _t1096*_t198;
-    const train5_real_t _t1767 = _ms48*_t1048 + _t1050*_t201 + _t1075*_t203 + _t1081*_t204
-            + _t1088*_t207;
-    const train5_real_t _t1768 = _ms162*_t1053 + _t1049 - _t1051;
-    const train5_real_t _t1769 = _ms48*_t1055 - _t1054;
-    const train5_real_t _t1770 = _ms338*_t1768 + _ms339*_t1769;
-    const train5_real_t _t1771 = _ms162*_ms287 + _t1049;
-    const train5_real_t _t1772 = _ms162*_ms288 + _t1051;
-    const train5_real_t _t1773 = _ms288*_ms48 + _t1054;
-    const train5_real_t _t1774 = _ms162*_ms289 + _ms286*_t1075;
-    const train5_real_t _t1775 = _ms287*_t1075 + _ms289*_ms48;
-    const train5_real_t _t1776 = _ms341*_t1771 + _ms343*_t1042 + _ms345*_t1772 + _ms347*_t1773
-            + _ms349*_t1774 + _ms351*_t1775;
-    const train5_real_t _t1777 = _ms162*_ms290 + _ms286*_t1081;
-    const train5_real_t _t1778 = _ms287*_t1081 + _ms290*_ms48;
-    const train5_real_t _t1779 = _ms353*_t1771 + _ms355*_t1042 + _ms357*_t1772 + _ms359*_t1773
-            + _ms361*_t1774 + _ms363*_t1775 + _ms365*_t1777 + _ms367*_t1778;
-    const train5_real_t _t1780 = _ms162*_ms291 + _ms286*_t1088;
-    const train5_real_t _t1781 = _ms287*_t1088 + _ms291*_ms48;
-    const train5_real_t _t1782 = _ms369*_t1771 + _ms371*_t1042 + _ms373*_t1772 + _ms375*_t1773
-            + _ms377*_t1774 + _ms379*_t1775 + _ms381*_t1777 + _ms383*_t1778 + _ms385*_t1780
-            + _ms387*_t1781;
-    const train5_real_t _t1783 = _ms162*_ms292 + _ms286*_t1096;
-    const train5_real_t _t1784 = _ms287*_t1096 + _ms292*_ms48;
-    const train5_real_t _t1785 = _ms389*_t1771 + _ms391*_t1042 + _ms393*_t1772 + _ms395*_t1773
-            + _ms397*_t1774 + _ms399*_t1775 + _ms401*_t1777 + _ms403*_t1778 + _ms405*_t1780
-            + _ms407*_t1781 + _ms409*_t1783 + _ms411*_t1784;
-    const train5_real_t _t1786 = _ms413*_t1768 + _ms415*_t1769;
-    const train5_real_t _t1787 = _ms417*_t1768 + _ms419*_t1769;
-    const train5_real_t _t1788 = _ms421*_t1771 + _ms423*_t1042 + _ms425*_t1772 + _ms427*_t1773
-            + _ms429*_t1774 + _ms431*_t1775;
-    const train5_real_t _t1789 = _ms433*_t1771 + _ms435*_t1042 + _ms437*_t1772 + _ms439*_t1773
-            + _ms441*_t1774 + _ms443*_t1775;
-    const train5_real_t _t1790 = _ms445*_t1771 + _ms447*_t1042 + _ms449*_t1772 + _ms451*_t1773
-            + _ms453*_t1774 + _ms455*_t1775 + _ms457*_t1777 + _ms459*_t1778;
-    const train5_real_t _t1791 = _ms461*_t1771 + _ms463*_t1042 + _ms465*_t1772 + _ms467*_t1773
-            + _ms469*_t1774 + _ms471*_t1775 + _ms473*_t1777 + _ms475*_t1778;
-    const train5_real_t _t1792 = _ms477*_t1771 + _ms479*_t1042 + _ms481*_t1772 + _ms483*_t1773
-            + _ms485*_t1774 + _ms487*_t1775 + _ms489*_t1777 + _ms491*_t1778 + _ms493*_t1780
-            + _ms495*_t1781;
-    const train5_real_t _t1793 = _ms497*_t1771 + _ms499*_t1042 + _ms501*_t1772 + _ms503*_t1773
-            + _ms505*_t1774 + _ms507*_t1775 + _ms509*_t1777 + _ms511*_t1778 + _ms513*_t1780
-            + _ms515*_t1781;
-    const train5_real_t _t1794 = _ms517*_t1771 + _ms519*_t1042 + _ms521*_t1772 + _ms523*_t1773
-            + _ms525*_t1774 + _ms527*_t1775 + _ms529*_t1777 + _ms531*_t1778 + _ms533*_t1780
-            + _ms535*_t1781 + _ms537*_t1783 + _ms539*_t1784;
-    const train5_real_t _t1795 = _ms541*_t1771 + _ms543*_t1042 + _ms545*_t1772 + _ms547*_t1773
-            + _ms549*_t1774 + _ms551*_t1775 + _ms553*_t1777 + _ms555*_t1778 + _ms557*_t1780
-            + _ms559*_t1781 + _ms561*_t1783 + _ms563*_t1784;
-    const train5_real_t _t1796 = _ms224*_t1763 + _ms228*_t1764 + _ms232*_t1765 + _ms236*_t1766
-            + _ms240*_t1767 + _t10*_t1770 + _t12*_t1776 + _t14*_t1779 + _t16*_t1782 + _t1762
-            + _t1771*_t512 + _t1785*_t18 + _t1786*_t20 + _t1787*_t22 + _t1788*_t24 + _t1789*_t26
-            + _t1790*_t28 + _t1791*_t30 + _t1792*_t32 + _t1793*_t34 + _t1794*_t36 + _t1795*_t38;
-    const train5_real_t _t1797 = _t1050*_t480 + _t1075*_t483 + _t1081*_t485 + _t1088*_t487
-            + _t1096*_t489;
-    const train5_real_t _t1798 = _ms225*_t1763 + _ms229*_t1764 + _ms233*_t1765 + _ms237*_t1766
-            + _ms241*_t1767 + _t1056*_t1771 + _t11*_t1770 + _t13*_t1776 + _t15*_t1779 + _t17*_t1782
-            + _t1785*_t19 + _t1786*_t21 + _t1787*_t23 + _t1788*_t25 + _t1789*_t27 + _t1790*_t29
-            + _t1791*_t31 + _t1792*_t33 + _t1793*_t35 + _t1794*_t37 + _t1795*_t39 + _t1797;
-    const train5_real_t _t1799 = -_t1796*_t545 + _t1798*_t530*_t541;
-    const train5_real_t _t1800 = _t1796*_t542 - _t1798*_t549;
-    const train5_real_t _t1801 = _t1799*_t523 + _t1800*_t526;
-    const train5_real_t _t1802 = K_theta_tractor_x_tractor*_t1057 + _t1059*_t114 + _t1076*_t120
-            + _t1082*_t124 + _t1089*_t128 + _t1097*_t132;
-    const train5_real_t _t1803 = _ms49*_t1044 + _t1076*_t155 + _t1082*_t158 + _t1089*_t161
-            + _t1097*_t164;
-    const train5_real_t _t1804 = _ms49*_t1045 + _t1059*_t170 + _t1082*_t173 + _t1089*_t175
-            + _t1097*_t177;
-    const train5_real_t _t1805 = _ms49*_t1046 + _t1059*_t180 + _t1076*_t184 + _t1089*_t186
-            + _t1097*_t188;
-    const train5_real_t _t1806 = _ms49*_t1047 + _t1059*_t191 + _t1076*_t193 + _t1082*_t196
-            + _t1097*_t198;
-    const train5_real_t _t1807 = _ms49*_t1048 + _t1059*_t201 + _t1076*_t203 + _t1082*_t204
-            + _t1089*_t207;
-    const train5_real_t _t1808 = _ms163*_t1053 + _t1058 - _t1060;
-    const train5_real_t _t1809 = _ms49*_t1055 - _t1061;
-    const train5_real_t _t1810 = _ms338*_t1808 + _ms339*_t1809;
-    const train5_real_t _t1811 = _ms163*_ms287 + _t1058;
-    const train5_real_t _t1812 = _ms163*_ms288 + _t1060;
-    const train5_real_t _t1813 = _ms288*_ms49 + _t1061;
-    const train5_real_t _t1814 = _ms163*_ms289 + _ms286*_t1076;
-    const train5_real_t _t1815 = _ms287*_t1076 + _ms289*_ms49;
-    const train5_real_t _t1816 = _ms341*_t1811 + _ms343*_t1057 + _ms345*_t1812 + _ms347*_t1813
-            + _ms349*_t1814 + _ms351*_t1815;
-    const train5_real_t _t1817 = _ms163*_ms290 + _ms286*_t1082;
-    const train5_real_t _t1818 = _ms287*_t1082 + _ms290*_ms49;
-    const train5_real_t _t1819 = _ms353*_t1811 + _ms355*_t1057 + _ms357*_t1812 + _ms359*_t1813
-            + _ms361*_t1814 + _ms363*_t1815 + _ms365*_t1817 + _ms367*_t1818;
-    const train5_real_t _t1820 = _ms163*_ms291 + _ms286*_t1089;
-    const train5_real_t _t1821 = _ms287*_t1089 + _ms291*_ms49;
-    const train5_real_t _t1822 = _ms369*_t1811 + _ms371*_t1057 + _ms373*_t1812 + _ms375*_t1813
-            + _ms377*_t1814 + _ms379*_t1815 + _ms381*_t1817 + _ms383*_t1818 + _ms385*_t1820
-            + _ms387*_t1821;
-    const train5_real_t _t1823 = _ms163*_ms292 + _ms286*_t1097;
-    const train5_real_t _t1824 = _ms287*_t1097 + _ms292*_ms49;
-    const train5_real_t _t1825 = _ms389*_t1811 + _ms391*_t1057 + _ms393*_t1812 + _ms395*_t1813
-            + _ms397*_t1814 + _ms399*_t1815 + _ms401*_t1817 + _ms403*_t1818 + _ms405*_t1820
-            + _ms407*_t1821 + _ms409*_t1823 + _ms411*_t1824;
-    const train5_real_t _t1826 = _ms413*_t1808 + _ms415*_t1809;
-    const train5_real_t _t1827 = _ms417*_t1808 + _ms419*_t1809;
-    const train5_real_t _t1828 = _ms421*_t1811 + _ms423*_t1057 + _ms425*_t1812 + _ms427*_t1813
-            + _ms429*_t1814 + _ms431*_t1815;
-    const train5_real_t _t1829 = _ms433*_t1811 + _ms435*_t1057 + _ms437*_t1812 + _ms439*_t1813
-            + _ms441*_t1814 + _ms443*_t1815;
-    const train5_real_t _t1830 = _ms445*_t1811 + _ms447*_t1057 + _ms449*_t1812 + _ms451*_t1813
-            + _ms453*_t1814 + _ms455*_t1815 + _ms457*_t1817 + _ms459*_t1818;
-    const train5_real_t _t1831 = _ms461*_t1811 + _ms463*_t1057 + _ms465*_t1812 + _ms467*_t1813
-            + _ms469*_t1814 + _ms471*_t1815 + _ms473*_t1817 + _ms475*_t1818;
-    const train5_real_t _t1832 = _ms477*_t1811 + _ms479*_t1057 + _ms481*_t1812 + _ms483*_t1813
-            + _ms485*_t1814 + _ms487*_t1815 + _ms489*_t1817 + _ms491*_t1818 + _ms493*_t1820
-            + _ms495*_t1821;
-    const train5_real_t _t1833 = _ms497*_t1811 + _ms499*_t1057 + _ms501*_t1812 + _ms503*_t1813
-            + _ms505*_t1814 + _ms507*_t1815 + _ms509*_t1817 + _ms511*_t1818 + _ms513*_t1820
-            + _ms515*_t1821;
-    const train5_real_t _t1834 = _ms517*_t1811 + _ms519*_t1057 + _ms521*_t1812 + _ms523*_t1813
-            + _ms525*_t1814 + _ms527*_t1815 + _ms529*_t1817 + _ms531*_t1818 + _ms533*_t1820
-            + _ms535*_t1821 + _ms537*_t1823 + _ms539*_t1824;
-    const train5_real_t _t1835 = _ms541*_t1811 + _ms543*_t1057 + _ms545*_t1812 + _ms547*_t1813
-            + _ms549*_t1814 + _ms551*_t1815 + _ms553*_t1817 + _ms555*_t1818 + _ms557*_t1820
-            + _ms559*_t1821 + _ms561*_t1823 + _ms563*_t1824;
-    const train5_real_t _t1836 = _ms224*_t1803 + _ms228*_t1804 + _ms232*_t1805 + _ms236*_t1806
-            + _ms240*_t1807 + _t10*_t1810 + _t12*_t1816 + _t14*_t1819 + _t16*_t1822 + _t18*_t1825
-            + _t1802 + _t1811*_t512 + _t1826*_t20 + _t1827*_t22 + _t1828*_t24 + _t1829*_t26
-            + _t1830*_t28 + _t1831*_t30 + _t1832*_t32 + _t1833*_t34 + _t1834*_t36 + _t1835*_t38;
-    const train5_real_t _t1837 = _t1059*_t480 + _t1076*_t483 + _t1082*_t485 + _t1089*_t487
-            + _t1097*_t489;
-    const train5_real_t _t1838 = _ms225*_t1803 + _ms229*_t1804 + _ms233*_t1805 + _ms237*_t1806
-            + _ms241*_t1807 + _t1056*_t1811 + _t11*_t1810 + _t13*_t1816 + _t15*_t1819 + _t17*_t1822
-            + _t1825*_t19 + _t1826*_t21 + _t1827*_t23 + _t1828*_t25 + _t1829*_t27 + _t1830*_t29
-            + _t1831*_t31 + _t1832*_t33 + _t1833*_t35 + _t1834*_t37 + _t1835*_t39 + _t1837;
-    const train5_real_t _t1839 = -_t1836*_t545 + _t1838*_t530*_t541;
-    const train5_real_t _t1840 = _t1836*_t542 - _t1838*_t549;
-    const train5_real_t _t1841 = _t1839*_t523 + _t1840*_t526;
-    const train5_real_t _t1842 = _t1307*_t524 + _t1308*_t528;
-    const train5_real_t _t1843 = _t1461*_t524 + _t1462*_t528;
-    const train5_real_t _t1844 = _t1583*_t524 + _t1584*_t528;
-    const train5_real_t _t1845 = _t1668*_t524 + _t1669*_t528;
-    const train5_real_t _t1846 = _t1724*_t524 + _t1725*_t528;
-    const train5_real_t _t1847 = _t1759*_t524 + _t1760*_t528;
-    const train5_real_t _t1848 = _t1799*_t524 + _t1800*_t528;
-    const train5_real_t _t1849 = _t1839*_t524 + _t1840*_t528;
-    const train5_real_t _t1850 = _t523*_t545 - _t526*_t542;
-    const train5_real_t _t1851 = -_t523*_t542 + _t526*_t535*_t541;
-    const train5_real_t _t1852 = _t1850*_t523 + _t1851*_t526;
-    const train5_real_t _t1853 = _t524*_t545 - _t528*_t542;
-    const train5_real_t _t1854 = -_t524*_t542 + _t528*_t535*_t541;
-    const train5_real_t _t1855 = _t1853*_t523 + _t1854*_t526;
-    const train5_real_t _t1856 = _t1850*_t524 + _t1851*_t528;
-    const train5_real_t _t1857 = _t1853*_t524 + _t1854*_t528;
+    const train5_real_t _t624 = -_ms483 + _t0*tau_right + _t1*tau_left;
+    const train5_real_t _t625 = _t622*_t624;
+    const train5_real_t _t626 = _t618*_t622;
+    const train5_real_t _t627 = -_ms490 + _t596*tau_right + _t597*tau_left;
+    const train5_real_t _t628 = _t622*_t627;
+    const train5_real_t _t629 = -_t604*_t627 + _t618*_t624;
+    const train5_real_t _t630 = _t611*_t622;
+    const train5_real_t _t631 = -_t604*_t624 + _t611*_t627;
+    const train5_real_t _t632 = _ms327*_t159 + _ms328*_t164;
+    const train5_real_t _t633 = _ms327*_t113 + _ms328*_t120;
+    const train5_real_t _t634 = _ms327*_t109 + _ms328*_t116;
+    const train5_real_t _t635 = _t393*_t634 - _t407;
+    const train5_real_t _t636 = _t389*_t633 + _t635;
+    const train5_real_t _t637 = _t385*_t632 + _t636;
+    const train5_real_t _t638 = _ms333*_t637;
+    const train5_real_t _t639 = -_t376 - _t395*_t634;
+    const train5_real_t _t640 = -_t391*_t633 + _t639;
+    const train5_real_t _t641 = -_t387*_t632 + _t640;
+    const train5_real_t _t642 = _ms333*_t641;
+    const train5_real_t _t643 = _ms331*_t635;
+    const train5_real_t _t644 = _ms331*_t639;
+    const train5_real_t _t645 = _ms332*_t636;
+    const train5_real_t _t646 = _ms332*_t640;
+    const train5_real_t _t647 = _ms327*_t169 + _ms328*_t174;
+    const train5_real_t _t648 = _ms327*_t125 + _ms328*_t130;
+    const train5_real_t _t649 = _ms327*_t84 + _ms328*_t86;
+    const train5_real_t _t650 = _t358 + _t393*_t649;
+    const train5_real_t _t651 = _t389*_t648 + _t650;
+    const train5_real_t _t652 = _t385*_t647 + _t651;
+    const train5_real_t _t653 = _ms333*_t652;
+    const train5_real_t _t654 = _t369 - _t395*_t649;
+    const train5_real_t _t655 = -_t391*_t648 + _t654;
+    const train5_real_t _t656 = -_t387*_t647 + _t655;
+    const train5_real_t _t657 = _ms333*_t656;
+    const train5_real_t _t658 = _ms331*_t650;
+    const train5_real_t _t659 = _ms331*_t654;
+    const train5_real_t _t660 = _ms332*_t651;
+    const train5_real_t _t661 = _ms332*_t655;
+    const train5_real_t _t662 = _ms327*_t179 + _ms328*_t184;
+    const train5_real_t _t663 = _ms327*_t132 + _ms328*_t134;
+    const train5_real_t _t664 = _t362 + _t389*_t663;
+    const train5_real_t _t665 = _t385*_t662 + _t664;
+    const train5_real_t _t666 = _ms333*_t665;
+    const train5_real_t _t667 = _t370 - _t391*_t663;
+    const train5_real_t _t668 = -_t387*_t662 + _t667;
+    const train5_real_t _t669 = _ms333*_t668;
+    const train5_real_t _t670 = _ms332*_t664;
+    const train5_real_t _t671 = _ms332*_t667;
+    const train5_real_t _t672 = _ms327*_t186 + _ms328*_t188;
+    const train5_real_t _t673 = _t366 + _t385*_t672;
+    const train5_real_t _t674 = _ms333*_t673;
+    const train5_real_t _t675 = _t371 - _t387*_t672;
+    const train5_real_t _t676 = _ms333*_t675;
+    const train5_real_t _t677 = _ms162*_ms277 + _ms317*_ms48;
+    const train5_real_t _t678 = _ms162*_ms263 + _ms310*_ms48;
+    const train5_real_t _t679 = _ms162*_ms249 + _ms303*_ms48;
+    const train5_real_t _t680 = _ms162*_ms235 + _ms296*_ms48;
+    const train5_real_t _t681 = _ms162 + _t397*_t680;
+    const train5_real_t _t682 = _t393*_t679 + _t681;
+    const train5_real_t _t683 = _t389*_t678 + _t682;
+    const train5_real_t _t684 = _t385*_t677 + _t683;
+    const train5_real_t _t685 = _ms333*_t684;
+    const train5_real_t _t686 = -TRAIN5_LIT(0.3)*_ms48;
+    const train5_real_t _t687 = -_t398*_t680 + _t686;
+    const train5_real_t _t688 = -_t395*_t679 + _t687;
+    const train5_real_t _t689 = -_t391*_t678 + _t688;
+    const train5_real_t _t690 = -_t387*_t677 + _t689;
+    const train5_real_t _t691 = _ms333*_t690;
+    const train5_real_t _t692 = TRAIN5_LIT(2.0)*_ms328;
+    const train5_real_t _t693 = _ms224*_ms225;
+    const train5_real_t _t694 = _ms329*_t52;
+    const train5_real_t _t695 = _ms329*_t50;
+    const train5_real_t _t696 = _ms330*_t681;
+    const train5_real_t _t697 = _ms330*_t687;
+    const train5_real_t _t698 = _ms331*_t682;
+    const train5_real_t _t699 = _ms331*_t688;
+    const train5_real_t _t700 = _ms332*_t683;
+    const train5_real_t _t701 = _ms332*_t689;
+    const train5_real_t _t702 = _ms235*_ms415;
+    const train5_real_t _t703 = _ms163*_ms277 + _ms317*_ms49;
+    const train5_real_t _t704 = _ms163*_ms263 + _ms310*_ms49;
+    const train5_real_t _t705 = _ms163*_ms249 + _ms303*_ms49;
+    const train5_real_t _t706 = _ms163*_ms235 + _ms296*_ms49;
+    const train5_real_t _t707 = _ms163 + _t397*_t706;
+    const train5_real_t _t708 = _t393*_t705 + _t707;
+    const train5_real_t _t709 = _t389*_t704 + _t708;
+    const train5_real_t _t710 = _t385*_t703 + _t709;
+    const train5_real_t _t711 = _ms333*_t710;
+    const train5_real_t _t712 = -TRAIN5_LIT(0.3)*_ms49;
+    const train5_real_t _t713 = -_t398*_t706 + _t712;
+    const train5_real_t _t714 = -_t395*_t705 + _t713;
+    const train5_real_t _t715 = -_t391*_t704 + _t714;
+    const train5_real_t _t716 = -_t387*_t703 + _t715;
+    const train5_real_t _t717 = _ms333*_t716;
+    const train5_real_t _t718 = _ms330*_t707;
+    const train5_real_t _t719 = _ms330*_t713;
+    const train5_real_t _t720 = _ms331*_t708;
+    const train5_real_t _t721 = _ms331*_t714;
+    const train5_real_t _t722 = _ms332*_t709;
+    const train5_real_t _t723 = _ms332*_t715;
+    const train5_real_t _t724 = _ms162*_t0 + _ms48*_t596;
+    const train5_real_t _t725 = _ms162*_t1 + _ms48*_t597;
+    const train5_real_t _t726 = _ms163*_t0 + _ms49*_t596;
+    const train5_real_t _t727 = _ms163*_t1 + _ms49*_t597;
+    const train5_real_t _t728 = _ms327*_t45;
+    const train5_real_t _t729 = _ms327*_t46;
+    const train5_real_t _t730 = _ms162*_t45;
+    const train5_real_t _t731 = _ms163*_t45;
+    const train5_real_t _t732 = _ms162*_t46;
+    const train5_real_t _t733 = _ms163*_t46;
+    const train5_real_t _t734 = _t147*_t241;
+    const train5_real_t _t735 = -_t149 + _t150 + _t154*_t98;
+    const train5_real_t _t736 = _t151 - _t154*_t97 - _t155;
+    const train5_real_t _t737 = -_ms320*_t145 - _ms321*_t146 - _t145*_t736 + _t146*_t735;
+    const train5_real_t _t738 = _t147*_t737;
+    const train5_real_t _t739 = _ms327*_t734 + _ms328*_t738;
+    const train5_real_t _t740 = _t156 + _t160*_t98;
+    const train5_real_t _t741 = _t157 - _t160*_t97;
+    const train5_real_t _t742 = -_t145*_t741 + _t146*_t740;
+    const train5_real_t _t743 = _t147*_t742;
+    const train5_real_t _t744 = _t161 + _t165*_t98;
+    const train5_real_t _t745 = _t162 - _t165*_t97;
+    const train5_real_t _t746 = -_t145*_t745 + _t146*_t744;
+    const train5_real_t _t747 = _t147*_t746;
+    const train5_real_t _t748 = _ms327*_t743 + _ms328*_t747;
+    const train5_real_t _t749 = _t166 + _t170*_t98;
+    const train5_real_t _t750 = _t167 - _t170*_t97;
+    const train5_real_t _t751 = -_t145*_t750 + _t146*_t749;
+    const train5_real_t _t752 = _t147*_t751;
+    const train5_real_t _t753 = _t171 + _t175*_t98;
+    const train5_real_t _t754 = _t172 - _t175*_t97;
+    const train5_real_t _t755 = -_t145*_t754 + _t146*_t753;
+    const train5_real_t _t756 = _t147*_t755;
+    const train5_real_t _t757 = _ms327*_t752 + _ms328*_t756;
+    const train5_real_t _t758 = _t176 + _t180*_t98;
+    const train5_real_t _t759 = _t177 - _t180*_t97;
+    const train5_real_t _t760 = -_t145*_t759 + _t146*_t758;
+    const train5_real_t _t761 = _t147*_t760;
+    const train5_real_t _t762 = _t181 + _t185*_t98;
+    const train5_real_t _t763 = _t182 - _t185*_t97;
+    const train5_real_t _t764 = -_t145*_t763 + _t146*_t762;
+    const train5_real_t _t765 = _t147*_t764;
+    const train5_real_t _t766 = _ms327*_t761 + _ms328*_t765;
+    const train5_real_t _t767 = _t137 + _t187*_t98;
+    const train5_real_t _t768 = _t143 - _t187*_t97;
+    const train5_real_t _t769 = -_t145*_t768 + _t146*_t767;
+    const train5_real_t _t770 = _t147*_t769;
+    const train5_real_t _t771 = _t149 + _t189*_t98;
+    const train5_real_t _t772 = _t155 - _t189*_t97;
+    const train5_real_t _t773 = -_t145*_t772 + _t146*_t771;
+    const train5_real_t _t774 = _t147*_t773;
+    const train5_real_t _t775 = _ms327*_t770 + _ms328*_t774;
+    const train5_real_t _t776 = _ms283*_t147;
+    const train5_real_t _t777 = _ms323*_t147;
+    const train5_real_t _t778 = _ms327*_t776 + _ms328*_t777;
+    const train5_real_t _t779 = _ms162*_ms291 + _ms324*_ms48;
+    const train5_real_t _t780 = _ms163*_ms291 + _ms324*_ms49;
+    const train5_real_t _t781 = _ms327*_t254 + _ms328*_t252;
+    const train5_real_t _t782 = _ms162*_ms236 + _ms297*_ms48;
+    const train5_real_t _t783 = _ms163*_ms236 + _ms297*_ms49;
+    const train5_real_t _t784 = _ms327*_t249 + _ms328*_t247;
+    const train5_real_t _t785 = _ms162*_ms237 + _ms298*_ms48;
+    const train5_real_t _t786 = _ms163*_ms237 + _ms298*_ms49;
+    const train5_real_t _t787 = _ms299*_t55 - _ms300*_t54 + _t197;
+    const train5_real_t _t788 = _t195*_t80 + _t196*_t787;
+    const train5_real_t _t789 = _ms327*_t227 + _ms328*_t788;
+    const train5_real_t _t790 = _t108*_t195 - _t194*_t196;
+    const train5_real_t _t791 = _t115*_t195 - _t196*_t197;
+    const train5_real_t _t792 = _ms327*_t790 + _ms328*_t791;
+    const train5_real_t _t793 = -_ms240*_t196 + _ms241*_ms243*_ms248;
+    const train5_real_t _t794 = -_ms301*_t196 + _ms302*_t195;
+    const train5_real_t _t795 = _ms327*_t793 + _ms328*_t794;
+    const train5_real_t _t796 = _ms162*_ms250 + _ms304*_ms48;
+    const train5_real_t _t797 = _ms163*_ms250 + _ms304*_ms49;
+    const train5_real_t _t798 = _t198*_t80 + _t199*_t787;
+    const train5_real_t _t799 = _ms327*_t225 + _ms328*_t798;
+    const train5_real_t _t800 = _t108*_t198 - _t194*_t199;
+    const train5_real_t _t801 = _t115*_t198 - _t197*_t199;
+    const train5_real_t _t802 = _ms327*_t800 + _ms328*_t801;
+    const train5_real_t _t803 = -_ms240*_t199 + _ms241*_ms245*_ms248;
+    const train5_real_t _t804 = -_ms301*_t199 + _ms302*_t198;
+    const train5_real_t _t805 = _ms327*_t803 + _ms328*_t804;
+    const train5_real_t _t806 = _ms162*_ms251 + _ms305*_ms48;
+    const train5_real_t _t807 = _ms163*_ms251 + _ms305*_ms49;
+    const train5_real_t _t808 = _ms306*_t76 - _ms307*_t75 + _t102*_t75 + _t103*_t76;
+    const train5_real_t _t809 = _t104*_t200 + _t201*_t808;
+    const train5_real_t _t810 = _ms327*_t232 + _ms328*_t809;
+    const train5_real_t _t811 = _t110*_t75 + _t111*_t76;
+    const train5_real_t _t812 = _t112*_t200 + _t201*_t811;
+    const train5_real_t _t813 = _t117*_t75 + _t118*_t76;
+    const train5_real_t _t814 = _t119*_t200 + _t201*_t813;
+    const train5_real_t _t815 = _ms327*_t812 + _ms328*_t814;
+    const train5_real_t _t816 = _t122*_t75 + _t123*_t76;
+    const train5_real_t _t817 = _t124*_t200 + _t201*_t816;
+    const train5_real_t _t818 = _t127*_t75 + _t128*_t76;
+    const train5_real_t _t819 = _t129*_t200 + _t201*_t818;
+    const train5_real_t _t820 = _ms327*_t817 + _ms328*_t819;
+    const train5_real_t _t821 = -_ms254*_t201 + _ms255*_ms257*_ms262;
+    const train5_real_t _t822 = -_ms308*_t201 + _ms309*_t200;
+    const train5_real_t _t823 = _ms327*_t821 + _ms328*_t822;
+    const train5_real_t _t824 = _ms162*_ms264 + _ms311*_ms48;
+    const train5_real_t _t825 = _ms163*_ms264 + _ms311*_ms49;
+    const train5_real_t _t826 = _t104*_t202 + _t203*_t808;
+    const train5_real_t _t827 = _ms327*_t230 + _ms328*_t826;
+    const train5_real_t _t828 = _t112*_t202 + _t203*_t811;
+    const train5_real_t _t829 = _t119*_t202 + _t203*_t813;
+    const train5_real_t _t830 = _ms327*_t828 + _ms328*_t829;
+    const train5_real_t _t831 = _t124*_t202 + _t203*_t816;
+    const train5_real_t _t832 = _t129*_t202 + _t203*_t818;
+    const train5_real_t _t833 = _ms327*_t831 + _ms328*_t832;
+    const train5_real_t _t834 = -_ms254*_t203 + _ms255*_ms259*_ms262;
+    const train5_real_t _t835 = -_ms308*_t203 + _ms309*_t202;
+    const train5_real_t _t836 = _ms327*_t834 + _ms328*_t835;
+    const train5_real_t _t837 = _ms162*_ms265 + _ms312*_ms48;
+    const train5_real_t _t838 = _ms163*_ms265 + _ms312*_ms49;
+    const train5_real_t _t839 = _ms313*_t98 - _ms314*_t97 + _t150*_t97 + _t151*_t98;
+    const train5_real_t _t840 = _t152*_t204 + _t205*_t839;
+    const train5_real_t _t841 = _ms327*_t237 + _ms328*_t840;
+    const train5_real_t _t842 = _t156*_t97 + _t157*_t98;
+    const train5_real_t _t843 = _t158*_t204 + _t205*_t842;
+    const train5_real_t _t844 = _t161*_t97 + _t162*_t98;
+    const train5_real_t _t845 = _t163*_t204 + _t205*_t844;
+    const train5_real_t _t846 = _ms327*_t843 + _ms328*_t845;
+    const train5_real_t _t847 = _t166*_t97 + _t167*_t98;
+    const train5_real_t _t848 = _t168*_t204 + _t205*_t847;
+    const train5_real_t _t849 = _t171*_t97 + _t172*_t98;
+    const train5_real_t _t850 = _t173*_t204 + _t205*_t849;
+    const train5_real_t _t851 = _ms327*_t848 + _ms328*_t850;
+    const train5_real_t _t852 = _t176*_t97 + _t177*_t98;
+    const train5_real_t _t853 = _t178*_t204 + _t205*_t852;
+    const train5_real_t _t854 = _t181*_t97 + _t182*_t98;
+    const train5_real_t _t855 = _t183*_t204 + _t205*_t854;
+    const train5_real_t _t856 = _ms327*_t853 + _ms328*_t855;
+    const train5_real_t _t857 = -_ms268*_t205 + _ms269*_ms271*_ms276;
+    const train5_real_t _t858 = -_ms315*_t205 + _ms316*_t204;
+    const train5_real_t _t859 = _ms327*_t857 + _ms328*_t858;
+    const train5_real_t _t860 = _ms162*_ms278 + _ms318*_ms48;
+    const train5_real_t _t861 = _ms163*_ms278 + _ms318*_ms49;
+    const train5_real_t _t862 = _t152*_t206 + _t207*_t839;
+    const train5_real_t _t863 = _ms327*_t235 + _ms328*_t862;
+    const train5_real_t _t864 = _t158*_t206 + _t207*_t842;
+    const train5_real_t _t865 = _t163*_t206 + _t207*_t844;
+    const train5_real_t _t866 = _ms327*_t864 + _ms328*_t865;
+    const train5_real_t _t867 = _t168*_t206 + _t207*_t847;
+    const train5_real_t _t868 = _t173*_t206 + _t207*_t849;
+    const train5_real_t _t869 = _ms327*_t867 + _ms328*_t868;
+    const train5_real_t _t870 = _t178*_t206 + _t207*_t852;
+    const train5_real_t _t871 = _t183*_t206 + _t207*_t854;
+    const train5_real_t _t872 = _ms327*_t870 + _ms328*_t871;
+    const train5_real_t _t873 = -_ms268*_t207 + _ms269*_ms273*_ms276;
+    const train5_real_t _t874 = -_ms315*_t207 + _ms316*_t206;
+    const train5_real_t _t875 = _ms327*_t873 + _ms328*_t874;
+    const train5_real_t _t876 = _ms162*_ms279 + _ms319*_ms48;
+    const train5_real_t _t877 = _ms163*_ms279 + _ms319*_ms49;
+    const train5_real_t _t878 = _ms320*_t146 - _ms321*_t145 + _t145*_t735 + _t146*_t736;
+    const train5_real_t _t879 = _t208*_t737 + _t209*_t878;
+    const train5_real_t _t880 = _ms327*_t245 + _ms328*_t879;
+    const train5_real_t _t881 = _t145*_t740 + _t146*_t741;
+    const train5_real_t _t882 = _t208*_t742 + _t209*_t881;
+    const train5_real_t _t883 = _t145*_t744 + _t146*_t745;
+    const train5_real_t _t884 = _t208*_t746 + _t209*_t883;
+    const train5_real_t _t885 = _ms327*_t882 + _ms328*_t884;
+    const train5_real_t _t886 = _t145*_t749 + _t146*_t750;
+    const train5_real_t _t887 = _t208*_t751 + _t209*_t886;
+    const train5_real_t _t888 = _t145*_t753 + _t146*_t754;
+    const train5_real_t _t889 = _t208*_t755 + _t209*_t888;
+    const train5_real_t _t890 = _ms327*_t887 + _ms328*_t889;
+    const train5_real_t _t891 = _t145*_t758 + _t146*_t759;
+    const train5_real_t _t892 = _t208*_t760 + _t209*_t891;
+    const train5_real_t _t893 = _t145*_t762 + _t146*_t763;
+    const train5_real_t _t894 = _t208*_t764 + _t209*_t893;
+    const train5_real_t _t895 = _ms327*_t892 + _ms328*_t894;
+    const train5_real_t _t896 = _t145*_t767 + _t146*_t768;
+    const train5_real_t _t897 = _t208*_t769 + _t209*_t896;
+    const train5_real_t _t898 = _t145*_t771 + _t146*_t772;
+    const train5_real_t _t899 = _t208*_t773 + _t209*_t898;
+    const train5_real_t _t900 = _ms327*_t897 + _ms328*_t899;
+    const train5_real_t _t901 = -_ms282*_t209 + _ms283*_ms285*_ms290;
+    const train5_real_t _t902 = -_ms322*_t209 + _ms323*_t208;
+    const train5_real_t _t903 = _ms327*_t901 + _ms328*_t902;
+    const train5_real_t _t904 = _ms162*_ms292 + _ms325*_ms48;
+    const train5_real_t _t905 = _ms163*_ms292 + _ms325*_ms49;
+    const train5_real_t _t906 = _t210*_t737 + _t211*_t878;
+    const train5_real_t _t907 = _ms327*_t243 + _ms328*_t906;
+    const train5_real_t _t908 = _t210*_t742 + _t211*_t881;
+    const train5_real_t _t909 = _t210*_t746 + _t211*_t883;
+    const train5_real_t _t910 = _ms327*_t908 + _ms328*_t909;
+    const train5_real_t _t911 = _t210*_t751 + _t211*_t886;
+    const train5_real_t _t912 = _t210*_t755 + _t211*_t888;
+    const train5_real_t _t913 = _ms327*_t911 + _ms328*_t912;
+    const train5_real_t _t914 = _t210*_t760 + _t211*_t891;
+    const train5_real_t _t915 = _t210*_t764 + _t211*_t893;
+    const train5_real_t _t916 = _ms327*_t914 + _ms328*_t915;
+    const train5_real_t _t917 = _t210*_t769 + _t211*_t896;
+    const train5_real_t _t918 = _t210*_t773 + _t211*_t898;
+    const train5_real_t _t919 = _ms327*_t917 + _ms328*_t918;
+    const train5_real_t _t920 = -_ms282*_t211 + _ms283*_ms287*_ms290;
+    const train5_real_t _t921 = -_ms322*_t211 + _ms323*_t210;
+    const train5_real_t _t922 = _ms327*_t920 + _ms328*_t921;
+    const train5_real_t _t923 = _ms162*_ms293 + _ms326*_ms48;
+    const train5_real_t _t924 = _ms163*_ms293 + _ms326*_ms49;
+    const train5_real_t _t925 = _ms429*_t71 + _t212 + _t271;
+    const train5_real_t _t926 = _ms433*_t93 + _t213 + _t925;
+    const train5_real_t _t927 = _ms437*_t141 + _t214 + _t926;
+    const train5_real_t _t928 = _ms431*_t71 - _t215 + _t272;
+    const train5_real_t _t929 = _ms435*_t93 - _t216 + _t928;
+    const train5_real_t _t930 = _ms439*_t141 - _t217 + _t929;
+    const train5_real_t _t931 = _ms429*_t81 + _t218 + _t273;
+    const train5_real_t _t932 = _ms433*_t105 + _t219 + _t931;
+    const train5_real_t _t933 = _ms437*_t153 + _t220 + _t932;
+    const train5_real_t _t934 = _ms431*_t81 - _t221 + _t274;
+    const train5_real_t _t935 = _ms435*_t105 - _t222 + _t934;
+    const train5_real_t _t936 = _ms439*_t153 - _t223 + _t935;
+    const train5_real_t _t937 = _ms304*_t228 + _ms305*_t226 + _ms311*_t233 + _ms312*_t231
+            + _ms318*_t238 + _ms319*_t236 + _ms325*_t246 + _ms326*_t244 + _t15*_t798 + _t16*_t788
+            + _t17*_t826 + _t18*_t809 + _t19*_t862 + _t20*_t840 + _t21*_t906 + _t22*_t879 + _t248
+            + _t251 + _t253 + _t256;
+    const train5_real_t _t938 = _t261 + _t937;
+    const train5_real_t _t939 = _t262 + _t263*_t71 + _t265*_t81 - _t266 + _t275 + _t938;
+    const train5_real_t _t940 = _t105*_t284 + _t276*_t931 + _t277*_t934 + _t278*_t925 + _t279*_t928
+            + _t280 - _t281 + _t282*_t93 + _t939;
+    const train5_real_t _t941 = _t141*_t291 + _t153*_t293 + _t285*_t932 + _t286*_t935 + _t287*_t926
+            + _t288*_t929 + _t289 - _t290 + _t940;
+    const train5_real_t _t942 = _t294*_t933 + _t295*_t936 + _t296*_t927 + _t297*_t930 + _t298
+            - _t299 + _t300*_t734 + _t302*_t738 + _t941;
+    const train5_real_t _t943 = _t304*_t798 + _t306*_t788 + _t308*_t826 + _t310*_t809 + _t312*_t862
+            + _t314*_t840 + _t316*_t906 + _t318*_t879 + _t320 + _t322;
+    const train5_real_t _t944 = _t323 + _t943;
+    const train5_real_t _t945 = _t324*_t81 - _t327 + _t329 + _t330 + _t944;
+    const train5_real_t _t946 = _t105*_t338 - _t333 + _t334*_t931 + _t336 + _t337*_t934 + _t945;
+    const train5_real_t _t947 = _t153*_t346 - _t341 + _t342*_t932 + _t344 + _t345*_t935 + _t946;
+    const train5_real_t _t948 = -_t349 + _t350*_t933 + _t352 + _t353*_t936 + _t354*_t738 + _t947;
+    const train5_real_t _t949 = _t355*_t739;
+    const train5_real_t _t950 = -_t358 + _t360*_t55 + _t407;
+    const train5_real_t _t951 = -_t362 + _t364*_t76 + _t950;
+    const train5_real_t _t952 = -_t366 + _t368*_t98 + _t951;
+    const train5_real_t _t953 = -_ms333*_t145*_t952 - _t146*_t380 + _t374*_t739 - _t383;
+    const train5_real_t _t954 = _t367*_t384;
+    const train5_real_t _t955 = _t386 + _t387*_t954;
+    const train5_real_t _t956 = _t363*_t388;
+    const train5_real_t _t957 = _t390 + _t391*_t956;
+    const train5_real_t _t958 = _t359*_t392;
+    const train5_real_t _t959 = _t394 + _t395*_t958;
+    const train5_real_t _t960 = _t359*_t406 - _t410 - _t413;
+    const train5_real_t _t961 = -_t420 + _t423 - _t424 - _t960;
+    const train5_real_t _t962 = _t61*_t961;
+    const train5_real_t _t963 = _t393*_t962 + _t422 - _t425 + _t959;
+    const train5_real_t _t964 = -_ms331*_t75*_t950 + _t363*_t428 - _t429*_t76 - _t432;
+    const train5_real_t _t965 = -_t433 + TRAIN5_LIT(0.85)*_t55*_t958;
+    const train5_real_t _t966 = -_t395*_t962 + _t419 - _t434 + _t965;
+    const train5_real_t _t967 = -_t435 - _t75*_t966 + _t76*_t963 - _t964;
+    const train5_real_t _t968 = _t77*_t967;
+    const train5_real_t _t969 = _t389*_t968 - _t436 + _t957 + _t963;
+    const train5_real_t _t970 = -_ms332*_t951*_t97 + _t367*_t439 - _t440*_t98 - _t443;
+    const train5_real_t _t971 = -_t444 + TRAIN5_LIT(0.85)*_t76*_t956;
+    const train5_real_t _t972 = -_t391*_t968 - _t445 + _t966 + _t971;
+    const train5_real_t _t973 = -_t446 + _t969*_t98 - _t97*_t972 - _t970;
+    const train5_real_t _t974 = _t973*_t99;
+    const train5_real_t _t975 = _t385*_t974 - _t447 + _t955 + _t969;
+    const train5_real_t _t976 = -_t448 + TRAIN5_LIT(0.85)*_t954*_t98;
+    const train5_real_t _t977 = -_t387*_t974 - _t449 + _t972 + _t976;
+    const train5_real_t _t978 = -_t145*_t977 + _t146*_t975 - _t450 - _t953;
+    const train5_real_t _t979 = _t147*_t978;
+    const train5_real_t _t980 = _ms429*_t962 - _ms431*_t958 + _t451 + _t489;
+    const train5_real_t _t981 = _ms433*_t968 - _ms435*_t956 + _t452 + _t980;
+    const train5_real_t _t982 = _ms437*_t974 - _ms439*_t954 + _t453 + _t981;
+    const train5_real_t _t983 = _ms429*_t958 + _ms431*_t962 + _t454 - _t455 + _t491;
+    const train5_real_t _t984 = _ms433*_t956 + _ms435*_t968 + _t456 - _t457 + _t983;
+    const train5_real_t _t985 = _ms437*_t954 + _ms439*_t974 + _t458 - _t459 + _t984;
+    const train5_real_t _t986 = _t359*_t461 - _t462 - _t463;
+    const train5_real_t _t987 = _t464 + _t465 - _t986;
+    const train5_real_t _t988 = _t195*_t961 + _t196*_t987;
+    const train5_real_t _t989 = _t198*_t961 + _t199*_t987;
+    const train5_real_t _t990 = _ms331*_t76*_t950 + _t363*_t466 - _t429*_t75 - _t467;
+    const train5_real_t _t991 = _t468 + _t75*_t963 + _t76*_t966 - _t990;
+    const train5_real_t _t992 = _t200*_t967 + _t201*_t991;
+    const train5_real_t _t993 = _t202*_t967 + _t203*_t991;
+    const train5_real_t _t994 = _ms332*_t951*_t98 + _t367*_t469 - _t440*_t97 - _t470;
+    const train5_real_t _t995 = _t471 + _t969*_t97 + _t972*_t98 - _t994;
+    const train5_real_t _t996 = _t204*_t973 + _t205*_t995;
+    const train5_real_t _t997 = _t206*_t973 + _t207*_t995;
+    const train5_real_t _t998 = _ms333*_t146*_t952 - _t145*_t380 + _t472*_t739 - _t473;
+    const train5_real_t _t999 = _t145*_t975 + _t146*_t977 + _t474 - _t998;
+    const train5_real_t _t1000 = _t208*_t978 + _t209*_t999;
+    const train5_real_t _t1001 = _t210*_t978 + _t211*_t999;
+    const train5_real_t _t1002 = _ms386*_t228 + _ms387*_t226 + _ms395*_t233 + _ms396*_t231
+            + _ms404*_t238 + _ms405*_t236 + _ms413*_t246 + _ms414*_t244 + _t1000*_t22 + _t1001*_t21
+            + _t15*_t989 + _t16*_t988 + _t17*_t993 + _t18*_t992 + _t19*_t997 + _t20*_t996 + _t478
+            + _t479 + _t481 + _t482;
+    const train5_real_t _t1003 = _t1002 - _t483 + _t484 + _t485 - _t486 + _t488;
+    const train5_real_t _t1004 = _t1003 + _t265*_t962 + _t490 + _t492 + _t494 + _t496 + _t499*_t958
+            + _t500 + _t501*_t71 - _t502;
+    const train5_real_t _t1005 = _t1004 + _t276*_t980 + _t277*_t983 + _t284*_t968 + _t503*_t928
+            + _t504*_t925 + _t507*_t956 + _t508 + _t509*_t93 - _t510;
+    const train5_real_t _t1006 = _t1005 + _t141*_t517 + _t285*_t981 + _t286*_t984 + _t293*_t974
+            + _t511*_t929 + _t512*_t926 + _t515*_t954 + _t516 - _t518;
+    const train5_real_t _t1007 = _t1006 + _t294*_t982 + _t295*_t985 + _t302*_t979 + _t519*_t930
+            + _t520*_t927 + _t523*_t949 + _t524 + _t525*_t734 - _t526;
+    const train5_real_t _t1008 = _t1000*_t317 + _t1001*_t315 + _t303*_t989 + _t305*_t988
+            + _t307*_t993 + _t309*_t992 + _t311*_t997 + _t313*_t996 + _t527*_t798 + _t528*_t788
+            + _t529*_t826 + _t530*_t809 + _t531*_t862 + _t532*_t840 + _t533*_t906 + _t534*_t879
+            + _t535 + _t536 + _t537 + _t538;
+    const train5_real_t _t1009 = _t1008 - _t539 + _t540 + _t541 - _t542 + _t543;
+    const train5_real_t _t1010 = _t1009 + _t263*_t962 + _t501*_t81 + _t544 + _t545 + _t546 + _t547
+            + _t548*_t958 + _t549 - _t550;
+    const train5_real_t _t1011 = _t1010 + _t105*_t509 + _t278*_t980 + _t279*_t983 + _t282*_t968
+            + _t503*_t934 + _t504*_t931 + _t551*_t956 + _t552 - _t553;
+    const train5_real_t _t1012 = _t1011 + _t153*_t517 + _t287*_t981 + _t288*_t984 + _t291*_t974
+            + _t511*_t935 + _t512*_t932 + _t554*_t954 + _t555 - _t556;
+    const train5_real_t _t1013 = _t1012 + _t296*_t982 + _t297*_t985 + _t300*_t979 + _t519*_t936
+            + _t520*_t933 + _t525*_t738 + _t557*_t949 + _t558 - _t559;
+    const train5_real_t _t1014 = _t225*_t560 + _t227*_t561 + _t230*_t562 + _t232*_t563 + _t235*_t564
+            + _t237*_t565 + _t243*_t566 + _t245*_t567 + _t568 + _t569;
+    const train5_real_t _t1015 = _t1014 + _t571;
+    const train5_real_t _t1016 = _t1015 - _t573 + _t574 + _t575 + _t576 + _t577*_t71;
+    const train5_real_t _t1017 = _t1016 - _t579 + _t580*_t925 + _t581 + _t582*_t928 + _t583*_t93;
+    const train5_real_t _t1018 = _t1017 + _t141*_t589 - _t585 + _t586*_t926 + _t587 + _t588*_t929;
+    const train5_real_t _t1019 = _t1018 - _t591 + _t592*_t927 + _t593 + _t594*_t930 + _t595*_t734;
+    const train5_real_t _t1020 = _t1019*_t618 - _t605*_t942 + _t611*_t948;
+    const train5_real_t _t1021 = -_t1020*_t621;
+    const train5_real_t _t1022 = -_t1007*_t626 + _t1013*_t623 + _t1021*_t629 + _t625*_t948
+            - _t628*_t942;
+    const train5_real_t _t1023 = _t1007*_t623 - _t1013*_t630 + _t1019*_t628 + _t1021*_t631
+            - _t625*_t942;
+    const train5_real_t _t1024 = _t0*_t1022 + _t1023*_t596;
+    const train5_real_t _t1025 = _ms429*_t109 - _t271;
+    const train5_real_t _t1026 = _ms433*_t113 + _t1025;
+    const train5_real_t _t1027 = _ms437*_t159 + _t1026;
+    const train5_real_t _t1028 = _ms431*_t109 - _t272;
+    const train5_real_t _t1029 = _ms435*_t113 + _t1028;
+    const train5_real_t _t1030 = _ms439*_t159 + _t1029;
+    const train5_real_t _t1031 = _ms429*_t116 - _t273;
+    const train5_real_t _t1032 = _ms433*_t120 + _t1031;
+    const train5_real_t _t1033 = _ms437*_t164 + _t1032;
+    const train5_real_t _t1034 = _ms431*_t116 - _t274;
+    const train5_real_t _t1035 = _ms435*_t120 + _t1034;
+    const train5_real_t _t1036 = _ms439*_t164 + _t1035;
+    const train5_real_t _t1037 = _t15*_t801 + _t16*_t791 + _t17*_t829 + _t18*_t814 + _t19*_t865
+            + _t20*_t845 + _t21*_t909 + _t22*_t884 - _t248 - _t251 - _t253 - _t256 + _t303*_t800
+            + _t305*_t790 + _t307*_t828 + _t309*_t812 + _t311*_t864 + _t313*_t843 + _t315*_t908
+            + _t317*_t882;
+    const train5_real_t _t1038 = _t1037 - _t261;
+    const train5_real_t _t1039 = _t1038 + _t109*_t263 + _t116*_t265 - _t275;
+    const train5_real_t _t1040 = _t1025*_t278 + _t1028*_t279 + _t1031*_t276 + _t1034*_t277 + _t1039
+            + _t113*_t282 + _t120*_t284;
+    const train5_real_t _t1041 = _t1026*_t287 + _t1029*_t288 + _t1032*_t285 + _t1035*_t286 + _t1040
+            + _t159*_t291 + _t164*_t293;
+    const train5_real_t _t1042 = _t1027*_t296 + _t1030*_t297 + _t1033*_t294 + _t1036*_t295 + _t1041
+            + _t300*_t743 + _t302*_t747;
+    const train5_real_t _t1043 = _t304*_t801 + _t306*_t791 + _t308*_t829 + _t310*_t814 + _t312*_t865
+            + _t314*_t845 + _t316*_t909 + _t318*_t884 - _t320 - _t322;
+    const train5_real_t _t1044 = _t1043 - _t323;
+    const train5_real_t _t1045 = _t1044 + _t116*_t324 - _t330;
+    const train5_real_t _t1046 = _t1031*_t334 + _t1034*_t337 + _t1045 + _t120*_t338;
+    const train5_real_t _t1047 = _t1032*_t342 + _t1035*_t345 + _t1046 + _t164*_t346;
+    const train5_real_t _t1048 = _t1033*_t350 + _t1036*_t353 + _t1047 + _t354*_t747;
+    const train5_real_t _t1049 = _t355*_t748;
+    const train5_real_t _t1050 = -_t145*_t638 - _t146*_t642 + _t374*_t748;
+    const train5_real_t _t1051 = _t384*_t632;
+    const train5_real_t _t1052 = _t1051*_t387;
+    const train5_real_t _t1053 = _t388*_t633;
+    const train5_real_t _t1054 = _t1053*_t391;
+    const train5_real_t _t1055 = _t392*_t634;
+    const train5_real_t _t1056 = _t1055*_t395;
+    const train5_real_t _t1057 = _t406*_t634 + _t410;
+    const train5_real_t _t1058 = -_t1057 + _t420 - _t423;
+    const train5_real_t _t1059 = _t1058*_t61;
+    const train5_real_t _t1060 = _t1056 + _t1059*_t393 - _t422;
+    const train5_real_t _t1061 = _t428*_t633 - _t643*_t75 - _t644*_t76;
+    const train5_real_t _t1062 = _t1055*_t393;
+    const train5_real_t _t1063 = -_t1059*_t395 + _t1062 - _t419;
+    const train5_real_t _t1064 = _t1060*_t76 - _t1061 - _t1063*_t75;
+    const train5_real_t _t1065 = _t1064*_t77;
+    const train5_real_t _t1066 = _t1054 + _t1060 + _t1065*_t389;
+    const train5_real_t _t1067 = _t439*_t632 - _t645*_t97 - _t646*_t98;
+    const train5_real_t _t1068 = _t1053*_t389;
+    const train5_real_t _t1069 = _t1063 - _t1065*_t391 + _t1068;
+    const train5_real_t _t1070 = _t1066*_t98 - _t1067 - _t1069*_t97;
+    const train5_real_t _t1071 = _t1070*_t99;
+    const train5_real_t _t1072 = _t1052 + _t1066 + _t1071*_t385;
+    const train5_real_t _t1073 = _t1051*_t385;
+    const train5_real_t _t1074 = _t1069 - _t1071*_t387 + _t1073;
+    const train5_real_t _t1075 = -_t1050 + _t1072*_t146 - _t1074*_t145;
+    const train5_real_t _t1076 = _t1075*_t147;
+    const train5_real_t _t1077 = _ms429*_t1059 - _ms431*_t1055 - _t489;
+    const train5_real_t _t1078 = _ms433*_t1065 - _ms435*_t1053 + _t1077;
+    const train5_real_t _t1079 = _ms437*_t1071 - _ms439*_t1051 + _t1078;
+    const train5_real_t _t1080 = _ms429*_t1055 + _ms431*_t1059 - _t491;
+    const train5_real_t _t1081 = _ms433*_t1053 + _ms435*_t1065 + _t1080;
+    const train5_real_t _t1082 = _ms437*_t1051 + _ms439*_t1071 + _t1081;
+    const train5_real_t _t1083 = _t461*_t634 + _t462;
+    const train5_real_t _t1084 = -_t1083 - _t464;
+    const train5_real_t _t1085 = _t1058*_t195 + _t1084*_t196;
+    const train5_real_t _t1086 = _t1058*_t198 + _t1084*_t199;
+    const train5_real_t _t1087 = _t466*_t633 + _t643*_t76 - _t644*_t75;
+    const train5_real_t _t1088 = _t1060*_t75 + _t1063*_t76 - _t1087;
+    const train5_real_t _t1089 = _t1064*_t200 + _t1088*_t201;
+    const train5_real_t _t1090 = _t1064*_t202 + _t1088*_t203;
+    const train5_real_t _t1091 = _t469*_t632 + _t645*_t98 - _t646*_t97;
+    const train5_real_t _t1092 = _t1066*_t97 + _t1069*_t98 - _t1091;
+    const train5_real_t _t1093 = _t1070*_t204 + _t1092*_t205;
+    const train5_real_t _t1094 = _t1070*_t206 + _t1092*_t207;
+    const train5_real_t _t1095 = -_t145*_t642 + _t146*_t638 + _t472*_t748;
+    const train5_real_t _t1096 = _t1072*_t145 + _t1074*_t146 - _t1095;
+    const train5_real_t _t1097 = _t1075*_t208 + _t1096*_t209;
+    const train5_real_t _t1098 = _t1075*_t210 + _t1096*_t211;
+    const train5_real_t _t1099 = _t1085*_t16 + _t1086*_t15 + _t1089*_t18 + _t1090*_t17 + _t1093*_t20
+            + _t1094*_t19 + _t1097*_t22 + _t1098*_t21 - _t478 - _t479 - _t481 - _t482 + _t527*_t800
+            + _t528*_t790 + _t529*_t828 + _t530*_t812 + _t531*_t864 + _t532*_t843 + _t533*_t908
+            + _t534*_t882;
+    const train5_real_t _t1100 = _t1099 + _t483 - _t484 - _t485 + _t486 - _t488;
+    const train5_real_t _t1101 = _t1055*_t499 + _t1059*_t265 + _t109*_t501 + _t1100 - _t490 - _t492
+            - _t494 - _t496;
+    const train5_real_t _t1102 = _t1025*_t504 + _t1028*_t503 + _t1053*_t507 + _t1065*_t284
+            + _t1077*_t276 + _t1080*_t277 + _t1101 + _t113*_t509;
+    const train5_real_t _t1103 = _t1026*_t512 + _t1029*_t511 + _t1051*_t515 + _t1071*_t293
+            + _t1078*_t285 + _t1081*_t286 + _t1102 + _t159*_t517;
+    const train5_real_t _t1104 = _t1027*_t520 + _t1030*_t519 + _t1049*_t523 + _t1076*_t302
+            + _t1079*_t294 + _t1082*_t295 + _t1103 + _t525*_t743;
+    const train5_real_t _t1105 = _t1085*_t305 + _t1086*_t303 + _t1089*_t309 + _t1090*_t307
+            + _t1093*_t313 + _t1094*_t311 + _t1097*_t317 + _t1098*_t315 + _t527*_t801 + _t528*_t791
+            + _t529*_t829 + _t530*_t814 + _t531*_t865 + _t532*_t845 + _t533*_t909 + _t534*_t884
+            - _t535 - _t536 - _t537 - _t538;
+    const train5_real_t _t1106 = _t1105 + _t539 - _t540 - _t541 + _t542 - _t543;
+    const train5_real_t _t1107 = _t1055*_t548 + _t1059*_t263 + _t1106 + _t116*_t501 - _t544 - _t545
+            - _t546 - _t547;
+    const train5_real_t _t1108 = _t1031*_t504 + _t1034*_t503 + _t1053*_t551 + _t1065*_t282
+            + _t1077*_t278 + _t1080*_t279 + _t1107 + _t120*_t509;
+    const train5_real_t _t1109 = _t1032*_t512 + _t1035*_t511 + _t1051*_t554 + _t1071*_t291
+            + _t1078*_t287 + _t1081*_t288 + _t1108 + _t164*_t517;
+    const train5_real_t _t1110 = _t1033*_t520 + _t1036*_t519 + _t1049*_t557 + _t1076*_t300
+            + _t1079*_t296 + _t1082*_t297 + _t1109 + _t525*_t747;
+    const train5_real_t _t1111 = _t560*_t800 + _t561*_t790 + _t562*_t828 + _t563*_t812 + _t564*_t864
+            + _t565*_t843 + _t566*_t908 + _t567*_t882 - _t568 - _t569;
+    const train5_real_t _t1112 = _t1111 - _t571;
+    const train5_real_t _t1113 = _t109*_t577 + _t1112 - _t574 - _t576;
+    const train5_real_t _t1114 = _t1025*_t580 + _t1028*_t582 + _t1113 + _t113*_t583;
+    const train5_real_t _t1115 = _t1026*_t586 + _t1029*_t588 + _t1114 + _t159*_t589;
+    const train5_real_t _t1116 = _t1027*_t592 + _t1030*_t594 + _t1115 + _t595*_t743;
+    const train5_real_t _t1117 = -_t1042*_t605 + _t1048*_t611 + _t1116*_t618;
+    const train5_real_t _t1118 = -_t1117*_t621;
+    const train5_real_t _t1119 = -_t1042*_t628 + _t1048*_t625 - _t1104*_t626 + _t1110*_t623
+            + _t1118*_t629;
+    const train5_real_t _t1120 = -_t1042*_t625 + _t1104*_t623 - _t1110*_t630 + _t1116*_t628
+            + _t1118*_t631;
+    const train5_real_t _t1121 = _t0*_t1119 + _t1120*_t596;
+    const train5_real_t _t1122 = _ms429*_t84 - _t212;
+    const train5_real_t _t1123 = _ms433*_t125 + _t1122;
+    const train5_real_t _t1124 = _ms437*_t169 + _t1123;
+    const train5_real_t _t1125 = _ms431*_t84 + _t215;
+    const train5_real_t _t1126 = _ms435*_t125 + _t1125;
+    const train5_real_t _t1127 = _ms439*_t169 + _t1126;
+    const train5_real_t _t1128 = _ms429*_t86 - _t218;
+    const train5_real_t _t1129 = _ms433*_t130 + _t1128;
+    const train5_real_t _t1130 = _ms437*_t174 + _t1129;
+    const train5_real_t _t1131 = _ms431*_t86 + _t221;
+    const train5_real_t _t1132 = _ms435*_t130 + _t1131;
+    const train5_real_t _t1133 = _ms439*_t174 + _t1132;
+    const train5_real_t _t1134 = _t15*_t804 + _t16*_t794 + _t17*_t832 + _t18*_t819 + _t19*_t868
+            + _t20*_t850 + _t21*_t912 + _t22*_t889 + _t303*_t803 + _t305*_t793 + _t307*_t831
+            + _t309*_t817 + _t311*_t867 + _t313*_t848 + _t315*_t911 + _t317*_t887;
+    const train5_real_t _t1135 = _t1134 - _t262 + _t263*_t84 + _t265*_t86 + _t266;
+    const train5_real_t _t1136 = _t1122*_t278 + _t1125*_t279 + _t1128*_t276 + _t1131*_t277 + _t1135
+            + _t125*_t282 + _t130*_t284;
+    const train5_real_t _t1137 = _t1123*_t287 + _t1126*_t288 + _t1129*_t285 + _t1132*_t286 + _t1136
+            + _t169*_t291 + _t174*_t293;
+    const train5_real_t _t1138 = _t1124*_t296 + _t1127*_t297 + _t1130*_t294 + _t1133*_t295 + _t1137
+            + _t300*_t752 + _t302*_t756;
+    const train5_real_t _t1139 = _t304*_t804 + _t306*_t794 + _t308*_t832 + _t310*_t819 + _t312*_t868
+            + _t314*_t850 + _t316*_t912 + _t318*_t889;
+    const train5_real_t _t1140 = _t1139 + _t324*_t86 + _t327 - _t329;
+    const train5_real_t _t1141 = _t1128*_t334 + _t1131*_t337 + _t1140 + _t130*_t338;
+    const train5_real_t _t1142 = _t1129*_t342 + _t1132*_t345 + _t1141 + _t174*_t346;
+    const train5_real_t _t1143 = _t1130*_t350 + _t1133*_t353 + _t1142 + _t354*_t756;
+    const train5_real_t _t1144 = _t355*_t757;
+    const train5_real_t _t1145 = -_t145*_t653 - _t146*_t657 + _t374*_t757;
+    const train5_real_t _t1146 = _t384*_t647;
+    const train5_real_t _t1147 = _t1146*_t387;
+    const train5_real_t _t1148 = _t388*_t648;
+    const train5_real_t _t1149 = _t1148*_t391;
+    const train5_real_t _t1150 = _t392*_t649;
+    const train5_real_t _t1151 = _t1150*_t395 - _t394;
+    const train5_real_t _t1152 = _t406*_t649 + _t413;
+    const train5_real_t _t1153 = -_t1152 + _t424;
+    const train5_real_t _t1154 = _t1153*_t61;
+    const train5_real_t _t1155 = _t1151 + _t1154*_t393 + _t425;
+    const train5_real_t _t1156 = _t428*_t648 - _t658*_t75 - _t659*_t76;
+    const train5_real_t _t1157 = _t1150*_t393 + _t433;
+    const train5_real_t _t1158 = -_t1154*_t395 + _t1157 + _t434;
+    const train5_real_t _t1159 = _t1155*_t76 - _t1156 - _t1158*_t75;
+    const train5_real_t _t1160 = _t1159*_t77;
+    const train5_real_t _t1161 = _t1149 + _t1155 + _t1160*_t389;
+    const train5_real_t _t1162 = _t439*_t647 - _t660*_t97 - _t661*_t98;
+    const train5_real_t _t1163 = _t1148*_t389;
+    const train5_real_t _t1164 = _t1158 - _t1160*_t391 + _t1163;
+    const train5_real_t _t1165 = _t1161*_t98 - _t1162 - _t1164*_t97;
+    const train5_real_t _t1166 = _t1165*_t99;
+    const train5_real_t _t1167 = _t1147 + _t1161 + _t1166*_t385;
+    const train5_real_t _t1168 = _t1146*_t385;
+    const train5_real_t _t1169 = _t1164 - _t1166*_t387 + _t1168;
+    const train5_real_t _t1170 = -_t1145 + _t1167*_t146 - _t1169*_t145;
+    const train5_real_t _t1171 = _t1170*_t147;
+    const train5_real_t _t1172 = _ms429*_t1154 - _ms431*_t1150 - _t451;
+    const train5_real_t _t1173 = _ms433*_t1160 - _ms435*_t1148 + _t1172;
+    const train5_real_t _t1174 = _ms437*_t1166 - _ms439*_t1146 + _t1173;
+    const train5_real_t _t1175 = _ms429*_t1150 + _ms431*_t1154 - _t454 + _t455;
+    const train5_real_t _t1176 = _ms433*_t1148 + _ms435*_t1160 + _t1175;
+    const train5_real_t _t1177 = _ms437*_t1146 + _ms439*_t1166 + _t1176;
+    const train5_real_t _t1178 = _t461*_t649 + _t463;
+    const train5_real_t _t1179 = -_t1178 - _t465;
+    const train5_real_t _t1180 = _t1153*_t195 + _t1179*_t196;
+    const train5_real_t _t1181 = _t1153*_t198 + _t1179*_t199;
+    const train5_real_t _t1182 = _t466*_t648 + _t658*_t76 - _t659*_t75;
+    const train5_real_t _t1183 = _t1155*_t75 + _t1158*_t76 - _t1182;
+    const train5_real_t _t1184 = _t1159*_t200 + _t1183*_t201;
+    const train5_real_t _t1185 = _t1159*_t202 + _t1183*_t203;
+    const train5_real_t _t1186 = _t469*_t647 + _t660*_t98 - _t661*_t97;
+    const train5_real_t _t1187 = _t1161*_t97 + _t1164*_t98 - _t1186;
+    const train5_real_t _t1188 = _t1165*_t204 + _t1187*_t205;
+    const train5_real_t _t1189 = _t1165*_t206 + _t1187*_t207;
+    const train5_real_t _t1190 = -_t145*_t657 + _t146*_t653 + _t472*_t757;
+    const train5_real_t _t1191 = _t1167*_t145 + _t1169*_t146 - _t1190;
+    const train5_real_t _t1192 = _t1170*_t208 + _t1191*_t209;
+    const train5_real_t _t1193 = _t1170*_t210 + _t1191*_t211;
+    const train5_real_t _t1194 = _t1180*_t16 + _t1181*_t15 + _t1184*_t18 + _t1185*_t17 + _t1188*_t20
+            + _t1189*_t19 + _t1192*_t22 + _t1193*_t21 + _t527*_t803 + _t528*_t793 + _t529*_t831
+            + _t530*_t817 + _t531*_t867 + _t532*_t848 + _t533*_t911 + _t534*_t887;
+    const train5_real_t _t1195 = _t1150*_t499 + _t1154*_t265 + _t1194 - _t500 + _t501*_t84 + _t502;
+    const train5_real_t _t1196 = _t1122*_t504 + _t1125*_t503 + _t1148*_t507 + _t1160*_t284
+            + _t1172*_t276 + _t1175*_t277 + _t1195 + _t125*_t509;
+    const train5_real_t _t1197 = _t1123*_t512 + _t1126*_t511 + _t1146*_t515 + _t1166*_t293
+            + _t1173*_t285 + _t1176*_t286 + _t1196 + _t169*_t517;
+    const train5_real_t _t1198 = _t1124*_t520 + _t1127*_t519 + _t1144*_t523 + _t1171*_t302
+            + _t1174*_t294 + _t1177*_t295 + _t1197 + _t525*_t752;
+    const train5_real_t _t1199 = _t1180*_t305 + _t1181*_t303 + _t1184*_t309 + _t1185*_t307
+            + _t1188*_t313 + _t1189*_t311 + _t1192*_t317 + _t1193*_t315 + _t527*_t804 + _t528*_t794
+            + _t529*_t832 + _t530*_t819 + _t531*_t868 + _t532*_t850 + _t533*_t912 + _t534*_t889;
+    const train5_real_t _t1200 = _t1150*_t548 + _t1154*_t263 + _t1199 + _t501*_t86 - _t549 + _t550;
+    const train5_real_t _t1201 = _t1128*_t504 + _t1131*_t503 + _t1148*_t551 + _t1160*_t282
+            + _t1172*_t278 + _t1175*_t279 + _t1200 + _t130*_t509;
+    const train5_real_t _t1202 = _t1129*_t512 + _t1132*_t511 + _t1146*_t554 + _t1166*_t291
+            + _t1173*_t287 + _t1176*_t288 + _t1201 + _t174*_t517;
+    const train5_real_t _t1203 = _t1130*_t520 + _t1133*_t519 + _t1144*_t557 + _t1171*_t300
+            + _t1174*_t296 + _t1177*_t297 + _t1202 + _t525*_t756;
+    const train5_real_t _t1204 = _t560*_t803 + _t561*_t793 + _t562*_t831 + _t563*_t817 + _t564*_t867
+            + _t565*_t848 + _t566*_t911 + _t567*_t887;
+    const train5_real_t _t1205 = _t1204 + _t573 - _t575 + _t577*_t84;
+    const train5_real_t _t1206 = _t1122*_t580 + _t1125*_t582 + _t1205 + _t125*_t583;
+    const train5_real_t _t1207 = _t1123*_t586 + _t1126*_t588 + _t1206 + _t169*_t589;
+    const train5_real_t _t1208 = _t1124*_t592 + _t1127*_t594 + _t1207 + _t595*_t752;
+    const train5_real_t _t1209 = -_t1138*_t605 + _t1143*_t611 + _t1208*_t618;
+    const train5_real_t _t1210 = -_t1209*_t621;
+    const train5_real_t _t1211 = -_t1138*_t628 + _t1143*_t625 - _t1198*_t626 + _t1203*_t623
+            + _t1210*_t629;
+    const train5_real_t _t1212 = -_t1138*_t625 + _t1198*_t623 - _t1203*_t630 + _t1208*_t628
+            + _t1210*_t631;
+    const train5_real_t _t1213 = _t0*_t1211 + _t1212*_t596;
+    const train5_real_t _t1214 = _ms433*_t132 - _t213;
+    const train5_real_t _t1215 = _ms437*_t179 + _t1214;
+    const train5_real_t _t1216 = _ms435*_t132 + _t216;
+    const train5_real_t _t1217 = _ms439*_t179 + _t1216;
+    const train5_real_t _t1218 = _ms433*_t134 - _t219;
+    const train5_real_t _t1219 = _ms437*_t184 + _t1218;
+    const train5_real_t _t1220 = _ms435*_t134 + _t222;
+    const train5_real_t _t1221 = _ms439*_t184 + _t1220;
+    const train5_real_t _t1222 = _t17*_t835 + _t18*_t822 + _t19*_t871 + _t20*_t855 + _t21*_t915
+            + _t22*_t894 + _t307*_t834 + _t309*_t821 + _t311*_t870 + _t313*_t853 + _t315*_t914
+            + _t317*_t892;
+    const train5_real_t _t1223 = _t1222 + _t132*_t282 + _t134*_t284 - _t280 + _t281;
+    const train5_real_t _t1224 = _t1214*_t287 + _t1216*_t288 + _t1218*_t285 + _t1220*_t286 + _t1223
+            + _t179*_t291 + _t184*_t293;
+    const train5_real_t _t1225 = _t1215*_t296 + _t1217*_t297 + _t1219*_t294 + _t1221*_t295 + _t1224
+            + _t300*_t761 + _t302*_t765;
+    const train5_real_t _t1226 = _t308*_t835 + _t310*_t822 + _t312*_t871 + _t314*_t855 + _t316*_t915
+            + _t318*_t894;
+    const train5_real_t _t1227 = _t1226 + _t134*_t338 + _t333 - _t336;
+    const train5_real_t _t1228 = _t1218*_t342 + _t1220*_t345 + _t1227 + _t184*_t346;
+    const train5_real_t _t1229 = _t1219*_t350 + _t1221*_t353 + _t1228 + _t354*_t765;
+    const train5_real_t _t1230 = _t355*_t766;
+    const train5_real_t _t1231 = -_t145*_t666 - _t146*_t669 + _t374*_t766;
+    const train5_real_t _t1232 = _t384*_t662;
+    const train5_real_t _t1233 = _t1232*_t387;
+    const train5_real_t _t1234 = _t388*_t663;
+    const train5_real_t _t1235 = _t1234*_t391 - _t390;
+    const train5_real_t _t1236 = _t428*_t663 + _t432;
+    const train5_real_t _t1237 = -_t1236 + _t435;
+    const train5_real_t _t1238 = _t1237*_t77;
+    const train5_real_t _t1239 = _t1235 + _t1238*_t389 + _t436;
+    const train5_real_t _t1240 = _t439*_t662 - _t670*_t97 - _t671*_t98;
+    const train5_real_t _t1241 = _t1234*_t389 + _t444;
+    const train5_real_t _t1242 = -_t1238*_t391 + _t1241 + _t445;
+    const train5_real_t _t1243 = _t1239*_t98 - _t1240 - _t1242*_t97;
+    const train5_real_t _t1244 = _t1243*_t99;
+    const train5_real_t _t1245 = _t1233 + _t1239 + _t1244*_t385;
+    const train5_real_t _t1246 = _t1232*_t385;
+    const train5_real_t _t1247 = _t1242 - _t1244*_t387 + _t1246;
+    const train5_real_t _t1248 = -_t1231 + _t1245*_t146 - _t1247*_t145;
+    const train5_real_t _t1249 = _t1248*_t147;
+    const train5_real_t _t1250 = _ms433*_t1238 - _ms435*_t1234 - _t452;
+    const train5_real_t _t1251 = _ms437*_t1244 - _ms439*_t1232 + _t1250;
+    const train5_real_t _t1252 = _ms433*_t1234 + _ms435*_t1238 - _t456 + _t457;
+    const train5_real_t _t1253 = _ms437*_t1232 + _ms439*_t1244 + _t1252;
+    const train5_real_t _t1254 = _t466*_t663 + _t467;
+    const train5_real_t _t1255 = -_t1254 - _t468;
+    const train5_real_t _t1256 = _t1237*_t200 + _t1255*_t201;
+    const train5_real_t _t1257 = _t1237*_t202 + _t1255*_t203;
+    const train5_real_t _t1258 = _t469*_t662 + _t670*_t98 - _t671*_t97;
+    const train5_real_t _t1259 = _t1239*_t97 + _t1242*_t98 - _t1258;
+    const train5_real_t _t1260 = _t1243*_t204 + _t1259*_t205;
+    const train5_real_t _t1261 = _t1243*_t206 + _t1259*_t207;
+    const train5_real_t _t1262 = -_t145*_t669 + _t146*_t666 + _t472*_t766;
+    const train5_real_t _t1263 = _t1245*_t145 + _t1247*_t146 - _t1262;
+    const train5_real_t _t1264 = _t1248*_t208 + _t1263*_t209;
+    const train5_real_t _t1265 = _t1248*_t210 + _t1263*_t211;
+    const train5_real_t _t1266 = _t1256*_t18 + _t1257*_t17 + _t1260*_t20 + _t1261*_t19 + _t1264*_t22
+            + _t1265*_t21 + _t529*_t834 + _t530*_t821 + _t531*_t870 + _t532*_t853 + _t533*_t914
+            + _t534*_t892;
+    const train5_real_t _t1267 = _t1234*_t507 + _t1238*_t284 + _t1266 + _t132*_t509 - _t508 + _t510;
+    const train5_real_t _t1268 = _t1214*_t512 + _t1216*_t511 + _t1232*_t515 + _t1244*_t293
+            + _t1250*_t285 + _t1252*_t286 + _t1267 + _t179*_t517;
+    const train5_real_t _t1269 = _t1215*_t520 + _t1217*_t519 + _t1230*_t523 + _t1249*_t302
+            + _t1251*_t294 + _t1253*_t295 + _t1268 + _t525*_t761;
+    const train5_real_t _t1270 = _t1256*_t309 + _t1257*_t307 + _t1260*_t313 + _t1261*_t311
+            + _t1264*_t317 + _t1265*_t315 + _t529*_t835 + _t530*_t822 + _t531*_t871 + _t532*_t855
+            + _t533*_t915 + _t534*_t894;
+    const train5_real_t _t1271 = _t1234*_t551 + _t1238*_t282 + _t1270 + _t134*_t509 - _t552 + _t553;
+    const train5_real_t _t1272 = _t1218*_t512 + _t1220*_t511 + _t1232*_t554 + _t1244*_t291
+            + _t1250*_t287 + _t1252*_t288 + _t1271 + _t184*_t517;
+    const train5_real_t _t1273 = _t1219*_t520 + _t1221*_t519 + _t1230*_t557 + _t1249*_t300
+            + _t1251*_t296 + _t1253*_t297 + _t1272 + _t525*_t765;
+    const train5_real_t _t1274 = _t562*_t834 + _t563*_t821 + _t564*_t870 + _t565*_t853 + _t566*_t914
+            + _t567*_t892;
+    const train5_real_t _t1275 = _t1274 + _t132*_t583 + _t579 - _t581;
+    const train5_real_t _t1276 = _t1214*_t586 + _t1216*_t588 + _t1275 + _t179*_t589;
+    const train5_real_t _t1277 = _t1215*_t592 + _t1217*_t594 + _t1276 + _t595*_t761;
+    const train5_real_t _t1278 = -_t1225*_t605 + _t1229*_t611 + _t1277*_t618;
+    const train5_real_t _t1279 = -_t1278*_t621;
+    const train5_real_t _t1280 = -_t1225*_t628 + _t1229*_t625 - _t1269*_t626 + _t1273*_t623
+            + _t1279*_t629;
+    const train5_real_t _t1281 = -_t1225*_t625 + _t1269*_t623 - _t1273*_t630 + _t1277*_t628
+            + _t1279*_t631;
+    const train5_real_t _t1282 = _t0*_t1280 + _t1281*_t596;
+    const train5_real_t _t1283 = _ms437*_t186 - _t214;
+    const train5_real_t _t1284 = _ms439*_t186 + _t217;
+    const train5_real_t _t1285 = _ms437*_t188 - _t220;
+    const train5_real_t _t1286 = _ms439*_t188 + _t223;
+    const train5_real_t _t1287 = _t19*_t874 + _t20*_t858 + _t21*_t918 + _t22*_t899 + _t311*_t873
+            + _t313*_t857 + _t315*_t917 + _t317*_t897;
+    const train5_real_t _t1288 = _t1287 + _t186*_t291 + _t188*_t293 - _t289 + _t290;
+    const train5_real_t _t1289 = _t1283*_t296 + _t1284*_t297 + _t1285*_t294 + _t1286*_t295 + _t1288
+            + _t300*_t770 + _t302*_t774;
+    const train5_real_t _t1290 = _t312*_t874 + _t314*_t858 + _t316*_t918 + _t318*_t899;
+    const train5_real_t _t1291 = _t1290 + _t188*_t346 + _t341 - _t344;
+    const train5_real_t _t1292 = _t1285*_t350 + _t1286*_t353 + _t1291 + _t354*_t774;
+    const train5_real_t _t1293 = _t355*_t775;
+    const train5_real_t _t1294 = -_t145*_t674 - _t146*_t676 + _t374*_t775;
+    const train5_real_t _t1295 = _t384*_t672;
+    const train5_real_t _t1296 = _t1295*_t387 - _t386;
+    const train5_real_t _t1297 = _t439*_t672 + _t443;
+    const train5_real_t _t1298 = -_t1297 + _t446;
+    const train5_real_t _t1299 = _t1298*_t99;
+    const train5_real_t _t1300 = _t1296 + _t1299*_t385 + _t447;
+    const train5_real_t _t1301 = _t1295*_t385 + _t448;
+    const train5_real_t _t1302 = -_t1299*_t387 + _t1301 + _t449;
+    const train5_real_t _t1303 = -_t1294 + _t1300*_t146 - _t1302*_t145;
+    const train5_real_t _t1304 = _t1303*_t147;
+    const train5_real_t _t1305 = _ms437*_t1299 - _ms439*_t1295 - _t453;
+    const train5_real_t _t1306 = _ms437*_t1295 + _ms439*_t1299 - _t458 + _t459;
+    const train5_real_t _t1307 = _t469*_t672 + _t470;
+    const train5_real_t _t1308 = -_t1307 - _t471;
+    const train5_real_t _t1309 = _t1298*_t204 + _t1308*_t205;
+    const train5_real_t _t1310 = _t1298*_t206 + _t1308*_t207;
+    const train5_real_t _t1311 = -_t145*_t676 + _t146*_t674 + _t472*_t775;
+    const train5_real_t _t1312 = _t1300*_t145 + _t1302*_t146 - _t1311;
+    const train5_real_t _t1313 = _t1303*_t208 + _t1312*_t209;
+    const train5_real_t _t1314 = _t1303*_t210 + _t1312*_t211;
+    const train5_real_t _t1315 = _t1309*_t20 + _t1310*_t19 + _t1313*_t22 + _t1314*_t21 + _t531*_t873
+            + _t532*_t857 + _t533*_t917 + _t534*_t897;
+    const train5_real_t _t1316 = _t1295*_t515 + _t1299*_t293 + _t1315 + _t186*_t517 - _t516 + _t518;
+    const train5_real_t _t1317 = _t1283*_t520 + _t1284*_t519 + _t1293*_t523 + _t1304*_t302
+            + _t1305*_t294 + _t1306*_t295 + _t1316 + _t525*_t770;
+    const train5_real_t _t1318 = _t1309*_t313 + _t1310*_t311 + _t1313*_t317 + _t1314*_t315
+            + _t531*_t874 + _t532*_t858 + _t533*_t918 + _t534*_t899;
+    const train5_real_t _t1319 = _t1295*_t554 + _t1299*_t291 + _t1318 + _t188*_t517 - _t555 + _t556;
+    const train5_real_t _t1320 = _t1285*_t520 + _t1286*_t519 + _t1293*_t557 + _t1304*_t300
+            + _t1305*_t296 + _t1306*_t297 + _t1319 + _t525*_t774;
+    const train5_real_t _t1321 = _t564*_t873 + _t565*_t857 + _t566*_t917 + _t567*_t897;
+    const train5_real_t _t1322 = _t1321 + _t186*_t589 + _t585 - _t587;
+    const train5_real_t _t1323 = _t1283*_t592 + _t1284*_t594 + _t1322 + _t595*_t770;
+    const train5_real_t _t1324 = -_t1289*_t605 + _t1292*_t611 + _t1323*_t618;
+    const train5_real_t _t1325 = -_t1324*_t621;
+    const train5_real_t _t1326 = -_t1289*_t628 + _t1292*_t625 - _t1317*_t626 + _t1320*_t623
+            + _t1325*_t629;
+    const train5_real_t _t1327 = -_t1289*_t625 + _t1317*_t623 - _t1320*_t630 + _t1323*_t628
+            + _t1325*_t631;
+    const train5_real_t _t1328 = _t0*_t1326 + _t1327*_t596;
+    const train5_real_t _t1329 = _t21*_t921 + _t22*_t902 + _t315*_t920 + _t317*_t901;
+    const train5_real_t _t1330 = _t1329 - _t298 + _t299 + _t300*_t776 + _t302*_t777;
+    const train5_real_t _t1331 = _t316*_t921 + _t318*_t902;
+    const train5_real_t _t1332 = _t1331 + _t349 - _t352 + _t354*_t777;
+    const train5_real_t _t1333 = _t355*_t778;
+    const train5_real_t _t1334 = _t374*_t778 + _t383;
+    const train5_real_t _t1335 = -_t1334 + _t450;
+    const train5_real_t _t1336 = _t1335*_t147;
+    const train5_real_t _t1337 = _t472*_t778 + _t473;
+    const train5_real_t _t1338 = -_t1337 - _t474;
+    const train5_real_t _t1339 = _t1335*_t208 + _t1338*_t209;
+    const train5_real_t _t1340 = _t1335*_t210 + _t1338*_t211;
+    const train5_real_t _t1341 = _t1339*_t22 + _t1340*_t21 + _t533*_t920 + _t534*_t901;
+    const train5_real_t _t1342 = _t1333*_t523 + _t1336*_t302 + _t1341 - _t524 + _t525*_t776 + _t526;
+    const train5_real_t _t1343 = _t1339*_t317 + _t1340*_t315 + _t533*_t921 + _t534*_t902;
+    const train5_real_t _t1344 = _t1333*_t557 + _t1336*_t300 + _t1343 + _t525*_t777 - _t558 + _t559;
+    const train5_real_t _t1345 = _t566*_t920 + _t567*_t901;
+    const train5_real_t _t1346 = _t1345 + _t591 - _t593 + _t595*_t776;
+    const train5_real_t _t1347 = -_t1330*_t605 + _t1332*_t611 + _t1346*_t618;
+    const train5_real_t _t1348 = -_t1347*_t621;
+    const train5_real_t _t1349 = -_t1330*_t628 + _t1332*_t625 - _t1342*_t626 + _t1344*_t623
+            + _t1348*_t629;
+    const train5_real_t _t1350 = -_t1330*_t625 + _t1342*_t623 - _t1344*_t630 + _t1346*_t628
+            + _t1348*_t631;
+    const train5_real_t _t1351 = _t0*_t1349 + _t1350*_t596;
+    const train5_real_t _t1352 = _t355*_t779;
+    const train5_real_t _t1353 = -_t145*_t685 - _t146*_t691 + _t374*_t779;
+    const train5_real_t _t1354 = _t384*_t677;
+    const train5_real_t _t1355 = _t1354*_t387;
+    const train5_real_t _t1356 = _t388*_t678;
+    const train5_real_t _t1357 = _t1356*_t391;
+    const train5_real_t _t1358 = _t392*_t679;
+    const train5_real_t _t1359 = _t1358*_t395;
+    const train5_real_t _t1360 = _ms48*_t692;
+    const train5_real_t _t1361 = TRAIN5_LIT(0.3)*_t1360;
+    const train5_real_t _t1362 = _t396*_t680;
+    const train5_real_t _t1363 = _t1362*_t398;
+    const train5_real_t _t1364 = -_ms162*_ms328 - _ms327*_ms48;
+    const train5_real_t _t1365 = -_t1364*_t693;
+    const train5_real_t _t1366 = -_ms162*_t695 + _t403*_t680 - _t686*_t694;
+    const train5_real_t _t1367 = _t1361*_t52 - _t1365*_t50 - _t1366;
+    const train5_real_t _t1368 = _t1367*_t47;
+    const train5_real_t _t1369 = _t1361 + _t1363 + _t1368*_t397;
+    const train5_real_t _t1370 = _t406*_t679 - _t54*_t696 - _t55*_t697;
+    const train5_real_t _t1371 = _t1362*_t397;
+    const train5_real_t _t1372 = _t1365 - _t1368*_t398 + _t1371;
+    const train5_real_t _t1373 = _t1369*_t55 - _t1370 - _t1372*_t54;
+    const train5_real_t _t1374 = _t1373*_t61;
+    const train5_real_t _t1375 = _t1359 + _t1369 + _t1374*_t393;
+    const train5_real_t _t1376 = _t428*_t678 - _t698*_t75 - _t699*_t76;
+    const train5_real_t _t1377 = _t1358*_t393;
+    const train5_real_t _t1378 = _t1372 - _t1374*_t395 + _t1377;
+    const train5_real_t _t1379 = _t1375*_t76 - _t1376 - _t1378*_t75;
+    const train5_real_t _t1380 = _t1379*_t77;
+    const train5_real_t _t1381 = _t1357 + _t1375 + _t1380*_t389;
+    const train5_real_t _t1382 = _t439*_t677 - _t700*_t97 - _t701*_t98;
+    const train5_real_t _t1383 = _t1356*_t389;
+    const train5_real_t _t1384 = _t1378 - _t1380*_t391 + _t1383;
+    const train5_real_t _t1385 = _t1381*_t98 - _t1382 - _t1384*_t97;
+    const train5_real_t _t1386 = _t1385*_t99;
+    const train5_real_t _t1387 = _t1355 + _t1381 + _t1386*_t385;
+    const train5_real_t _t1388 = _t1354*_t385;
+    const train5_real_t _t1389 = _t1384 - _t1386*_t387 + _t1388;
+    const train5_real_t _t1390 = -_t1353 + _t1387*_t146 - _t1389*_t145;
+    const train5_real_t _t1391 = _t1390*_t147;
+    const train5_real_t _t1392 = _ms425*_t1368 - _ms427*_t1362 + _t1361;
+    const train5_real_t _t1393 = _ms429*_t1374 - _ms431*_t1358 + _t1392;
+    const train5_real_t _t1394 = _ms433*_t1380 - _ms435*_t1356 + _t1393;
+    const train5_real_t _t1395 = _ms437*_t1386 - _ms439*_t1354 + _t1394;
+    const train5_real_t _t1396 = _ms425*_t1362 + _ms427*_t1368 + _t1365;
+    const train5_real_t _t1397 = _ms429*_t1358 + _ms431*_t1374 + _t1396;
+    const train5_real_t _t1398 = _ms433*_t1356 + _ms435*_t1380 + _t1397;
+    const train5_real_t _t1399 = _ms437*_t1354 + _ms439*_t1386 + _t1398;
+    const train5_real_t _t1400 = _ms162*_t694 + _t460*_t680 - _t686*_t695;
+    const train5_real_t _t1401 = _t1361*_t50 + _t1365*_t52 - _t1400;
+    const train5_real_t _t1402 = _t1367*_t191 + _t1401*_t190;
+    const train5_real_t _t1403 = _t1367*_t193 + _t1401*_t192;
+    const train5_real_t _t1404 = _t461*_t679 - _t54*_t697 + _t55*_t696;
+    const train5_real_t _t1405 = _t1369*_t54 + _t1372*_t55 - _t1404;
+    const train5_real_t _t1406 = _t1373*_t195 + _t1405*_t196;
+    const train5_real_t _t1407 = _t1373*_t198 + _t1405*_t199;
+    const train5_real_t _t1408 = _t466*_t678 + _t698*_t76 - _t699*_t75;
+    const train5_real_t _t1409 = _t1375*_t75 + _t1378*_t76 - _t1408;
+    const train5_real_t _t1410 = _t1379*_t200 + _t1409*_t201;
+    const train5_real_t _t1411 = _t1379*_t202 + _t1409*_t203;
+    const train5_real_t _t1412 = _t469*_t677 + _t700*_t98 - _t701*_t97;
+    const train5_real_t _t1413 = _t1381*_t97 + _t1384*_t98 - _t1412;
+    const train5_real_t _t1414 = _t1385*_t204 + _t1413*_t205;
+    const train5_real_t _t1415 = _t1385*_t206 + _t1413*_t207;
+    const train5_real_t _t1416 = -_t145*_t691 + _t146*_t685 + _t472*_t779;
+    const train5_real_t _t1417 = _t1387*_t145 + _t1389*_t146 - _t1416;
+    const train5_real_t _t1418 = _t1390*_t208 + _t1417*_t209;
+    const train5_real_t _t1419 = _t1390*_t210 + _t1417*_t211;
+    const train5_real_t _t1420 = _t1402*_t24 + _t1403*_t23 + _t1406*_t16 + _t1407*_t15 + _t1410*_t18
+            + _t1411*_t17 + _t1414*_t20 + _t1415*_t19 + _t1418*_t22 + _t1419*_t21;
+    const train5_real_t _t1421 = K_theta_tractor_x_tractor*_t1360 + _t1420;
+    const train5_real_t _t1422 = -_ms416*_t1362 + _t1361*_t702 + _t1365*_t570 + _t1368*_t259
+            + _t1421;
+    const train5_real_t _t1423 = _t1358*_t499 + _t1374*_t265 + _t1392*_t267 + _t1396*_t268 + _t1422;
+    const train5_real_t _t1424 = _t1356*_t507 + _t1380*_t284 + _t1393*_t276 + _t1397*_t277 + _t1423;
+    const train5_real_t _t1425 = _t1354*_t515 + _t1386*_t293 + _t1394*_t285 + _t1398*_t286 + _t1424;
+    const train5_real_t _t1426 = _t1352*_t523 + _t1391*_t302 + _t1395*_t294 + _t1399*_t295 + _t1425;
+    const train5_real_t _t1427 = _t1402*_t321 + _t1403*_t319 + _t1406*_t305 + _t1407*_t303
+            + _t1410*_t309 + _t1411*_t307 + _t1414*_t313 + _t1415*_t311 + _t1418*_t317
+            + _t1419*_t315;
+    const train5_real_t _t1428 = -K_theta_tractor_x_tractor*_t1365 + _t1427;
+    const train5_real_t _t1429 = _t1361*_t25 - _t1362*_t260 + _t1365*_t44 + _t1368*_t257 + _t1428;
+    const train5_real_t _t1430 = _t1358*_t548 + _t1374*_t263 + _t1392*_t269 + _t1396*_t270 + _t1429;
+    const train5_real_t _t1431 = _t1356*_t551 + _t1380*_t282 + _t1393*_t278 + _t1397*_t279 + _t1430;
+    const train5_real_t _t1432 = _t1354*_t554 + _t1386*_t291 + _t1394*_t287 + _t1398*_t288 + _t1431;
+    const train5_real_t _t1433 = _t1352*_t557 + _t1391*_t300 + _t1395*_t296 + _t1399*_t297 + _t1432;
+    const train5_real_t _t1434 = -_t1426*_t626 + _t1433*_t604*_t622;
+    const train5_real_t _t1435 = _t1426*_t623 - _t1433*_t630;
+    const train5_real_t _t1436 = _t0*_t1434 + _t1435*_t596;
+    const train5_real_t _t1437 = _t355*_t780;
+    const train5_real_t _t1438 = -_t145*_t711 - _t146*_t717 + _t374*_t780;
+    const train5_real_t _t1439 = _t384*_t703;
+    const train5_real_t _t1440 = _t1439*_t387;
+    const train5_real_t _t1441 = _t388*_t704;
+    const train5_real_t _t1442 = _t1441*_t391;
+    const train5_real_t _t1443 = _t392*_t705;
+    const train5_real_t _t1444 = _t1443*_t395;
+    const train5_real_t _t1445 = _ms49*_t692;
+    const train5_real_t _t1446 = TRAIN5_LIT(0.3)*_t1445;
+    const train5_real_t _t1447 = _t396*_t706;
+    const train5_real_t _t1448 = _t1447*_t398;
+    const train5_real_t _t1449 = -_ms163*_ms328 - _ms327*_ms49;
+    const train5_real_t _t1450 = -_t1449*_t693;
+    const train5_real_t _t1451 = -_ms163*_t695 + _t403*_t706 - _t694*_t712;
+    const train5_real_t _t1452 = _t1446*_t52 - _t1450*_t50 - _t1451;
+    const train5_real_t _t1453 = _t1452*_t47;
+    const train5_real_t _t1454 = _t1446 + _t1448 + _t1453*_t397;
+    const train5_real_t _t1455 = _t406*_t705 - _t54*_t718 - _t55*_t719;
+    const train5_real_t _t1456 = _t1447*_t397;
+    const train5_real_t _t1457 = _t1450 - _t1453*_t398 + _t1456;
+    const train5_real_t _t1458 = _t1454*_t55 - _t1455 - _t1457*_t54;
+    const train5_real_t _t1459 = _t1458*_t61;
+    const train5_real_t _t1460 = _t1444 + _t1454 + _t1459*_t393;
+    const train5_real_t _t1461 = _t428*_t704 - _t720*_t75 - _t721*_t76;
+    const train5_real_t _t1462 = _t1443*_t393;
+    const train5_real_t _t1463 = _t1457 - _t1459*_t395 + _t1462;
+    const train5_real_t _t1464 = _t1460*_t76 - _t1461 - _t1463*_t75;
+    const train5_real_t _t1465 = _t1464*_t77;
+    const train5_real_t _t1466 = _t1442 + _t1460 + _t1465*_t389;
+    const train5_real_t _t1467 = _t439*_t703 - _t722*_t97 - _t723*_t98;
+    const train5_real_t _t1468 = _t1441*_t389;
+    const train5_real_t _t1469 = _t1463 - _t1465*_t391 + _t1468;
+    const train5_real_t _t1470 = _t1466*_t98 - _t1467 - _t1469*_t97;
+    const train5_real_t _t1471 = _t1470*_t99;
+    const train5_real_t _t1472 = _t1440 + _t1466 + _t1471*_t385;
+    const train5_real_t _t1473 = _t1439*_t385;
+    const train5_real_t _t1474 = _t1469 - _t1471*_t387 + _t1473;
+    const train5_real_t _t1475 = -_t1438 - _t145*_t1474 + _t146*_t1472;
+    const train5_real_t _t1476 = _t147*_t1475;
+    const train5_real_t _t1477 = _ms425*_t1453 - _ms427*_t1447 + _t1446;
+    const train5_real_t _t1478 = _ms429*_t1459 - _ms431*_t1443 + _t1477;
+    const train5_real_t _t1479 = _ms433*_t1465 - _ms435*_t1441 + _t1478;
+    const train5_real_t _t1480 = _ms437*_t1471 - _ms439*_t1439 + _t1479;
+    const train5_real_t _t1481 = _ms425*_t1447 + _ms427*_t1453 + _t1450;
+    const train5_real_t _t1482 = _ms429*_t1443 + _ms431*_t1459 + _t1481;
+    const train5_real_t _t1483 = _ms433*_t1441 + _ms435*_t1465 + _t1482;
+    const train5_real_t _t1484 = _ms437*_t1439 + _ms439*_t1471 + _t1483;
+    const train5_real_t _t1485 = _ms163*_t694 + _t460*_t706 - _t695*_t712;
+    const train5_real_t _t1486 = _t1446*_t50 + _t1450*_t52 - _t1485;
+    const train5_real_t _t1487 = _t1452*_t191 + _t1486*_t190;
+    const train5_real_t _t1488 = _t1452*_t193 + _t1486*_t192;
+    const train5_real_t _t1489 = _t461*_t705 - _t54*_t719 + _t55*_t718;
+    const train5_real_t _t1490 = _t1454*_t54 + _t1457*_t55 - _t1489;
+    const train5_real_t _t1491 = _t1458*_t195 + _t1490*_t196;
+    const train5_real_t _t1492 = _t1458*_t198 + _t1490*_t199;
+    const train5_real_t _t1493 = _t466*_t704 + _t720*_t76 - _t721*_t75;
+    const train5_real_t _t1494 = _t1460*_t75 + _t1463*_t76 - _t1493;
+    const train5_real_t _t1495 = _t1464*_t200 + _t1494*_t201;
+    const train5_real_t _t1496 = _t1464*_t202 + _t1494*_t203;
+    const train5_real_t _t1497 = _t469*_t703 + _t722*_t98 - _t723*_t97;
+    const train5_real_t _t1498 = _t1466*_t97 + _t1469*_t98 - _t1497;
+    const train5_real_t _t1499 = _t1470*_t204 + _t1498*_t205;
+    const train5_real_t _t1500 = _t1470*_t206 + _t1498*_t207;
+    const train5_real_t _t1501 = -_t145*_t717 + _t146*_t711 + _t472*_t780;
+    const train5_real_t _t1502 = _t145*_t1472 + _t146*_t1474 - _t1501;
+    const train5_real_t _t1503 = _t1475*_t208 + _t1502*_t209;
+    const train5_real_t _t1504 = _t1475*_t210 + _t1502*_t211;
+    const train5_real_t _t1505 = _t1487*_t24 + _t1488*_t23 + _t1491*_t16 + _t1492*_t15 + _t1495*_t18
+            + _t1496*_t17 + _t1499*_t20 + _t1500*_t19 + _t1503*_t22 + _t1504*_t21;
+    const train5_real_t _t1506 = K_theta_tractor_x_tractor*_t1445 + _t1505;
+    const train5_real_t _t1507 = -_ms416*_t1447 + _t1446*_t702 + _t1450*_t570 + _t1453*_t259
+            + _t1506;
+    const train5_real_t _t1508 = _t1443*_t499 + _t1459*_t265 + _t1477*_t267 + _t1481*_t268 + _t1507;
+    const train5_real_t _t1509 = _t1441*_t507 + _t1465*_t284 + _t1478*_t276 + _t1482*_t277 + _t1508;
+    const train5_real_t _t1510 = _t1439*_t515 + _t1471*_t293 + _t1479*_t285 + _t1483*_t286 + _t1509;
+    const train5_real_t _t1511 = _t1437*_t523 + _t1476*_t302 + _t1480*_t294 + _t1484*_t295 + _t1510;
+    const train5_real_t _t1512 = _t1487*_t321 + _t1488*_t319 + _t1491*_t305 + _t1492*_t303
+            + _t1495*_t309 + _t1496*_t307 + _t1499*_t313 + _t1500*_t311 + _t1503*_t317
+            + _t1504*_t315;
+    const train5_real_t _t1513 = -K_theta_tractor_x_tractor*_t1450 + _t1512;
+    const train5_real_t _t1514 = _t1446*_t25 - _t1447*_t260 + _t1450*_t44 + _t1453*_t257 + _t1513;
+    const train5_real_t _t1515 = _t1443*_t548 + _t1459*_t263 + _t1477*_t269 + _t1481*_t270 + _t1514;
+    const train5_real_t _t1516 = _t1441*_t551 + _t1465*_t282 + _t1478*_t278 + _t1482*_t279 + _t1515;
+    const train5_real_t _t1517 = _t1439*_t554 + _t1471*_t291 + _t1479*_t287 + _t1483*_t288 + _t1516;
+    const train5_real_t _t1518 = _t1437*_t557 + _t1476*_t300 + _t1480*_t296 + _t1484*_t297 + _t1517;
+    const train5_real_t _t1519 = -_t1511*_t626 + _t1518*_t604*_t622;
+    const train5_real_t _t1520 = _t1511*_t623 - _t1518*_t630;
+    const train5_real_t _t1521 = _t0*_t1519 + _t1520*_t596;
+    const train5_real_t _t1522 = _t1*_t1022 + _t1023*_t597;
+    const train5_real_t _t1523 = _t1*_t1119 + _t1120*_t597;
+    const train5_real_t _t1524 = _t1*_t1211 + _t1212*_t597;
+    const train5_real_t _t1525 = _t1*_t1280 + _t1281*_t597;
+    const train5_real_t _t1526 = _t1*_t1326 + _t1327*_t597;
+    const train5_real_t _t1527 = _t1*_t1349 + _t1350*_t597;
+    const train5_real_t _t1528 = _t1*_t1434 + _t1435*_t597;
+    const train5_real_t _t1529 = _t1*_t1519 + _t1520*_t597;
+    const train5_real_t _t1530 = _t0*_t626 - _t596*_t623;
+    const train5_real_t _t1531 = -_t0*_t623 + _t596*_t611*_t622;
+    const train5_real_t _t1532 = _t0*_t1530 + _t1531*_t596;
+    const train5_real_t _t1533 = _t1*_t626 - _t597*_t623;
+    const train5_real_t _t1534 = -_t1*_t623 + _t597*_t611*_t622;
+    const train5_real_t _t1535 = _t0*_t1533 + _t1534*_t596;
+    const train5_real_t _t1536 = _t1*_t1530 + _t1531*_t597;
+    const train5_real_t _t1537 = _t1*_t1533 + _t1534*_t597;
     A[0] = TRAIN5_LIT(0.0);
     A[1] = TRAIN5_LIT(0.0);
-    A[2] = -_t1067;
+    A[2] = -_t729;
     A[3] = TRAIN5_LIT(0.0);
     A[4] = TRAIN5_LIT(0.0);
     A[5] = TRAIN5_LIT(0.0);
@@ -5845,11 +4164,11 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[17] = TRAIN5_LIT(0.0);
     A[18] = TRAIN5_LIT(0.0);
     A[19] = TRAIN5_LIT(0.0);
-    A[20] = _t1068;
-    A[21] = _t1069;
+    A[20] = _t730;
+    A[21] = _t731;
     A[22] = TRAIN5_LIT(0.0);
     A[23] = TRAIN5_LIT(0.0);
-    A[24] = _t1066;
+    A[24] = _t728;
     A[25] = TRAIN5_LIT(0.0);
     A[26] = TRAIN5_LIT(0.0);
     A[27] = TRAIN5_LIT(0.0);
@@ -5867,8 +4186,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[39] = TRAIN5_LIT(0.0);
     A[40] = TRAIN5_LIT(0.0);
     A[41] = TRAIN5_LIT(0.0);
-    A[42] = _t1070;
-    A[43] = _t1071;
+    A[42] = _t732;
+    A[43] = _t733;
     A[44] = TRAIN5_LIT(0.0);
     A[45] = TRAIN5_LIT(0.0);
     A[46] = TRAIN5_LIT(0.0);
@@ -5893,8 +4212,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[65] = _ms49;
     A[66] = TRAIN5_LIT(0.0);
     A[67] = TRAIN5_LIT(0.0);
-    A[68] = _t115;
-    A[69] = -_t115;
+    A[68] = _t375;
+    A[69] = -_t375;
     A[70] = TRAIN5_LIT(0.0);
     A[71] = TRAIN5_LIT(0.0);
     A[72] = TRAIN5_LIT(0.0);
@@ -5911,13 +4230,13 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[83] = TRAIN5_LIT(0.0);
     A[84] = TRAIN5_LIT(0.0);
     A[85] = TRAIN5_LIT(0.0);
-    A[86] = _t1050;
-    A[87] = _t1059;
+    A[86] = _t680;
+    A[87] = _t706;
     A[88] = TRAIN5_LIT(0.0);
     A[89] = TRAIN5_LIT(0.0);
-    A[90] = _t1072;
-    A[91] = _t1073;
-    A[92] = _t1074;
+    A[90] = _t359;
+    A[91] = _t634;
+    A[92] = _t649;
     A[93] = TRAIN5_LIT(0.0);
     A[94] = TRAIN5_LIT(0.0);
     A[95] = TRAIN5_LIT(0.0);
@@ -5933,14 +4252,14 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[105] = TRAIN5_LIT(0.0);
     A[106] = TRAIN5_LIT(0.0);
     A[107] = TRAIN5_LIT(0.0);
-    A[108] = _t1075;
-    A[109] = _t1076;
+    A[108] = _t679;
+    A[109] = _t705;
     A[110] = TRAIN5_LIT(0.0);
     A[111] = TRAIN5_LIT(0.0);
-    A[112] = _t1077;
-    A[113] = _t1078;
-    A[114] = _t1079;
-    A[115] = _t1080;
+    A[112] = _t363;
+    A[113] = _t633;
+    A[114] = _t648;
+    A[115] = _t663;
     A[116] = TRAIN5_LIT(0.0);
     A[117] = TRAIN5_LIT(0.0);
     A[118] = TRAIN5_LIT(0.0);
@@ -5955,15 +4274,15 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[127] = TRAIN5_LIT(0.0);
     A[128] = TRAIN5_LIT(0.0);
     A[129] = TRAIN5_LIT(0.0);
-    A[130] = _t1081;
-    A[131] = _t1082;
+    A[130] = _t678;
+    A[131] = _t704;
     A[132] = TRAIN5_LIT(0.0);
     A[133] = TRAIN5_LIT(0.0);
-    A[134] = _t1083;
-    A[135] = _t1084;
-    A[136] = _t1085;
-    A[137] = _t1086;
-    A[138] = _t1087;
+    A[134] = _t367;
+    A[135] = _t632;
+    A[136] = _t647;
+    A[137] = _t662;
+    A[138] = _t672;
     A[139] = TRAIN5_LIT(0.0);
     A[140] = TRAIN5_LIT(0.0);
     A[141] = TRAIN5_LIT(0.0);
@@ -5977,16 +4296,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[149] = TRAIN5_LIT(0.0);
     A[150] = TRAIN5_LIT(0.0);
     A[151] = TRAIN5_LIT(0.0);
-    A[152] = _t1088;
-    A[153] = _t1089;
+    A[152] = _t677;
+    A[153] = _t703;
     A[154] = TRAIN5_LIT(0.0);
     A[155] = TRAIN5_LIT(0.0);
-    A[156] = _t1090;
-    A[157] = _t1091;
-    A[158] = _t1092;
-    A[159] = _t1093;
-    A[160] = _t1094;
-    A[161] = _t1095;
+    A[156] = _t739;
+    A[157] = _t748;
+    A[158] = _t757;
+    A[159] = _t766;
+    A[160] = _t775;
+    A[161] = _t778;
     A[162] = TRAIN5_LIT(0.0);
     A[163] = TRAIN5_LIT(0.0);
     A[164] = TRAIN5_LIT(0.0);
@@ -5999,8 +4318,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[171] = TRAIN5_LIT(0.0);
     A[172] = TRAIN5_LIT(0.0);
     A[173] = TRAIN5_LIT(0.0);
-    A[174] = _t1096;
-    A[175] = _t1097;
+    A[174] = _t779;
+    A[175] = _t780;
     A[176] = TRAIN5_LIT(0.0);
     A[177] = TRAIN5_LIT(0.0);
     A[178] = TRAIN5_LIT(0.0);
@@ -6021,8 +4340,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[193] = TRAIN5_LIT(0.0);
     A[194] = TRAIN5_LIT(0.0);
     A[195] = TRAIN5_LIT(0.0);
-    A[196] = _t1062;
-    A[197] = _t1064;
+    A[196] = _t724;
+    A[197] = _t726;
     A[198] = TRAIN5_LIT(0.0);
     A[199] = TRAIN5_LIT(0.0);
     A[200] = TRAIN5_LIT(0.0);
@@ -6043,12 +4362,12 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[215] = TRAIN5_LIT(0.0);
     A[216] = TRAIN5_LIT(0.0);
     A[217] = TRAIN5_LIT(0.0);
-    A[218] = _t1063;
-    A[219] = _t1065;
+    A[218] = _t725;
+    A[219] = _t727;
     A[220] = TRAIN5_LIT(0.0);
     A[221] = TRAIN5_LIT(0.0);
-    A[222] = _t1098;
-    A[223] = -_t1098;
+    A[222] = _t781;
+    A[223] = -_t781;
     A[224] = TRAIN5_LIT(0.0);
     A[225] = TRAIN5_LIT(0.0);
     A[226] = TRAIN5_LIT(0.0);
@@ -6065,12 +4384,12 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[237] = TRAIN5_LIT(0.0);
     A[238] = TRAIN5_LIT(0.0);
     A[239] = TRAIN5_LIT(0.0);
-    A[240] = _t1099;
-    A[241] = _t1100;
+    A[240] = _t782;
+    A[241] = _t783;
     A[242] = TRAIN5_LIT(0.0);
     A[243] = TRAIN5_LIT(0.0);
-    A[244] = _t1101;
-    A[245] = -_t1101;
+    A[244] = _t784;
+    A[245] = -_t784;
     A[246] = TRAIN5_LIT(0.0);
     A[247] = TRAIN5_LIT(0.0);
     A[248] = TRAIN5_LIT(0.0);
@@ -6087,13 +4406,13 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[259] = TRAIN5_LIT(0.0);
     A[260] = TRAIN5_LIT(0.0);
     A[261] = TRAIN5_LIT(0.0);
-    A[262] = _t1102;
-    A[263] = _t1103;
+    A[262] = _t785;
+    A[263] = _t786;
     A[264] = TRAIN5_LIT(0.0);
     A[265] = TRAIN5_LIT(0.0);
-    A[266] = _t1104;
-    A[267] = _t1105;
-    A[268] = _t1106;
+    A[266] = _t789;
+    A[267] = _t792;
+    A[268] = _t795;
     A[269] = TRAIN5_LIT(0.0);
     A[270] = TRAIN5_LIT(0.0);
     A[271] = TRAIN5_LIT(0.0);
@@ -6109,13 +4428,13 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[281] = TRAIN5_LIT(0.0);
     A[282] = TRAIN5_LIT(0.0);
     A[283] = TRAIN5_LIT(0.0);
-    A[284] = _t1107;
-    A[285] = _t1108;
+    A[284] = _t796;
+    A[285] = _t797;
     A[286] = TRAIN5_LIT(0.0);
     A[287] = TRAIN5_LIT(0.0);
-    A[288] = _t1109;
-    A[289] = _t1110;
-    A[290] = _t1111;
+    A[288] = _t799;
+    A[289] = _t802;
+    A[290] = _t805;
     A[291] = TRAIN5_LIT(0.0);
     A[292] = TRAIN5_LIT(0.0);
     A[293] = TRAIN5_LIT(0.0);
@@ -6131,14 +4450,14 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[303] = TRAIN5_LIT(0.0);
     A[304] = TRAIN5_LIT(0.0);
     A[305] = TRAIN5_LIT(0.0);
-    A[306] = _t1112;
-    A[307] = _t1113;
+    A[306] = _t806;
+    A[307] = _t807;
     A[308] = TRAIN5_LIT(0.0);
     A[309] = TRAIN5_LIT(0.0);
-    A[310] = _t1114;
-    A[311] = _t1115;
-    A[312] = _t1116;
-    A[313] = _t1117;
+    A[310] = _t810;
+    A[311] = _t815;
+    A[312] = _t820;
+    A[313] = _t823;
     A[314] = TRAIN5_LIT(0.0);
     A[315] = TRAIN5_LIT(0.0);
     A[316] = TRAIN5_LIT(0.0);
@@ -6153,14 +4472,14 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[325] = TRAIN5_LIT(0.0);
     A[326] = TRAIN5_LIT(0.0);
     A[327] = TRAIN5_LIT(0.0);
-    A[328] = _t1118;
-    A[329] = _t1119;
+    A[328] = _t824;
+    A[329] = _t825;
     A[330] = TRAIN5_LIT(0.0);
     A[331] = TRAIN5_LIT(0.0);
-    A[332] = _t1120;
-    A[333] = _t1121;
-    A[334] = _t1122;
-    A[335] = _t1123;
+    A[332] = _t827;
+    A[333] = _t830;
+    A[334] = _t833;
+    A[335] = _t836;
     A[336] = TRAIN5_LIT(0.0);
     A[337] = TRAIN5_LIT(0.0);
     A[338] = TRAIN5_LIT(0.0);
@@ -6175,15 +4494,15 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[347] = TRAIN5_LIT(0.0);
     A[348] = TRAIN5_LIT(0.0);
     A[349] = TRAIN5_LIT(0.0);
-    A[350] = _t1124;
-    A[351] = _t1125;
+    A[350] = _t837;
+    A[351] = _t838;
     A[352] = TRAIN5_LIT(0.0);
     A[353] = TRAIN5_LIT(0.0);
-    A[354] = _t1126;
-    A[355] = _t1127;
-    A[356] = _t1128;
-    A[357] = _t1129;
-    A[358] = _t1130;
+    A[354] = _t841;
+    A[355] = _t846;
+    A[356] = _t851;
+    A[357] = _t856;
+    A[358] = _t859;
     A[359] = TRAIN5_LIT(0.0);
     A[360] = TRAIN5_LIT(0.0);
     A[361] = TRAIN5_LIT(0.0);
@@ -6197,15 +4516,15 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[369] = TRAIN5_LIT(0.0);
     A[370] = TRAIN5_LIT(0.0);
     A[371] = TRAIN5_LIT(0.0);
-    A[372] = _t1131;
-    A[373] = _t1132;
+    A[372] = _t860;
+    A[373] = _t861;
     A[374] = TRAIN5_LIT(0.0);
     A[375] = TRAIN5_LIT(0.0);
-    A[376] = _t1133;
-    A[377] = _t1134;
-    A[378] = _t1135;
-    A[379] = _t1136;
-    A[380] = _t1137;
+    A[376] = _t863;
+    A[377] = _t866;
+    A[378] = _t869;
+    A[379] = _t872;
+    A[380] = _t875;
     A[381] = TRAIN5_LIT(0.0);
     A[382] = TRAIN5_LIT(0.0);
     A[383] = TRAIN5_LIT(0.0);
@@ -6219,16 +4538,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[391] = TRAIN5_LIT(0.0);
     A[392] = TRAIN5_LIT(0.0);
     A[393] = TRAIN5_LIT(0.0);
-    A[394] = _t1138;
-    A[395] = _t1139;
+    A[394] = _t876;
+    A[395] = _t877;
     A[396] = TRAIN5_LIT(0.0);
     A[397] = TRAIN5_LIT(0.0);
-    A[398] = _t1140;
-    A[399] = _t1141;
-    A[400] = _t1142;
-    A[401] = _t1143;
-    A[402] = _t1144;
-    A[403] = _t1145;
+    A[398] = _t880;
+    A[399] = _t885;
+    A[400] = _t890;
+    A[401] = _t895;
+    A[402] = _t900;
+    A[403] = _t903;
     A[404] = TRAIN5_LIT(0.0);
     A[405] = TRAIN5_LIT(0.0);
     A[406] = TRAIN5_LIT(0.0);
@@ -6241,16 +4560,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[413] = TRAIN5_LIT(0.0);
     A[414] = TRAIN5_LIT(0.0);
     A[415] = TRAIN5_LIT(0.0);
-    A[416] = _t1146;
-    A[417] = _t1147;
+    A[416] = _t904;
+    A[417] = _t905;
     A[418] = TRAIN5_LIT(0.0);
     A[419] = TRAIN5_LIT(0.0);
-    A[420] = _t1148;
-    A[421] = _t1149;
-    A[422] = _t1150;
-    A[423] = _t1151;
-    A[424] = _t1152;
-    A[425] = _t1153;
+    A[420] = _t907;
+    A[421] = _t910;
+    A[422] = _t913;
+    A[423] = _t916;
+    A[424] = _t919;
+    A[425] = _t922;
     A[426] = TRAIN5_LIT(0.0);
     A[427] = TRAIN5_LIT(0.0);
     A[428] = TRAIN5_LIT(0.0);
@@ -6263,16 +4582,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[435] = TRAIN5_LIT(0.0);
     A[436] = TRAIN5_LIT(0.0);
     A[437] = TRAIN5_LIT(0.0);
-    A[438] = _t1154;
-    A[439] = _t1155;
+    A[438] = _t923;
+    A[439] = _t924;
     A[440] = TRAIN5_LIT(0.0);
     A[441] = TRAIN5_LIT(0.0);
-    A[442] = _t1309;
-    A[443] = _t1463;
-    A[444] = _t1585;
-    A[445] = _t1670;
-    A[446] = _t1726;
-    A[447] = _t1761;
+    A[442] = _t1024;
+    A[443] = _t1121;
+    A[444] = _t1213;
+    A[445] = _t1282;
+    A[446] = _t1328;
+    A[447] = _t1351;
     A[448] = TRAIN5_LIT(0.0);
     A[449] = TRAIN5_LIT(0.0);
     A[450] = TRAIN5_LIT(0.0);
@@ -6285,16 +4604,16 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[457] = TRAIN5_LIT(0.0);
     A[458] = TRAIN5_LIT(0.0);
     A[459] = TRAIN5_LIT(0.0);
-    A[460] = _t1801;
-    A[461] = _t1841;
+    A[460] = _t1436;
+    A[461] = _t1521;
     A[462] = TRAIN5_LIT(0.0);
     A[463] = TRAIN5_LIT(0.0);
-    A[464] = _t1842;
-    A[465] = _t1843;
-    A[466] = _t1844;
-    A[467] = _t1845;
-    A[468] = _t1846;
-    A[469] = _t1847;
+    A[464] = _t1522;
+    A[465] = _t1523;
+    A[466] = _t1524;
+    A[467] = _t1525;
+    A[468] = _t1526;
+    A[469] = _t1527;
     A[470] = TRAIN5_LIT(0.0);
     A[471] = TRAIN5_LIT(0.0);
     A[472] = TRAIN5_LIT(0.0);
@@ -6307,8 +4626,8 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     A[479] = TRAIN5_LIT(0.0);
     A[480] = TRAIN5_LIT(0.0);
     A[481] = TRAIN5_LIT(0.0);
-    A[482] = _t1848;
-    A[483] = _t1849;
+    A[482] = _t1528;
+    A[483] = _t1529;
     B[0] = TRAIN5_LIT(0.0);
     B[1] = TRAIN5_LIT(0.0);
     B[2] = TRAIN5_LIT(0.0);
@@ -6349,14 +4668,14 @@ void train5_linearization(const train5_params_t *p, const train5_real_t *q,
     B[37] = TRAIN5_LIT(0.0);
     B[38] = TRAIN5_LIT(0.0);
     B[39] = TRAIN5_LIT(0.0);
-    B[40] = _t1852;
-    B[41] = _t1855;
-    B[42] = _t1856;
-    B[43] = _t1857;
+    B[40] = _t1532;
+    B[41] = _t1535;
+    B[42] = _t1536;
+    B[43] = _t1537;
 }
 
 /* train5_wheel_contact_forces: documented in train5_model.h.
-   operations after CSE: 951 add, 1336 mul, 13 div, 20 sin/cos, 0 sqrt */
+   operations after CSE: 536 add, 896 mul, 17 div, 20 sin/cos, 0 sqrt */
 train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const train5_real_t *q,
     const train5_real_t *wheel_rates, const train5_real_t *tau, train5_real_t *longitudinal,
     train5_real_t *lateral)
@@ -6447,315 +4766,347 @@ train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const trai
             | train5_exp_carry(tau_left)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
         return TRAIN5_ERR_NONFINITE_INPUT;
     }
+    (void)K_theta_cart2_x_tractor;
+    (void)K_theta_cart2_x_tractor_2;
+    (void)K_theta_cart3_x_tractor;
+    (void)K_theta_cart3_x_tractor_2;
+    (void)K_theta_cart4_x_tractor;
+    (void)K_theta_cart4_x_tractor_2;
+    (void)K_theta_cart5_x_tractor;
+    (void)K_theta_cart5_x_tractor_2;
+    (void)K_theta_cart_x_tractor;
+    (void)K_theta_cart_x_tractor_2;
     (void)thetadot_left;
     (void)thetadot_right;
-    train5_real_t _shared[408];
+    train5_real_t _shared[239];
     train5_staged_quantities(p, q, wheel_rates, _shared);
-    const train5_real_t _ms74 = _shared[2];
-    const train5_real_t _ms79 = _shared[3];
-    const train5_real_t _ms84 = _shared[4];
-    const train5_real_t _ms89 = _shared[5];
-    const train5_real_t _ms94 = _shared[6];
-    const train5_real_t _ms99 = _shared[7];
-    const train5_real_t _ms104 = _shared[8];
-    const train5_real_t _ms109 = _shared[9];
-    const train5_real_t _ms114 = _shared[10];
-    const train5_real_t _ms119 = _shared[11];
-    const train5_real_t _ms224 = _shared[54];
-    const train5_real_t _ms225 = _shared[55];
-    const train5_real_t _ms228 = _shared[58];
-    const train5_real_t _ms229 = _shared[59];
-    const train5_real_t _ms232 = _shared[62];
-    const train5_real_t _ms233 = _shared[63];
-    const train5_real_t _ms236 = _shared[66];
-    const train5_real_t _ms237 = _shared[67];
-    const train5_real_t _ms240 = _shared[70];
-    const train5_real_t _ms241 = _shared[71];
-    const train5_real_t _ms248 = _shared[74];
-    const train5_real_t _ms249 = _shared[75];
-    const train5_real_t _ms252 = _shared[78];
-    const train5_real_t _ms253 = _shared[79];
-    const train5_real_t _ms256 = _shared[82];
-    const train5_real_t _ms257 = _shared[83];
-    const train5_real_t _ms260 = _shared[86];
-    const train5_real_t _ms261 = _shared[87];
-    const train5_real_t _ms264 = _shared[90];
-    const train5_real_t _ms265 = _shared[91];
-    const train5_real_t _ms268 = _shared[94];
-    const train5_real_t _ms269 = _shared[95];
-    const train5_real_t _ms272 = _shared[98];
-    const train5_real_t _ms273 = _shared[99];
-    const train5_real_t _ms276 = _shared[102];
-    const train5_real_t _ms277 = _shared[103];
-    const train5_real_t _ms280 = _shared[106];
-    const train5_real_t _ms281 = _shared[107];
-    const train5_real_t _ms284 = _shared[110];
-    const train5_real_t _ms285 = _shared[111];
-    const train5_real_t _ms287 = _shared[113];
-    const train5_real_t _ms288 = _shared[114];
-    const train5_real_t _ms289 = _shared[115];
-    const train5_real_t _ms290 = _shared[116];
-    const train5_real_t _ms291 = _shared[117];
-    const train5_real_t _ms292 = _shared[118];
-    const train5_real_t _ms305 = _shared[119];
-    const train5_real_t _ms306 = _shared[120];
-    const train5_real_t _ms307 = _shared[121];
-    const train5_real_t _ms308 = _shared[122];
-    const train5_real_t _ms309 = _shared[123];
-    const train5_real_t _ms310 = _shared[124];
-    const train5_real_t _ms311 = _shared[125];
-    const train5_real_t _ms312 = _shared[126];
-    const train5_real_t _ms313 = _shared[127];
-    const train5_real_t _ms314 = _shared[128];
-    const train5_real_t _ms315 = _shared[129];
-    const train5_real_t _ms316 = _shared[130];
-    const train5_real_t _ms317 = _shared[131];
-    const train5_real_t _ms318 = _shared[132];
-    const train5_real_t _ms319 = _shared[133];
-    const train5_real_t _ms320 = _shared[134];
-    const train5_real_t _ms321 = _shared[135];
-    const train5_real_t _ms322 = _shared[136];
-    const train5_real_t _ms323 = _shared[137];
-    const train5_real_t _ms324 = _shared[138];
-    const train5_real_t _ms325 = _shared[139];
-    const train5_real_t _ms326 = _shared[140];
-    const train5_real_t _ms327 = _shared[141];
-    const train5_real_t _ms328 = _shared[142];
-    const train5_real_t _ms329 = _shared[143];
-    const train5_real_t _ms330 = _shared[144];
-    const train5_real_t _ms332 = _shared[145];
-    const train5_real_t _ms333 = _shared[146];
-    const train5_real_t _ms334 = _shared[147];
-    const train5_real_t _ms335 = _shared[148];
-    const train5_real_t _ms336 = _shared[149];
-    const train5_real_t _ms337 = _shared[150];
-    const train5_real_t _ms566 = _shared[379];
-    const train5_real_t _ms567 = _shared[380];
-    const train5_real_t _ms573 = _shared[386];
-    const train5_real_t _ms576 = _shared[389];
-    const train5_real_t _ms579 = _shared[392];
-    const train5_real_t _ms582 = _shared[395];
-    const train5_real_t _ms583 = _shared[396];
-    const train5_real_t _ms584 = _shared[397];
-    const train5_real_t _ms585 = _shared[398];
-    const train5_real_t _ms586 = _shared[399];
-    const train5_real_t _ms587 = _shared[400];
-    const train5_real_t _ms588 = _shared[401];
-    const train5_real_t _ms589 = _shared[402];
-    const train5_real_t _ms590 = _shared[403];
-    const train5_real_t _ms591 = _shared[404];
-    const train5_real_t _ms592 = _shared[405];
-    const train5_real_t _ms636 = _shared[406];
-    const train5_real_t _ms637 = _shared[407];
-    const train5_real_t _t0 = _ms289*_ms289;
-    const train5_real_t _t1 = -theta_tractor;
-    const train5_real_t _t2 = _t1 + theta_cart2;
-    const train5_real_t _t3 = TRAIN5_SIN(_t2);
-    const train5_real_t _t4 = TRAIN5_COS(_t2);
-    const train5_real_t _t5 = _ms290*_ms290;
-    const train5_real_t _t6 = _t1 + theta_cart3;
-    const train5_real_t _t7 = TRAIN5_SIN(_t6);
-    const train5_real_t _t8 = TRAIN5_COS(_t6);
-    const train5_real_t _t9 = _ms291*_ms291;
-    const train5_real_t _t10 = _t1 + theta_cart4;
-    const train5_real_t _t11 = TRAIN5_SIN(_t10);
-    const train5_real_t _t12 = TRAIN5_COS(_t10);
-    const train5_real_t _t13 = _ms292*_ms292;
-    const train5_real_t _t14 = _t1 + theta_cart5;
-    const train5_real_t _t15 = TRAIN5_SIN(_t14);
-    const train5_real_t _t16 = TRAIN5_COS(_t14);
-    const train5_real_t _t17 = _ms288*_ms288;
-    const train5_real_t _t18 = _t1 + theta_cart;
-    const train5_real_t _t19 = TRAIN5_SIN(_t18);
-    const train5_real_t _t20 = TRAIN5_COS(_t18);
-    const train5_real_t _t21 = TRAIN5_LIT(1.0)/radius_right;
-    const train5_real_t _t22 = TRAIN5_LIT(1.0)/radius_left;
-    const train5_real_t _t23 = J_x_tractor + _ms224*_ms305 + _ms228*_ms306 + _ms232*_ms307
-            + _ms236*_ms308 + _ms240*_ms309;
-    const train5_real_t _t24 = J_theta_cart*_ms224 + _ms228*_ms320 + _ms232*_ms321 + _ms236*_ms322
-            + _ms240*_ms323 + _ms305;
-    const train5_real_t _t25 = J_theta_cart2*_ms228 + _ms224*_ms320 + _ms232*_ms324 + _ms236*_ms325
-            + _ms240*_ms326 + _ms306;
-    const train5_real_t _t26 = J_theta_cart3*_ms232 + _ms224*_ms321 + _ms228*_ms324 + _ms236*_ms327
-            + _ms240*_ms328 + _ms307;
-    const train5_real_t _t27 = J_theta_cart4*_ms236 + _ms224*_ms322 + _ms228*_ms325 + _ms232*_ms327
-            + _ms240*_ms329 + _ms308;
-    const train5_real_t _t28 = J_theta_cart5*_ms240 + _ms224*_ms323 + _ms228*_ms326 + _ms232*_ms328
-            + _ms236*_ms329 + _ms309;
-    const train5_real_t _t29 = J_theta_right*_t21;
-    const train5_real_t _t30 = J_theta_left*_t22;
-    const train5_real_t _t31 = J_theta_cart_right*_ms248;
-    const train5_real_t _t32 = J_theta_cart_left*_ms252;
-    const train5_real_t _t33 = J_theta_cart2_right*_ms256;
-    const train5_real_t _t34 = J_theta_cart2_left*_ms260;
-    const train5_real_t _t35 = J_theta_cart3_right*_ms264;
-    const train5_real_t _t36 = J_theta_cart3_left*_ms268;
-    const train5_real_t _t37 = J_theta_cart4_right*_ms272;
-    const train5_real_t _t38 = J_theta_cart4_left*_ms276;
-    const train5_real_t _t39 = J_theta_cart5_right*_ms280;
-    const train5_real_t _t40 = J_theta_cart5_left*_ms284;
-    const train5_real_t _t41 = _ms224*_t24 + _ms228*_t25 + _ms232*_t26 + _ms236*_t27 + _ms240*_t28
-            + _ms248*_t31 + _ms252*_t32 + _ms256*_t33 + _ms260*_t34 + _ms264*_t35 + _ms268*_t36
-            + _ms272*_t37 + _ms276*_t38 + _ms280*_t39 + _ms284*_t40 + _t21*_t29 + _t22*_t30 + _t23;
-    const train5_real_t _t42 = K_theta_tractor_x_tractor_2 + _ms225*_ms305 + _ms229*_ms306
-            + _ms233*_ms307 + _ms237*_ms308 + _ms241*_ms309;
-    const train5_real_t _t43 = J_theta_cart*_ms225 + _ms229*_ms320 + _ms233*_ms321 + _ms237*_ms322
-            + _ms241*_ms323 + _ms315;
-    const train5_real_t _t44 = J_theta_cart2*_ms229 + _ms225*_ms320 + _ms233*_ms324 + _ms237*_ms325
-            + _ms241*_ms326 + _ms316;
-    const train5_real_t _t45 = J_theta_cart3*_ms233 + _ms225*_ms321 + _ms229*_ms324 + _ms237*_ms327
-            + _ms241*_ms328 + _ms317;
-    const train5_real_t _t46 = J_theta_cart4*_ms237 + _ms225*_ms322 + _ms229*_ms325 + _ms233*_ms327
-            + _ms241*_ms329 + _ms318;
-    const train5_real_t _t47 = J_theta_cart5*_ms241 + _ms225*_ms323 + _ms229*_ms326 + _ms233*_ms328
-            + _ms237*_ms329 + _ms319;
-    const train5_real_t _t48 = TRAIN5_LIT(0.207)*_t21;
-    const train5_real_t _t49 = J_theta_right*_t48;
-    const train5_real_t _t50 = -TRAIN5_LIT(0.207)*_t22;
-    const train5_real_t _t51 = J_theta_left*_t50;
-    const train5_real_t _t52 = J_theta_cart_right*_ms249;
-    const train5_real_t _t53 = J_theta_cart_left*_ms253;
-    const train5_real_t _t54 = J_theta_cart2_right*_ms257;
-    const train5_real_t _t55 = J_theta_cart2_left*_ms261;
-    const train5_real_t _t56 = J_theta_cart3_right*_ms265;
-    const train5_real_t _t57 = J_theta_cart3_left*_ms269;
-    const train5_real_t _t58 = J_theta_cart4_right*_ms273;
-    const train5_real_t _t59 = J_theta_cart4_left*_ms277;
-    const train5_real_t _t60 = J_theta_cart5_right*_ms281;
-    const train5_real_t _t61 = J_theta_cart5_left*_ms285;
-    const train5_real_t _t62 = _ms224*_t43 + _ms228*_t44 + _ms232*_t45 + _ms236*_t46 + _ms240*_t47
-            + _ms248*_t52 + _ms252*_t53 + _ms256*_t54 + _ms260*_t55 + _ms264*_t56 + _ms268*_t57
-            + _ms272*_t58 + _ms276*_t59 + _ms280*_t60 + _ms284*_t61 + _t21*_t49 + _t22*_t51 + _t42;
-    const train5_real_t _t63 = J_theta_tractor + _ms225*_ms315 + _ms229*_ms316 + _ms233*_ms317
-            + _ms237*_ms318 + _ms241*_ms319;
-    const train5_real_t _t64 = _ms225*_t43 + _ms229*_t44 + _ms233*_t45 + _ms237*_t46 + _ms241*_t47
-            + _ms249*_t52 + _ms253*_t53 + _ms257*_t54 + _ms261*_t55 + _ms265*_t56 + _ms269*_t57
-            + _ms273*_t58 + _ms277*_t59 + _ms281*_t60 + _ms285*_t61 + _t48*_t49 + _t50*_t51 + _t63;
-    const train5_real_t _t65 = _t41*_t64 - _t62*_t62;
-    const train5_real_t _t66 = TRAIN5_LIT(0.85)*_t16;
-    const train5_real_t _t67 = -_t11*_t66 + TRAIN5_LIT(0.85)*_t12*_t15;
-    const train5_real_t _t68 = TRAIN5_LIT(0.85)*_t15;
-    const train5_real_t _t69 = TRAIN5_LIT(0.85)*_t15*_t8 - _t66*_t7;
-    const train5_real_t _t70 = TRAIN5_LIT(0.85)*_t12;
-    const train5_real_t _t71 = TRAIN5_LIT(0.85)*_t11*_t8 - _t7*_t70;
-    const train5_real_t _t72 = TRAIN5_LIT(0.85)*_t11;
-    const train5_real_t _t73 = TRAIN5_LIT(0.85)*_t15*_t4 - _t3*_t66;
-    const train5_real_t _t74 = TRAIN5_LIT(0.85)*_t11*_t4 - _t3*_t70;
-    const train5_real_t _t75 = TRAIN5_LIT(0.85)*_t8;
-    const train5_real_t _t76 = -_t3*_t75 + TRAIN5_LIT(0.85)*_t4*_t7;
-    const train5_real_t _t77 = TRAIN5_LIT(0.85)*_t7;
-    const train5_real_t _t78 = TRAIN5_LIT(0.85)*_t15*_t20 - _t19*_t66;
-    const train5_real_t _t79 = TRAIN5_LIT(0.85)*_t11*_t20 - _t19*_t70;
-    const train5_real_t _t80 = -_t19*_t75 + TRAIN5_LIT(0.85)*_t20*_t7;
-    const train5_real_t _t81 = TRAIN5_LIT(0.85)*_t4;
-    const train5_real_t _t82 = -_t19*_t81 + TRAIN5_LIT(0.85)*_t20*_t3;
-    const train5_real_t _t83 = -_ms636 + _t21*tau_right + _t22*tau_left;
-    const train5_real_t _t84 = -_ms637 + _t48*tau_right + _t50*tau_left;
-    const train5_real_t _t85 = TRAIN5_LIT(1.0)/_t65;
-    const train5_real_t _t86 = _t85*(-_t62*_t84 + _t64*_t83);
-    const train5_real_t _t87 = _t85*(_t41*_t84 - _t62*_t83);
-    const train5_real_t _t88 = _ms280*_t86 + _ms281*_t87 + _ms591;
-    const train5_real_t _t89 = -J_theta_cart5_right*_t88;
-    const train5_real_t _t90 = _ms114*_t89;
-    const train5_real_t _t91 = _t15*_t90;
-    const train5_real_t _t92 = _ms284*_t86 + _ms285*_t87 + _ms592;
-    const train5_real_t _t93 = -J_theta_cart5_left*_t92;
-    const train5_real_t _t94 = _ms119*_t93;
-    const train5_real_t _t95 = _t15*_t94;
-    const train5_real_t _t96 = _ms272*_t86 + _ms273*_t87 + _ms589;
-    const train5_real_t _t97 = -J_theta_cart4_right*_t96;
-    const train5_real_t _t98 = _ms104*_t97;
-    const train5_real_t _t99 = _t11*_t98;
-    const train5_real_t _t100 = _ms276*_t86 + _ms277*_t87 + _ms590;
-    const train5_real_t _t101 = -J_theta_cart4_left*_t100;
-    const train5_real_t _t102 = _ms109*_t101;
-    const train5_real_t _t103 = _t102*_t11;
-    const train5_real_t _t104 = _ms264*_t86 + _ms265*_t87 + _ms587;
-    const train5_real_t _t105 = -J_theta_cart3_right*_t104;
-    const train5_real_t _t106 = _ms94*_t105;
-    const train5_real_t _t107 = _t106*_t7;
-    const train5_real_t _t108 = _ms268*_t86 + _ms269*_t87 + _ms588;
-    const train5_real_t _t109 = -J_theta_cart3_left*_t108;
-    const train5_real_t _t110 = _ms99*_t109;
-    const train5_real_t _t111 = _t110*_t7;
-    const train5_real_t _t112 = _ms256*_t86 + _ms257*_t87 + _ms585;
-    const train5_real_t _t113 = -J_theta_cart2_right*_t112;
-    const train5_real_t _t114 = _ms84*_t113;
-    const train5_real_t _t115 = _t114*_t3;
-    const train5_real_t _t116 = _ms260*_t86 + _ms261*_t87 + _ms586;
-    const train5_real_t _t117 = -J_theta_cart2_left*_t116;
-    const train5_real_t _t118 = _ms89*_t117;
-    const train5_real_t _t119 = _t118*_t3;
-    const train5_real_t _t120 = _ms248*_t86 + _ms249*_t87 + _ms583;
-    const train5_real_t _t121 = -J_theta_cart_right*_t120;
-    const train5_real_t _t122 = _ms74*_t121;
-    const train5_real_t _t123 = _t122*_t19;
-    const train5_real_t _t124 = _ms252*_t86 + _ms253*_t87 + _ms584;
-    const train5_real_t _t125 = -J_theta_cart_left*_t124;
-    const train5_real_t _t126 = _ms79*_t125;
-    const train5_real_t _t127 = _t126*_t19;
-    const train5_real_t _t128 = _ms224*_t86 + _ms225*_t87 + _ms566;
-    const train5_real_t _t129 = _ms228*_t86 + _ms229*_t87 + _ms573;
-    const train5_real_t _t130 = _ms232*_t86 + _ms233*_t87 + _ms576;
-    const train5_real_t _t131 = _ms236*_t86 + _ms237*_t87 + _ms579;
-    const train5_real_t _t132 = _ms240*_t86 + _ms241*_t87 + _ms582;
-    const train5_real_t _t133 = -J_x_tractor*_t86 - K_theta_tractor_x_tractor_2*_t87 - _ms305*_t128
-            - _ms306*_t129 - _ms307*_t130 - _ms308*_t131 - _ms309*_t132 - _ms330;
-    const train5_real_t _t134 = -J_theta_cart5*_t132 - _ms309*_t86 - _ms314*_ms567 - _ms319*_t87
-            - _ms323*_t128 - _ms326*_t129 - _ms328*_t130 - _ms329*_t131 - _ms337;
-    const train5_real_t _t135 = _t134 + TRAIN5_LIT(0.2)*_t90 - TRAIN5_LIT(0.2)*_t94;
-    const train5_real_t _t136 = -TRAIN5_LIT(1.6666666666666667)*_t135;
-    const train5_real_t _t137 = -J_theta_cart4*_t131 - _ms308*_t86 - _ms313*_ms567 - _ms318*_t87
-            - _ms322*_t128 - _ms325*_t129 - _ms327*_t130 - _ms329*_t132 - _ms336;
-    const train5_real_t _t138 = -TRAIN5_LIT(0.2)*_t102 - _t136*(-_t11*_t68 - _t12*_t66) + _t137
-            - _t67*_t90 - _t67*_t94 + TRAIN5_LIT(0.2)*_t98;
-    const train5_real_t _t139 = -TRAIN5_LIT(1.6666666666666667)*_t138;
-    const train5_real_t _t140 = -J_theta_cart3*_t130 - _ms307*_t86 - _ms312*_ms567 - _ms317*_t87
-            - _ms321*_t128 - _ms324*_t129 - _ms327*_t131 - _ms328*_t132 - _ms335;
-    const train5_real_t _t141 = -_t102*_t71 + TRAIN5_LIT(0.2)*_t106 - TRAIN5_LIT(0.2)*_t110
-            - _t136*(-_t66*_t8 - _t68*_t7) - _t139*(-_t7*_t72 - _t70*_t8) + _t140 - _t69*_t90
-            - _t69*_t94 - _t71*_t98;
-    const train5_real_t _t142 = -TRAIN5_LIT(1.6666666666666667)*_t141;
-    const train5_real_t _t143 = -J_theta_cart2*_t129 - _ms306*_t86 - _ms311*_ms567 - _ms316*_t87
-            - _ms320*_t128 - _ms324*_t130 - _ms325*_t131 - _ms326*_t132 - _ms334;
-    const train5_real_t _t144 = -_t102*_t74 - _t106*_t76 - _t110*_t76 + TRAIN5_LIT(0.2)*_t114
-            - TRAIN5_LIT(0.2)*_t118 - _t136*(-_t3*_t68 - _t4*_t66) - _t139*(-_t3*_t72 - _t4*_t70)
-            - _t142*(-_t3*_t77 - _t4*_t75) + _t143 - _t73*_t90 - _t73*_t94 - _t74*_t98;
-    const train5_real_t _t145 = -TRAIN5_LIT(1.6666666666666667)*_t144;
-    const train5_real_t _t146 = -J_theta_cart*_t128 - _ms305*_t86 - _ms310*_ms567 - _ms315*_t87
-            - _ms320*_t129 - _ms321*_t130 - _ms322*_t131 - _ms323*_t132 - _ms333;
-    const train5_real_t _t147 = -_t102*_t79 - _t106*_t80 - _t110*_t80 - _t114*_t82 - _t118*_t82
-            + TRAIN5_LIT(0.2)*_t122 - TRAIN5_LIT(0.2)*_t126 - _t136*(-_t19*_t68 - _t20*_t66)
-            - _t139*(-_t19*_t72 - _t20*_t70) - _t142*(-_t19*_t77 - _t20*_t75)
-            - _t145*(-TRAIN5_LIT(0.85)*_t19*_t3 - _t20*_t81) + _t146 - _t78*_t90 - _t78*_t94
-            - _t79*_t98;
-    const train5_real_t _t148 = -TRAIN5_LIT(1.6666666666666667)*_t147;
-    const train5_real_t _t149 = _t102*_t12 + _t106*_t8 + _t11*_t139 + _t110*_t8 + _t114*_t4
-            + _t118*_t4 + _t12*_t98 + _t122*_t20 + _t126*_t20 + _t133 + _t136*_t15 + _t142*_t7
-            + _t145*_t3 + _t148*_t19 + _t16*_t90 + _t16*_t94;
-    const train5_real_t _t150 = TRAIN5_LIT(0.5)*_t149;
-    const train5_real_t _t151 = -J_theta_tractor*_t87 + K_theta_tractor_x_tractor*_ms567
-            - K_theta_tractor_x_tractor_2*_t86 - _ms315*_t128 - _ms316*_t129 - _ms317*_t130
-            - _ms318*_t131 - _ms319*_t132 - _ms332;
-    const train5_real_t _t152 = -TRAIN5_LIT(0.3)*_t103 - TRAIN5_LIT(0.3)*_t107
-            - TRAIN5_LIT(0.3)*_t111 - TRAIN5_LIT(0.3)*_t115 - TRAIN5_LIT(0.3)*_t119
-            + TRAIN5_LIT(0.3)*_t12*_t139 - TRAIN5_LIT(0.3)*_t123 - TRAIN5_LIT(0.3)*_t127
-            + TRAIN5_LIT(0.3)*_t136*_t16 + TRAIN5_LIT(0.3)*_t142*_t8 + TRAIN5_LIT(0.3)*_t145*_t4
-            + TRAIN5_LIT(0.3)*_t148*_t20 + _t151 - TRAIN5_LIT(0.3)*_t91 - TRAIN5_LIT(0.3)*_t95
-            - TRAIN5_LIT(0.3)*_t99;
-    const train5_real_t _t153 = TRAIN5_LIT(2.4154589371980677)*_t152;
-    const train5_real_t _t154 = K_theta_cart2_x_tractor*_t0*_t3 + K_theta_cart2_x_tractor_2*_t0*_t4
-            + K_theta_cart3_x_tractor*_t5*_t7 + K_theta_cart3_x_tractor_2*_t5*_t8
-            + K_theta_cart4_x_tractor*_t11*_t9 + K_theta_cart4_x_tractor_2*_t12*_t9
-            + K_theta_cart5_x_tractor*_t13*_t15 + K_theta_cart5_x_tractor_2*_t13*_t16
-            + K_theta_cart_x_tractor*_t17*_t19 + K_theta_cart_x_tractor_2*_t17*_t20
-            + K_theta_tractor_x_tractor_2*_ms287*_ms287;
-    const train5_real_t _t155 = -J_x_tractor*_ms567 + K_theta_tractor_x_tractor*_t87 - _ms310*_t128
-            - _ms311*_t129 - _ms312*_t130 - _ms313*_t131 - _ms314*_t132 - _t154;
-    const train5_real_t _t156 = -_t150 + _t153;
-    const train5_real_t _t157 = -_t150 - _t153;
-    const train5_real_t _t158 = _t103 + _t107 + _t111 + _t115 + _t119 - _t12*_t139 + _t123 + _t127
-            - _t136*_t16 - _t142*_t8 - _t145*_t4 - _t148*_t20 + _t155 + _t91 + _t95 + _t99;
+    const train5_real_t _ms225 = _shared[9];
+    const train5_real_t _ms235 = _shared[17];
+    const train5_real_t _ms236 = _shared[18];
+    const train5_real_t _ms237 = _shared[19];
+    const train5_real_t _ms249 = _shared[31];
+    const train5_real_t _ms250 = _shared[32];
+    const train5_real_t _ms251 = _shared[33];
+    const train5_real_t _ms263 = _shared[45];
+    const train5_real_t _ms264 = _shared[46];
+    const train5_real_t _ms265 = _shared[47];
+    const train5_real_t _ms277 = _shared[59];
+    const train5_real_t _ms278 = _shared[60];
+    const train5_real_t _ms279 = _shared[61];
+    const train5_real_t _ms291 = _shared[73];
+    const train5_real_t _ms292 = _shared[74];
+    const train5_real_t _ms293 = _shared[75];
+    const train5_real_t _ms296 = _shared[76];
+    const train5_real_t _ms297 = _shared[77];
+    const train5_real_t _ms298 = _shared[78];
+    const train5_real_t _ms303 = _shared[83];
+    const train5_real_t _ms304 = _shared[84];
+    const train5_real_t _ms305 = _shared[85];
+    const train5_real_t _ms310 = _shared[90];
+    const train5_real_t _ms311 = _shared[91];
+    const train5_real_t _ms312 = _shared[92];
+    const train5_real_t _ms317 = _shared[97];
+    const train5_real_t _ms318 = _shared[98];
+    const train5_real_t _ms319 = _shared[99];
+    const train5_real_t _ms324 = _shared[104];
+    const train5_real_t _ms325 = _shared[105];
+    const train5_real_t _ms326 = _shared[106];
+    const train5_real_t _ms346 = _shared[114];
+    const train5_real_t _ms347 = _shared[115];
+    const train5_real_t _ms348 = _shared[116];
+    const train5_real_t _ms349 = _shared[117];
+    const train5_real_t _ms350 = _shared[118];
+    const train5_real_t _ms351 = _shared[119];
+    const train5_real_t _ms371 = _shared[139];
+    const train5_real_t _ms376 = _shared[144];
+    const train5_real_t _ms377 = _shared[145];
+    const train5_real_t _ms378 = _shared[146];
+    const train5_real_t _ms385 = _shared[153];
+    const train5_real_t _ms386 = _shared[154];
+    const train5_real_t _ms387 = _shared[155];
+    const train5_real_t _ms394 = _shared[162];
+    const train5_real_t _ms395 = _shared[163];
+    const train5_real_t _ms396 = _shared[164];
+    const train5_real_t _ms403 = _shared[171];
+    const train5_real_t _ms404 = _shared[172];
+    const train5_real_t _ms405 = _shared[173];
+    const train5_real_t _ms412 = _shared[180];
+    const train5_real_t _ms413 = _shared[181];
+    const train5_real_t _ms414 = _shared[182];
+    const train5_real_t _ms415 = _shared[183];
+    const train5_real_t _ms416 = _shared[184];
+    const train5_real_t _ms417 = _shared[185];
+    const train5_real_t _ms418 = _shared[186];
+    const train5_real_t _ms419 = _shared[187];
+    const train5_real_t _ms420 = _shared[188];
+    const train5_real_t _ms421 = _shared[189];
+    const train5_real_t _ms422 = _shared[190];
+    const train5_real_t _ms423 = _shared[191];
+    const train5_real_t _ms424 = _shared[192];
+    const train5_real_t _ms425 = _shared[193];
+    const train5_real_t _ms426 = _shared[194];
+    const train5_real_t _ms427 = _shared[195];
+    const train5_real_t _ms428 = _shared[196];
+    const train5_real_t _ms429 = _shared[197];
+    const train5_real_t _ms430 = _shared[198];
+    const train5_real_t _ms431 = _shared[199];
+    const train5_real_t _ms432 = _shared[200];
+    const train5_real_t _ms433 = _shared[201];
+    const train5_real_t _ms434 = _shared[202];
+    const train5_real_t _ms435 = _shared[203];
+    const train5_real_t _ms436 = _shared[204];
+    const train5_real_t _ms437 = _shared[205];
+    const train5_real_t _ms438 = _shared[206];
+    const train5_real_t _ms439 = _shared[207];
+    const train5_real_t _ms440 = _shared[208];
+    const train5_real_t _ms441 = _shared[209];
+    const train5_real_t _ms442 = _shared[210];
+    const train5_real_t _ms443 = _shared[211];
+    const train5_real_t _ms444 = _shared[212];
+    const train5_real_t _ms445 = _shared[213];
+    const train5_real_t _ms446 = _shared[214];
+    const train5_real_t _ms447 = _shared[215];
+    const train5_real_t _ms448 = _shared[216];
+    const train5_real_t _ms483 = _shared[231];
+    const train5_real_t _ms490 = _shared[238];
+    const train5_real_t _t0 = _ms225*radius_left;
+    const train5_real_t _t1 = _ms225*radius_right;
+    const train5_real_t _t2 = _ms417*_ms426;
+    const train5_real_t _t3 = _ms418*_ms428;
+    const train5_real_t _t4 = _ms419*_ms430;
+    const train5_real_t _t5 = _ms420*_ms432;
+    const train5_real_t _t6 = _ms421*_ms434;
+    const train5_real_t _t7 = _ms422*_ms436;
+    const train5_real_t _t8 = _ms423*_ms438;
+    const train5_real_t _t9 = _ms424*_ms440;
+    const train5_real_t _t10 = _ms417*_ms441;
+    const train5_real_t _t11 = _ms418*_ms442;
+    const train5_real_t _t12 = _t10 + _t11;
+    const train5_real_t _t13 = _ms419*_ms443;
+    const train5_real_t _t14 = _ms420*_ms444;
+    const train5_real_t _t15 = _t13 + _t14;
+    const train5_real_t _t16 = _ms421*_ms445;
+    const train5_real_t _t17 = _ms422*_ms446;
+    const train5_real_t _t18 = _t16 + _t17;
+    const train5_real_t _t19 = _ms423*_ms447;
+    const train5_real_t _t20 = _ms424*_ms448;
+    const train5_real_t _t21 = _t19 + _t20;
+    const train5_real_t _t22 = J_theta_cart2_left*_ms251*_ms251 + J_theta_cart2_right*_ms250*_ms250
+            + J_theta_cart3_left*_ms265*_ms265 + J_theta_cart3_right*_ms264*_ms264
+            + J_theta_cart4_left*_ms279*_ms279 + J_theta_cart4_right*_ms278*_ms278
+            + J_theta_cart5_left*_ms293*_ms293 + J_theta_cart5_right*_ms292*_ms292
+            + J_theta_cart_left*_ms237*_ms237 + J_theta_cart_right*_ms236*_ms236
+            + J_theta_left*_t1*_t1 + J_theta_right*_t0*_t0 + J_x_tractor;
+    const train5_real_t _t23 = J_theta_cart*_ms235*_ms235 + TRAIN5_LIT(2.0)*_ms235*_ms415 + _t22;
+    const train5_real_t _t24 = J_theta_cart2*_ms249*_ms249 + _ms249*_t2 + _ms249*_t3
+            + _ms249*(_t2 + _t3) + _t23;
+    const train5_real_t _t25 = J_theta_cart3*_ms263*_ms263 + _ms263*_t4 + _ms263*_t5
+            + _ms263*(_t4 + _t5) + _t24;
+    const train5_real_t _t26 = J_theta_cart4*_ms277*_ms277 + _ms277*_t6 + _ms277*_t7
+            + _ms277*(_t6 + _t7) + _t25;
+    const train5_real_t _t27 = J_theta_cart5*_ms291*_ms291 + _ms291*_t8 + _ms291*_t9
+            + _ms291*(_t8 + _t9) + _t26;
+    const train5_real_t _t28 = TRAIN5_LIT(0.207)*_t0;
+    const train5_real_t _t29 = -TRAIN5_LIT(0.207)*_t1;
+    const train5_real_t _t30 = J_theta_cart2_left*_ms251*_ms305 + J_theta_cart2_right*_ms250*_ms304
+            + J_theta_cart3_left*_ms265*_ms312 + J_theta_cart3_right*_ms264*_ms311
+            + J_theta_cart4_left*_ms279*_ms319 + J_theta_cart4_right*_ms278*_ms318
+            + J_theta_cart5_left*_ms293*_ms326 + J_theta_cart5_right*_ms292*_ms325
+            + J_theta_cart_left*_ms237*_ms298 + J_theta_cart_right*_ms236*_ms297
+            + J_theta_left*_t1*_t29 + J_theta_right*_t0*_t28;
+    const train5_real_t _t31 = K_theta_tractor_x_tractor_2 + _t30;
+    const train5_real_t _t32 = J_theta_cart*_ms235*_ms296 - TRAIN5_LIT(0.3)*_ms235*_ms416
+            + _ms296*_ms415 + _t31;
+    const train5_real_t _t33 = J_theta_cart2*_ms249*_ms303 + _ms249*_t12 + _ms303*_t2 + _ms303*_t3
+            + _t32;
+    const train5_real_t _t34 = J_theta_cart3*_ms263*_ms310 + _ms263*_t15 + _ms310*_t4 + _ms310*_t5
+            + _t33;
+    const train5_real_t _t35 = J_theta_cart4*_ms277*_ms317 + _ms277*_t18 + _ms317*_t6 + _ms317*_t7
+            + _t34;
+    const train5_real_t _t36 = J_theta_cart5*_ms291*_ms324 + _ms291*_t21 + _ms324*_t8 + _ms324*_t9
+            + _t35;
+    const train5_real_t _t37 = J_theta_cart2_left*_ms305*_ms305 + J_theta_cart2_right*_ms304*_ms304
+            + J_theta_cart3_left*_ms312*_ms312 + J_theta_cart3_right*_ms311*_ms311
+            + J_theta_cart4_left*_ms319*_ms319 + J_theta_cart4_right*_ms318*_ms318
+            + J_theta_cart5_left*_ms326*_ms326 + J_theta_cart5_right*_ms325*_ms325
+            + J_theta_cart_left*_ms298*_ms298 + J_theta_cart_right*_ms297*_ms297
+            + J_theta_left*_t29*_t29 + J_theta_right*_t28*_t28;
+    const train5_real_t _t38 = J_theta_tractor + _t37;
+    const train5_real_t _t39 = J_theta_cart*_ms296*_ms296 - TRAIN5_LIT(0.6)*_ms296*_ms416 + _t38;
+    const train5_real_t _t40 = J_theta_cart2*_ms303*_ms303 + _ms303*_t10 + _ms303*_t11 + _ms303*_t12
+            + _t39;
+    const train5_real_t _t41 = J_theta_cart3*_ms310*_ms310 + _ms310*_t13 + _ms310*_t14 + _ms310*_t15
+            + _t40;
+    const train5_real_t _t42 = J_theta_cart4*_ms317*_ms317 + _ms317*_t16 + _ms317*_t17 + _ms317*_t18
+            + _t41;
+    const train5_real_t _t43 = J_theta_cart5*_ms324*_ms324 + _ms324*_t19 + _ms324*_t20 + _ms324*_t21
+            + _t42;
+    const train5_real_t _t44 = _t27*_t43 - _t36*_t36;
+    const train5_real_t _t45 = -theta_tractor;
+    const train5_real_t _t46 = _t45 + theta_cart4;
+    const train5_real_t _t47 = TRAIN5_SIN(_t46);
+    const train5_real_t _t48 = _t45 + theta_cart5;
+    const train5_real_t _t49 = TRAIN5_COS(_t48);
+    const train5_real_t _t50 = TRAIN5_LIT(0.85)*_t49;
+    const train5_real_t _t51 = TRAIN5_SIN(_t48);
+    const train5_real_t _t52 = TRAIN5_COS(_t46);
+    const train5_real_t _t53 = -_t47*_t50 + TRAIN5_LIT(0.85)*_t51*_t52;
+    const train5_real_t _t54 = TRAIN5_LIT(0.85)*_t51;
+    const train5_real_t _t55 = _t45 + theta_cart3;
+    const train5_real_t _t56 = TRAIN5_SIN(_t55);
+    const train5_real_t _t57 = TRAIN5_COS(_t55);
+    const train5_real_t _t58 = -_t50*_t56 + TRAIN5_LIT(0.85)*_t51*_t57;
+    const train5_real_t _t59 = TRAIN5_LIT(0.85)*_t52;
+    const train5_real_t _t60 = TRAIN5_LIT(0.85)*_t47*_t57 - _t56*_t59;
+    const train5_real_t _t61 = TRAIN5_LIT(0.85)*_t47;
+    const train5_real_t _t62 = _t45 + theta_cart2;
+    const train5_real_t _t63 = TRAIN5_SIN(_t62);
+    const train5_real_t _t64 = TRAIN5_COS(_t62);
+    const train5_real_t _t65 = -_t50*_t63 + TRAIN5_LIT(0.85)*_t51*_t64;
+    const train5_real_t _t66 = TRAIN5_LIT(0.85)*_t47*_t64 - _t59*_t63;
+    const train5_real_t _t67 = TRAIN5_LIT(0.85)*_t57;
+    const train5_real_t _t68 = TRAIN5_LIT(0.85)*_t56*_t64 - _t63*_t67;
+    const train5_real_t _t69 = TRAIN5_LIT(0.85)*_t56;
+    const train5_real_t _t70 = _t45 + theta_cart;
+    const train5_real_t _t71 = TRAIN5_SIN(_t70);
+    const train5_real_t _t72 = TRAIN5_COS(_t70);
+    const train5_real_t _t73 = -_t50*_t71 + TRAIN5_LIT(0.85)*_t51*_t72;
+    const train5_real_t _t74 = TRAIN5_LIT(0.85)*_t47*_t72 - _t59*_t71;
+    const train5_real_t _t75 = TRAIN5_LIT(0.85)*_t56*_t72 - _t67*_t71;
+    const train5_real_t _t76 = TRAIN5_LIT(0.85)*_t64;
+    const train5_real_t _t77 = TRAIN5_LIT(0.85)*_t63*_t72 - _t71*_t76;
+    const train5_real_t _t78 = TRAIN5_LIT(1.0)/radius_cart5_right;
+    const train5_real_t _t79 = -_ms483 + _t0*tau_right + _t1*tau_left;
+    const train5_real_t _t80 = -_ms490 + _t28*tau_right + _t29*tau_left;
+    const train5_real_t _t81 = TRAIN5_LIT(1.0)/_t44;
+    const train5_real_t _t82 = _t81*(-_t36*_t80 + _t43*_t79);
+    const train5_real_t _t83 = _t81*(_t27*_t80 - _t36*_t79);
+    const train5_real_t _t84 = _ms292*_t82 + _ms325*_t83 + _ms413;
+    const train5_real_t _t85 = J_theta_cart5_right*_t84;
+    const train5_real_t _t86 = -_t78*_t85;
+    const train5_real_t _t87 = _t51*_t86;
+    const train5_real_t _t88 = TRAIN5_LIT(1.0)/radius_cart5_left;
+    const train5_real_t _t89 = _ms293*_t82 + _ms326*_t83 + _ms414;
+    const train5_real_t _t90 = J_theta_cart5_left*_t89;
+    const train5_real_t _t91 = -_t88*_t90;
+    const train5_real_t _t92 = _t51*_t91;
+    const train5_real_t _t93 = TRAIN5_LIT(1.0)/radius_cart4_right;
+    const train5_real_t _t94 = _ms278*_t82 + _ms318*_t83 + _ms404;
+    const train5_real_t _t95 = J_theta_cart4_right*_t94;
+    const train5_real_t _t96 = -_t93*_t95;
+    const train5_real_t _t97 = _t47*_t96;
+    const train5_real_t _t98 = TRAIN5_LIT(1.0)/radius_cart4_left;
+    const train5_real_t _t99 = _ms279*_t82 + _ms319*_t83 + _ms405;
+    const train5_real_t _t100 = J_theta_cart4_left*_t99;
+    const train5_real_t _t101 = -_t100*_t98;
+    const train5_real_t _t102 = _t101*_t47;
+    const train5_real_t _t103 = TRAIN5_LIT(1.0)/radius_cart3_right;
+    const train5_real_t _t104 = _ms264*_t82 + _ms311*_t83 + _ms395;
+    const train5_real_t _t105 = J_theta_cart3_right*_t104;
+    const train5_real_t _t106 = -_t103*_t105;
+    const train5_real_t _t107 = _t106*_t56;
+    const train5_real_t _t108 = TRAIN5_LIT(1.0)/radius_cart3_left;
+    const train5_real_t _t109 = _ms265*_t82 + _ms312*_t83 + _ms396;
+    const train5_real_t _t110 = J_theta_cart3_left*_t109;
+    const train5_real_t _t111 = -_t108*_t110;
+    const train5_real_t _t112 = _t111*_t56;
+    const train5_real_t _t113 = TRAIN5_LIT(1.0)/radius_cart2_right;
+    const train5_real_t _t114 = _ms250*_t82 + _ms304*_t83 + _ms386;
+    const train5_real_t _t115 = J_theta_cart2_right*_t114;
+    const train5_real_t _t116 = -_t113*_t115;
+    const train5_real_t _t117 = _t116*_t63;
+    const train5_real_t _t118 = TRAIN5_LIT(1.0)/radius_cart2_left;
+    const train5_real_t _t119 = _ms251*_t82 + _ms305*_t83 + _ms387;
+    const train5_real_t _t120 = J_theta_cart2_left*_t119;
+    const train5_real_t _t121 = -_t118*_t120;
+    const train5_real_t _t122 = _t121*_t63;
+    const train5_real_t _t123 = TRAIN5_LIT(1.0)/radius_cart_right;
+    const train5_real_t _t124 = _ms236*_t82 + _ms297*_t83 + _ms377;
+    const train5_real_t _t125 = J_theta_cart_right*_t124;
+    const train5_real_t _t126 = -_t123*_t125;
+    const train5_real_t _t127 = _t126*_t71;
+    const train5_real_t _t128 = TRAIN5_LIT(1.0)/radius_cart_left;
+    const train5_real_t _t129 = _ms237*_t82 + _ms298*_t83 + _ms378;
+    const train5_real_t _t130 = J_theta_cart_left*_t129;
+    const train5_real_t _t131 = -_t128*_t130;
+    const train5_real_t _t132 = _t131*_t71;
+    const train5_real_t _t133 = _ms235*_t82 + _ms296*_t83 + _ms376;
+    const train5_real_t _t134 = _ms249*_t82 + _ms303*_t83 + _ms385;
+    const train5_real_t _t135 = _ms263*_t82 + _ms310*_t83 + _ms394;
+    const train5_real_t _t136 = _ms277*_t82 + _ms317*_t83 + _ms403;
+    const train5_real_t _t137 = _ms291*_t82 + _ms324*_t83 + _ms412;
+    const train5_real_t _t138 = -_ms351*_ms424 + _ms423*_t137;
+    const train5_real_t _t139 = -_ms350*_ms422 + _ms421*_t136 + _t138;
+    const train5_real_t _t140 = -_ms349*_ms420 + _ms419*_t135 + _t139;
+    const train5_real_t _t141 = -_ms348*_ms418 + _ms417*_t134 + _t140;
+    const train5_real_t _t142 = -_ms347*_ms416 + _ms415*_t133 + _t141;
+    const train5_real_t _t143 = K_theta_tractor_x_tractor*_ms346 + K_theta_tractor_x_tractor_2*_t83
+            + _t142;
+    const train5_real_t _t144 = J_x_tractor*_t82 + _t143;
+    const train5_real_t _t145 = TRAIN5_LIT(0.3)*_ms346 + _t82;
+    const train5_real_t _t146 = -_ms347*_ms427 + _ms425*_t133 + _t145;
+    const train5_real_t _t147 = -_ms348*_ms431 + _ms429*_t134 + _t146;
+    const train5_real_t _t148 = -_ms349*_ms435 + _ms433*_t135 + _t147;
+    const train5_real_t _t149 = -_ms350*_ms439 + _ms437*_t136 + _t148;
+    const train5_real_t _t150 = _ms371 - TRAIN5_LIT(0.3)*_t83;
+    const train5_real_t _t151 = _ms347*_ms425 + _ms427*_t133 + _t150;
+    const train5_real_t _t152 = _ms348*_ms429 + _ms431*_t134 + _t151;
+    const train5_real_t _t153 = _ms349*_ms433 + _ms435*_t135 + _t152;
+    const train5_real_t _t154 = _ms350*_ms437 + _ms439*_t136 + _t153;
+    const train5_real_t _t155 = J_theta_cart5*_t137 + _ms423*_t149 + _ms424*_t154;
+    const train5_real_t _t156 = -_t155 + TRAIN5_LIT(0.2)*_t86 - TRAIN5_LIT(0.2)*_t91;
+    const train5_real_t _t157 = -TRAIN5_LIT(1.6666666666666667)*_t156;
+    const train5_real_t _t158 = _ms351*_ms423 + _ms424*_t137;
+    const train5_real_t _t159 = J_theta_cart4*_t136 + _ms421*_t148 + _ms422*_t153 + _ms437*_t138
+            + _ms439*_t158;
+    const train5_real_t _t160 = -TRAIN5_LIT(0.2)*_t101 - _t157*(-_t47*_t54 - _t50*_t52) - _t159
+            - _t53*_t86 - _t53*_t91 + TRAIN5_LIT(0.2)*_t96;
+    const train5_real_t _t161 = -TRAIN5_LIT(1.6666666666666667)*_t160;
+    const train5_real_t _t162 = _ms350*_ms421 + _ms422*_t136 + _t158;
+    const train5_real_t _t163 = J_theta_cart3*_t135 + _ms419*_t147 + _ms420*_t152 + _ms433*_t139
+            + _ms435*_t162;
+    const train5_real_t _t164 = -_t101*_t60 + TRAIN5_LIT(0.2)*_t106 - TRAIN5_LIT(0.2)*_t111
+            - _t157*(-_t50*_t57 - _t54*_t56) - _t161*(-_t56*_t61 - _t57*_t59) - _t163 - _t58*_t86
+            - _t58*_t91 - _t60*_t96;
+    const train5_real_t _t165 = -TRAIN5_LIT(1.6666666666666667)*_t164;
+    const train5_real_t _t166 = _ms349*_ms419 + _ms420*_t135 + _t162;
+    const train5_real_t _t167 = J_theta_cart2*_t134 + _ms417*_t146 + _ms418*_t151 + _ms429*_t140
+            + _ms431*_t166;
+    const train5_real_t _t168 = -_t101*_t66 - _t106*_t68 - _t111*_t68 + TRAIN5_LIT(0.2)*_t116
+            - TRAIN5_LIT(0.2)*_t121 - _t157*(-_t50*_t64 - _t54*_t63)
+            - _t161*(-_t59*_t64 - _t61*_t63) - _t165*(-_t63*_t69 - _t64*_t67) - _t167 - _t65*_t86
+            - _t65*_t91 - _t66*_t96;
+    const train5_real_t _t169 = -TRAIN5_LIT(1.6666666666666667)*_t168;
+    const train5_real_t _t170 = _ms348*_ms417 + _ms418*_t134 + _t166;
+    const train5_real_t _t171 = J_theta_cart*_t133 + _ms415*_t145 + _ms416*_t150 + _ms425*_t141
+            + _ms427*_t170;
+    const train5_real_t _t172 = -_t101*_t74 - _t106*_t75 - _t111*_t75 - _t116*_t77 - _t121*_t77
+            + TRAIN5_LIT(0.2)*_t126 - TRAIN5_LIT(0.2)*_t131 - _t157*(-_t50*_t72 - _t54*_t71)
+            - _t161*(-_t59*_t72 - _t61*_t71) - _t165*(-_t67*_t72 - _t69*_t71)
+            - _t169*(-TRAIN5_LIT(0.85)*_t63*_t71 - _t72*_t76) - _t171 - _t73*_t86 - _t73*_t91
+            - _t74*_t96;
+    const train5_real_t _t173 = -TRAIN5_LIT(1.6666666666666667)*_t172;
+    const train5_real_t _t174 = _t101*_t52 + _t106*_t57 + _t111*_t57 + _t116*_t64 + _t121*_t64
+            + _t126*_t72 + _t131*_t72 - _t144 + _t157*_t51 + _t161*_t47 + _t165*_t56 + _t169*_t63
+            + _t173*_t71 + _t49*_t86 + _t49*_t91 + _t52*_t96;
+    const train5_real_t _t175 = TRAIN5_LIT(0.5)*_t174;
+    const train5_real_t _t176 = _ms347*_ms415 + _ms416*_t133 + _t170;
+    const train5_real_t _t177 = J_theta_tractor*_t83 - K_theta_tractor_x_tractor*_ms371
+            + K_theta_tractor_x_tractor_2*_t82 - TRAIN5_LIT(0.3)*_t176;
+    const train5_real_t _t178 = -TRAIN5_LIT(0.3)*_t102 - TRAIN5_LIT(0.3)*_t107
+            - TRAIN5_LIT(0.3)*_t112 - TRAIN5_LIT(0.3)*_t117 - TRAIN5_LIT(0.3)*_t122
+            - TRAIN5_LIT(0.3)*_t127 - TRAIN5_LIT(0.3)*_t132 + TRAIN5_LIT(0.3)*_t157*_t49
+            + TRAIN5_LIT(0.3)*_t161*_t52 + TRAIN5_LIT(0.3)*_t165*_t57 + TRAIN5_LIT(0.3)*_t169*_t64
+            + TRAIN5_LIT(0.3)*_t173*_t72 - _t177 - TRAIN5_LIT(0.3)*_t87 - TRAIN5_LIT(0.3)*_t92
+            - TRAIN5_LIT(0.3)*_t97;
+    const train5_real_t _t179 = TRAIN5_LIT(2.4154589371980677)*_t178;
+    const train5_real_t _t180 = -K_theta_tractor_x_tractor*_t83 + K_theta_tractor_x_tractor_2*_ms346
+            + _t176;
+    const train5_real_t _t181 = J_x_tractor*_ms371 + _t180;
+    const train5_real_t _t182 = -_t175 + _t179;
+    const train5_real_t _t183 = -_t175 - _t179;
+    const train5_real_t _t184 = _t102 + _t107 + _t112 + _t117 + _t122 + _t127 + _t132 - _t157*_t49
+            - _t161*_t52 - _t165*_t57 - _t169*_t64 - _t173*_t72 - _t181 + _t87 + _t92 + _t97;
     if (!(radius_cart2_left > TRAIN5_LIT(0.0))) { /* radius_cart2_left > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
@@ -6849,20 +5200,20 @@ train5_status_t train5_wheel_contact_forces(const train5_params_t *p, const trai
     if (!(J_x_tractor > TRAIN5_LIT(0.0))) { /* J_x_tractor > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    if (!(_t41 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+    if (!(_t27 > TRAIN5_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    if (!(_t65 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+    if (!(_t44 > TRAIN5_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
         return TRAIN5_ERR_BAD_PARAMS;
     }
-    const train5_real_t r_0 = _t157;
-    const train5_real_t r_1 = _t156;
-    const train5_real_t r_2 = -_t158;
-    const train5_real_t r_3 = -_t148;
-    const train5_real_t r_4 = -_t145;
-    const train5_real_t r_5 = -_t142;
-    const train5_real_t r_6 = -_t139;
-    const train5_real_t r_7 = -_t136;
+    const train5_real_t r_0 = _t183;
+    const train5_real_t r_1 = _t182;
+    const train5_real_t r_2 = -_t184;
+    const train5_real_t r_3 = -_t173;
+    const train5_real_t r_4 = -_t169;
+    const train5_real_t r_5 = -_t165;
+    const train5_real_t r_6 = -_t161;
+    const train5_real_t r_7 = -_t157;
     if (((train5_exp_carry(r_0) | train5_exp_carry(r_1) | train5_exp_carry(r_2)
             | train5_exp_carry(r_3) | train5_exp_carry(r_4) | train5_exp_carry(r_5)
             | train5_exp_carry(r_6) | train5_exp_carry(r_7)) & TRAIN5_EXP_CARRY_TOP) != 0u) {
