@@ -25,15 +25,16 @@ from modeling.robots.drishti import model as wmr
 # the end while the other has nothing to do. pytest-xdist's own order (--loadscope-reorder,
 # its default: most tests first) put the two-test tutorial, minutes long, last.
 LONGEST_FILES = (
-    "docs/test_tutorial.py",
     "codegen/test_codegen_cli.py",
+    "docs/test_tutorial.py",
     "firmware/test_misra.py",
     "runtime/test_bench.py",
-    "reproduction/test_reproduction.py",
     "firmware/test_frozen_config.py",
+    "runtime/test_audit_warnings_travel.py",
     "robot_files/test_public_pipeline.py",
+    "runtime/test_cli.py",
     "generated/test_any_robot_pipeline.py",
-    "generated/test_crosscheck.py",
+    "derivation/test_description_trailer.py",
 )
 
 
