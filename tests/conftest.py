@@ -1,4 +1,5 @@
-"""Shared numeric views of the symbolic WMR model (lambdified once per session).
+"""Shared numeric views of the symbolic WMR model (lambdified once per session), and the
+order in which ``make test`` hands the test files to its workers.
 
 Every function takes (q, qdot, qddot, tau, p) with p = (m, I, K, K_lat, I_w, r, b, d) in the
 order of ``wmr.PLANT_SYMBOLS``; arguments an expression does not use are ignored.
@@ -8,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -16,6 +18,45 @@ import sympy as sp
 
 from modeling.robot_file import load_robot
 from modeling.robots.drishti import model as wmr
+
+# The test files that take longest (per-test durations of a full `make test`, summed per
+# file), longest first. `make test` runs one file per worker (--dist loadfile) on two
+# workers: these start first, so that neither worker is left running one of them alone at
+# the end while the other has nothing to do. pytest-xdist's own order (--loadscope-reorder,
+# its default: most tests first) put the two-test tutorial, minutes long, last.
+LONGEST_FILES = (
+    "codegen/test_codegen_cli.py",
+    "docs/test_tutorial.py",
+    "firmware/test_misra.py",
+    "runtime/test_bench.py",
+    "firmware/test_frozen_config.py",
+    "runtime/test_audit_warnings_travel.py",
+    "robot_files/test_public_pipeline.py",
+    "runtime/test_cli.py",
+    "generated/test_any_robot_pipeline.py",
+    "derivation/test_description_trailer.py",
+)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if hasattr(config.option, "loadscopereorder"):  # pytest-xdist is loaded
+        config.option.loadscopereorder = False  # the collection's order, as sorted below
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The longest files first (:data:`LONGEST_FILES`), every other file after them in the
+    collection's order; the tests of a file keep theirs (a stable sort)."""
+    rank = {name: i for i, name in enumerate(LONGEST_FILES)}
+    here = Path(__file__).parent
+
+    def key(item: pytest.Item) -> int:
+        try:
+            return rank.get(item.path.relative_to(here).as_posix(), len(rank))
+        except ValueError:  # a test outside tests/
+            return len(rank)
+
+    items.sort(key=key)
+
 
 ARGS = (wmr.q, wmr.qdot, wmr.qddot, tuple(wmr.tau), wmr.PLANT_SYMBOLS)
 NumFn = Callable[..., np.ndarray]

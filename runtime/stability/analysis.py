@@ -25,6 +25,7 @@ from runtime.bindings.uncertainty import tde_alpha
 from runtime.experiment.settings import ACCEL_CODES, Experiment
 from runtime.plants import plant_for
 from runtime.sim import loop, paths
+from runtime.sim.memo import Memo
 from runtime.stability.sampled_loop import (
     EPS_SOURCE,
     FORMULATIONS,
@@ -85,7 +86,20 @@ def measured_gain(
     """Median switching gain over the experiment's closed-loop circle (the analysis'
     operating point) at the experiment's setting. The configuration checks are skipped: the
     loop's stability is what is analysed here, and the TDE condition over the uncertainty
-    box is reported apart (:func:`tde_notes`)."""
+    box is reported apart (:func:`tde_notes`). The same arguments in one process: the same
+    gain, simulated once (`wmr freeze` asks for it on every run of a configuration)."""
+    key = (str(code.folder.resolve()), code.prefix, controller, formulation,
+           tuple(sorted((k, float(v)) for k, v in robot.items())), replace(exp, source=""))
+    return _gain_memo.get(key, lambda: _measured_gain(code, controller, formulation, robot, exp))
+
+
+# Gains already measured in this process, keyed as the references' memo keys its circle
+# (the experiment's ``source``, its file's name as typed, is read by no simulation).
+_gain_memo: Memo[float] = Memo(32)
+
+
+def _measured_gain(code: RobotCode, controller: str, formulation: str,
+                   robot: dict[str, float], exp: Experiment) -> float:
     ref = paths.circle(code, robot, exp)
     r = loop.run(code, controller, formulation, ref, robot, exp,
                  plant=plant_for(code, exp, robot))

@@ -201,11 +201,30 @@ def grip_along(monitor: SlipMonitor, nominal: dict[str, float], exp: Experiment,
     return needed.copy(), limit.copy()
 
 
+# Verdicts already reached in this process, by everything they read (the robot's generated
+# code by its folder and prefix, as the references' and the grip's memos): `wmr freeze` asks
+# for the same simulated verdict on every run with the same configuration, at seconds each.
+# The experiment's ``source`` (the file's name as typed) is left out of the key: nothing
+# in a verdict reads it. A verdict is a frozen dataclass: handed out as it is.
+_verdict_memo: Memo[SaturationVerdict] = Memo(32)
+
+
 def saturation_verdict(code: RobotCode, controller: str, formulation: str,
                        nominal: dict[str, float], exp: Experiment, plant: str = "payload",
                        simulate: bool = False) -> SaturationVerdict:
     """The verdict for one controller and formulation (see the module docstring); the
-    demand with the heaviest robot unless ``plant="nominal"``."""
+    demand with the heaviest robot unless ``plant="nominal"`` (the same arguments in one
+    process: the same verdict, reached once)."""
+    key = (str(code.folder.resolve()), code.prefix, controller, formulation,
+           tuple(sorted((k, float(v)) for k, v in nominal.items())),
+           replace(exp, source=""), plant, simulate)
+    return _verdict_memo.get(key, lambda: _saturation_verdict(
+        code, controller, formulation, nominal, exp, plant, simulate))
+
+
+def _saturation_verdict(code: RobotCode, controller: str, formulation: str,
+                        nominal: dict[str, float], exp: Experiment, plant: str,
+                        simulate: bool) -> SaturationVerdict:
     info = code.controller(controller)
     heavy = plant_parameters(code, nominal, exp, "payload" if plant == "payload" else plant)
     heavy = {k: v for k, v in heavy.items() if k in nominal}

@@ -189,4 +189,5 @@ def test_crosscheck_reports_them(bare: tuple[Path, Path]) -> None:
     title = done.stdout.index("Robot bare_caster")
     section = done.stdout[title:].split("Robot file audit", 1)[1].split("\n\n", 3)
     assert WARNING.search(section[2]) and section[2].count("- ") == 2, section
-    assert "Robot file audit" not in wmr("crosscheck", "--robot", "drishti", "--quick").stdout
+    # a robot without warnings has no such section: tests/generated/test_crosscheck.py, on
+    # the report of every shipped robot (the same rendering this command prints)

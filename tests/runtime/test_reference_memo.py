@@ -1,7 +1,9 @@
-"""The process-level memos of the references (``runtime.sim.reference.integrate``) and of the
-grip along a path (``runtime.stability.saturation.grip_along``): a repeated request returns
-what a fresh computation returns, bit for bit, as a copy of its own; a request that differs
-in anything the computation reads is computed anew."""
+"""The process-level memos of the references (``runtime.sim.reference.integrate``), of the
+grip along a path (``runtime.stability.saturation.grip_along``), of the saturation verdict
+(``saturation_verdict``) and of the measured switching gain
+(``runtime.stability.analysis.measured_gain``): a repeated request returns what a fresh
+computation returns, bit for bit (arrays as a copy of their own); a request that differs in
+anything the computation reads is computed anew."""
 
 from __future__ import annotations
 
@@ -13,7 +15,7 @@ import pytest
 from runtime.bindings.generated import RobotCode, load_robot_code
 from runtime.experiment.settings import Experiment
 from runtime.sim import paths, reference
-from runtime.stability import saturation
+from runtime.stability import analysis, saturation
 
 
 @pytest.fixture(scope="module")
@@ -68,3 +70,36 @@ def test_the_grip_memo_returns_the_fresh_grip(code: RobotCode) -> None:
     slower = paths.lawnmower(code, code.params, exp)
     other = saturation.grip_along(monitor, code.params, exp, slower)
     assert other[0].shape[0] == len(slower.t) != len(ref.t)
+
+
+def test_a_repeated_saturation_verdict_is_the_fresh_one(code: RobotCode) -> None:
+    """The verdict memo (``wmr freeze`` asks for the same simulated verdict on every run): the
+    fresh verdict again; an experiment that differs only in its file's name is the same
+    request; one that differs in τ_max is computed anew (another verdict)."""
+    exp = _short()
+    saturation._verdict_memo.clear()
+    first = saturation.saturation_verdict(code, "tdroc", "paper", code.params, exp)
+    fresh = saturation._saturation_verdict(code, "tdroc", "paper", code.params, exp,
+                                           "payload", False)
+    assert first == fresh
+    again = saturation.saturation_verdict(code, "tdroc", "paper", code.params,
+                                          replace(exp, source="elsewhere.toml"))
+    assert again is first and len(saturation._verdict_memo) == 1
+    low = replace(exp, controller=replace(exp.controller, tau_max=0.5 * fresh.demand))
+    other = saturation.saturation_verdict(code, "tdroc", "paper", code.params, low)
+    assert other.tau_max == low.controller.tau_max and other.verdict == "saturates"
+    assert len(saturation._verdict_memo) == 2
+
+
+def test_a_repeated_measured_gain_is_the_fresh_one(code: RobotCode) -> None:
+    exp = _short()
+    analysis._gain_memo.clear()
+    first = analysis.measured_gain(code, "tdroc", "paper", code.params, exp)
+    assert first == analysis._measured_gain(code, "tdroc", "paper", code.params, exp)
+    assert analysis.measured_gain(code, "tdroc", "paper", code.params,
+                                  replace(exp, source="elsewhere.toml")) == first
+    assert len(analysis._gain_memo) == 1
+    # another window discount: another loop, another median gain
+    other = replace(exp, controller=replace(exp.controller, a=0.5))
+    assert analysis.measured_gain(code, "tdroc", "paper", code.params, other) != first
+    assert len(analysis._gain_memo) == 2
