@@ -1,19 +1,30 @@
 """A bounded, per-process memo of results by key, least recently used dropped first.
 
-The references (:mod:`runtime.sim.reference`) and the grip along a path
-(:mod:`runtime.stability.saturation`) are asked for again with the same arguments, once per
+The references (:mod:`runtime.sim.reference`), the grip along a path and the saturation
+verdict (:mod:`runtime.stability.saturation`) and the measured switching gain
+(:mod:`runtime.stability.analysis`) are asked for again with the same arguments, once per
 controller, formulation and delay, at seconds each; each keeps its results here. The caller
-builds the key from everything the computation reads, and copies what it hands out (the
-results are NumPy arrays that a caller may write into).
+builds the key (:func:`key_of`) from everything the computation reads, and copies what it
+hands out where that is mutable (NumPy arrays a caller may write into).
 """
 
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Mapping
 from typing import Generic, TypeVar
 
+from runtime.bindings.generated import RobotCode
+
 T = TypeVar("T")
+
+
+def key_of(code: RobotCode, params: Mapping[str, float], *rest: Hashable
+           ) -> tuple[Hashable, ...]:
+    """A memo key: the robot's generated code (its folder, resolved, and prefix), the
+    parameters by name as floats, then ``rest`` (whatever else the computation reads)."""
+    return (str(code.folder.resolve()), code.prefix,
+            tuple(sorted((k, float(v)) for k, v in params.items())), *rest)
 
 
 class Memo(Generic[T]):

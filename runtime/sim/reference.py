@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
 from runtime.bindings.generated import RobotCode
-from runtime.sim.memo import Memo
+from runtime.sim.memo import Memo, key_of
 
 Array = NDArray[np.float64]
 RAMP = 0.3  # s, tanh time constant of every wheel-rate switch
@@ -75,9 +75,8 @@ def integrate(code: RobotCode, name: str, profile: WheelProfile, start: Array,
               scale: float = math.nan) -> Reference:
     """Integrate q̇ = S(q) η_d(t) from ``start`` (DOP853, rtol 1e-11) and sample every h
     (the same arguments in one process: the same reference, integrated once)."""
-    key = (str(code.folder.resolve()), code.prefix, name, profile,
-           np.asarray(start, dtype=np.float64).tobytes(),
-           tuple(sorted((k, float(v)) for k, v in params.items())), h, duration, scale)
+    key = key_of(code, params, name, profile, np.asarray(start, dtype=np.float64).tobytes(),
+                 h, duration, scale)
     ref = _memo.get(key, lambda: _integrate(code, name, profile, start, params, h, duration,
                                             scale))
     return replace(ref, t=ref.t.copy(), q=ref.q.copy(), qdot=ref.qdot.copy(),

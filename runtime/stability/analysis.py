@@ -25,7 +25,7 @@ from runtime.bindings.uncertainty import tde_alpha
 from runtime.experiment.settings import ACCEL_CODES, Experiment
 from runtime.plants import plant_for
 from runtime.sim import loop, paths
-from runtime.sim.memo import Memo
+from runtime.sim.memo import Memo, key_of
 from runtime.stability.sampled_loop import (
     EPS_SOURCE,
     FORMULATIONS,
@@ -88,8 +88,7 @@ def measured_gain(
     loop's stability is what is analysed here, and the TDE condition over the uncertainty
     box is reported apart (:func:`tde_notes`). The same arguments in one process: the same
     gain, simulated once (`wmr freeze` asks for it on every run of a configuration)."""
-    key = (str(code.folder.resolve()), code.prefix, controller, formulation,
-           tuple(sorted((k, float(v)) for k, v in robot.items())), replace(exp, source=""))
+    key = key_of(code, robot, controller, formulation, replace(exp, source=""))
     return _gain_memo.get(key, lambda: _measured_gain(code, controller, formulation, robot, exp))
 
 

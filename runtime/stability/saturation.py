@@ -61,7 +61,7 @@ from runtime.experiment.settings import Experiment
 from runtime.plants import plant_for
 from runtime.setting.layout import robot_layout, traction_torque_limit
 from runtime.sim import loop, paths
-from runtime.sim.memo import Memo
+from runtime.sim.memo import Memo, key_of
 from runtime.sim.reference import Reference
 from runtime.sim.slip_monitor import MonitoredPlant, SlipMonitor
 from runtime.stability.sampled_loop import plant_parameters, roc_gain
@@ -188,8 +188,7 @@ def grip_along(monitor: SlipMonitor, nominal: dict[str, float], exp: Experiment,
     digest = hashlib.sha256()
     for a in (ref.t, ref.q, ref.qdot, ref.qddot):
         digest.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
-    key = (str(monitor.code.folder.resolve()), monitor.code.prefix, monitor.robot,
-           tuple(sorted((k, float(v)) for k, v in nominal.items())), exp, digest.digest())
+    key = key_of(monitor.code, nominal, monitor.robot, exp, digest.digest())
 
     def grip() -> tuple[Array, Array]:
         radius = {w.name: w.radius for w in monitor.robot.wheels}
@@ -215,9 +214,8 @@ def saturation_verdict(code: RobotCode, controller: str, formulation: str,
     """The verdict for one controller and formulation (see the module docstring); the
     demand with the heaviest robot unless ``plant="nominal"`` (the same arguments in one
     process: the same verdict, reached once)."""
-    key = (str(code.folder.resolve()), code.prefix, controller, formulation,
-           tuple(sorted((k, float(v)) for k, v in nominal.items())),
-           replace(exp, source=""), plant, simulate)
+    key = key_of(code, nominal, controller, formulation, replace(exp, source=""), plant,
+                 simulate)
     return _verdict_memo.get(key, lambda: _saturation_verdict(
         code, controller, formulation, nominal, exp, plant, simulate))
 
