@@ -45,6 +45,12 @@ def derived_key(access: str) -> str:
     return access if access in DERIVED else base if base in DERIVED else ""
 
 
+def producers(prog: Program) -> set[str]:
+    """The functions whose outputs ``prog``'s :data:`DERIVED` inputs are (its box takes
+    their enclosures)."""
+    return {DERIVED[k][0] for k in map(derived_key, prog.input_names.values()) if k}
+
+
 @dataclass(frozen=True)
 class Envelope:
     """The operating envelope the certificates are stated for (SI units)."""

@@ -27,7 +27,7 @@ import sympy as sp
 from codegen.backend import RobotTarget
 from codegen.backends.c.backend import config_for
 from codegen.backends.c.certify.bound import Certificate
-from codegen.backends.c.certify.boxes import DERIVED, ENVELOPE, Interval, box_of, derived_key
+from codegen.backends.c.certify.boxes import ENVELOPE, Interval, box_of, producers
 from codegen.backends.c.certify.program import Program
 from codegen.backends.c.certify.robot import derive, programs, robot_angles, robot_params
 from codegen.backends.c.certify.steps import steps_of
@@ -95,9 +95,7 @@ def plan_only(robot: str, target: RobotTarget, stored: Mapping[str, Any] | None,
             rows[n].get("composed") and not current(rows[n]["composed"]["function"]))}
     # the readers of a re-certified producer's derived inputs (their boxes are its output
     # enclosures), and a function certified over its producer's image (compose.py)
-    functions |= {n for n, (_, prog) in irs.items()
-                  if any(DERIVED[k][0] in functions
-                         for k in map(derived_key, prog.input_names.values()) if k)}
+    functions |= {n for n, (_, prog) in irs.items() if producers(prog) & functions}
     functions |= {n for n, r in rows.items() if n in irs
                   and r.get("composed", {}).get("function") in functions}
     chosen = {k for n in names for k, s in steps.items() if n in (k, s.controller)}
@@ -109,8 +107,7 @@ def plan_only(robot: str, target: RobotTarget, stored: Mapping[str, Any] | None,
         return plan
     # stored results read: the producers of the re-certified functions' derived inputs,
     # and every function a re-certified step combines, unless re-certified now
-    reads = {DERIVED[k][0] for n in functions
-             for k in map(derived_key, irs[n][1].input_names.values()) if k}
+    reads = {p for n in functions for p in producers(irs[n][1])}
     reads |= {n for k in chosen for n in steps[k].reads(irs[steps[k].law][1])}
     reads -= functions
     for name in sorted(reads):

@@ -18,6 +18,7 @@ from codegen.backends.c.certify.boxes import (
     derived_key,
     input_errors,
     parameter_ranges,
+    producers,
 )
 from codegen.backends.c.certify.compose import composed
 from codegen.backends.c.certify.program import Program, program_of
@@ -87,7 +88,7 @@ def certify_robot(target: RobotTarget, env: Envelope = ENVELOPE, seconds: float 
         cert = certify(prog, box, input_errors(prog), seconds=seconds, max_boxes=max_boxes)
         keys = {a: derived_key(a) for a in prog.input_names.values() if derived_key(a)}
         wiring = {a: DERIVED[k][1][0] for a, k in keys.items()}
-        producer = {DERIVED[k][0] for k in keys.values()}
+        producer = producers(prog)
         if (not cert.proved and "divisor may be 0" in cert.reason and len(producer) == 1
                 and len({a.split("[")[0] for a in wiring}) == 1  # one M-hat, not two q's
                 and next(iter(producer)) in progs):
