@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from codegen.backend import RobotTarget
 from codegen.backends.c.certify.analysis import U
 from codegen.backends.c.certify.bound import Certificate, certify
-from codegen.backends.c.certify.boxes import DERIVED, ENVELOPE, Envelope, Interval
+from codegen.backends.c.certify.boxes import ENVELOPE, Envelope, Interval, producers
 from codegen.backends.c.certify.program import Program
 from codegen.backends.c.kernels import StepFeatures
 from modeling.controllers import ControllerSpec
@@ -81,10 +81,8 @@ class Step:
         """The functions whose certificate (bound or output enclosure) this step's bound
         uses, ``law`` the law's program: the law, estimator and gain, and the producers of
         the law's derived inputs (P's entries, M-hat)."""
-        args = {access.split("[")[0] for access in law.input_names.values()}
         return frozenset(n for n in (self.law, self.estimator, self.gain, self.norm)
-                         if n) | {
-            fn for arg, (fn, _) in DERIVED.items() if arg.split("[")[0] in args}
+                         if n) | producers(law)
 
 
 def steps_of(target: RobotTarget, names: Collection[str]) -> Iterator[Step]:
