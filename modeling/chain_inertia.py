@@ -76,11 +76,8 @@ class ChainInertia:
         gs = [(d(a), d(b)) for a, b in self.moment_slopes]
         e = [(d(a), d(b)) for a, b in self.hitches]
         es = [(d(a), d(b)) for a, b in self.hitch_slopes]
-        prefix: list[Vector] = [(column[self.x], column[self.y])]
-        for i in range(k - 1):
-            px, py = prefix[-1]
-            prefix.append((d(px + e[i][0] * col[i] + es[i][0] * sq[i]),
-                           d(py + e[i][1] * col[i] + es[i][1] * sq[i])))
+        prefix = self._hitch_velocities(stage, column, [(ax * q, ay * q) for (ax, ay), q
+                                                        in zip(es, sq, strict=True)])
         suffix: list[Vector] = [(sp.S.Zero, sp.S.Zero)] * k
         total: Vector = (sp.S.Zero, sp.S.Zero)
         for i in reversed(range(k)):
@@ -99,13 +96,16 @@ class ChainInertia:
         return sp.Matrix(out)
 
 
-    def _hitch_velocities(self, stage: Stage, column: Sequence[sp.Expr]) -> list[Vector]:
-        """P_i of ``column``: (v_x, v_y), then P_{i+1} = P_i + e_i v_θi."""
+    def _hitch_velocities(self, stage: Stage, column: Sequence[sp.Expr],
+                          centripetal: Sequence[Vector] | None = None) -> list[Vector]:
+        """P_i of ``column``: (v_x, v_y), then P_{i+1} = P_i + e_i v_θi (+ the hitch's
+        ``centripetal`` term e'_i θ̇_i², for the accelerations)."""
         d = stage.define
         prefix: list[Vector] = [(column[self.x], column[self.y])]
         for i in range(len(self.yaws) - 1):
             (px, py), (ex, ey), rate = prefix[-1], self.hitches[i], column[self.yaws[i]]
-            prefix.append((d(px + d(ex) * rate), d(py + d(ey) * rate)))
+            cx, cy = centripetal[i] if centripetal is not None else (sp.S.Zero, sp.S.Zero)
+            prefix.append((d(px + d(ex) * rate + cx), d(py + d(ey) * rate + cy)))
         return prefix
 
     def congruence(self, stage: Stage, s: sp.Matrix) -> sp.Matrix:
@@ -143,13 +143,7 @@ class ChainInertia:
             es = [(d(a) * q, d(b) * q) for (a, b), q in zip(self.hitch_slopes, sq,
                                                                 strict=True)]
             column = columns[0]
-            prefix: list[Vector] = [(column[self.x], column[self.y])]
-            for i in range(len(self.yaws) - 1):
-                (px, py), (ex, ey) = prefix[-1], self.hitches[i]
-                rate = column[self.yaws[i]]
-                prefix.append((d(px + d(ex) * rate + es[i][0]),
-                               d(py + d(ey) * rate + es[i][1])))
-            right = [prefix]
+            right = [self._hitch_velocities(stage, column, es)]
             weight = [[(g[i][0] * column[y] + d(a) * sq[i], g[i][1] * column[y] + d(b) * sq[i])
                        for i, (y, (a, b)) in enumerate(zip(self.yaws, self.moment_slopes,
                                                            strict=True))]]
