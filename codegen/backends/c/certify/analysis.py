@@ -35,6 +35,7 @@ import numpy.typing as npt
 
 from codegen.backends.c.certify.affine import affine_bounds
 from codegen.backends.c.certify.program import Node, Program
+from codegen.backends.c.certify.unitvector import layer_of, unit_component
 
 Array = npt.NDArray[np.float64]
 U = 2.0**-24  # float32 unit roundoff
@@ -137,6 +138,7 @@ class Analysis:
         self.known = dict(known or {})
         self._tight: tuple[Array, Array] | None = None
         self._norm_parts: dict[int, tuple[Array, float]] = {}
+        self._splits: dict[int, tuple[Array, Array]] = {}  # :func:`.unitvector.split_errors`
         self.open_guards: list[str] = []  # statuses of guards the last run did not prove
         self.values: list[Value | Truth | None] = []
 
@@ -168,6 +170,7 @@ class Analysis:
             return v
 
         self._norm_parts = {}
+        self._splits = {}
         tight = affine_bounds(self.program, lo, hi, self.known) if self.affine else []
         for idx, node in enumerate(self.program.nodes):
             self._tight = tight[idx] if tight else None
@@ -242,8 +245,9 @@ class Analysis:
                 normalised = self._normalised(ia, ib)
                 if normalised is not None:
                     g, m = normalised
-                    return self._scaled_component(val(ia), val(g), val(m), flag, where,
-                                                  self._relative_part(m, val))
+                    old = self._scaled_component(val(ia), val(g), val(m), flag, where,
+                                                 self._relative_part(m, val))
+                    return self._unit_vector(old, ia, g, m, val, flag, where)
             if node.args[0] == node.args[1]:  # a square of one value: never negative
                 xlo, xhi = _sq_iv(a.xlo, a.xhi)
                 rlo, rhi = _sq_iv(a.flo, a.fhi)
@@ -433,6 +437,31 @@ class Analysis:
         prop = np.where(fm > 0, prop + quotient_round, np.inf)
         bound_f = np.where(fm > 0, gmag_f * ratio * (1 + U) ** 2, np.inf)
         return self._rounded(-bound_f, bound_f, prop, -gmag_x, gmag_x, flag, where)
+
+    def _unit_vector(self, old: Value, ia: int, g: int, m: int, val: object, flag: object,
+                     where: str) -> Value:
+        """fl(a * fl(g / M)) by :mod:`.unitvector`'s rule (s/max(||s||, c) as one unit
+        vector, its entries' cancellation kept), intersected with ``old`` (the rule of
+        :meth:`_scaled_component`): both hold, so does the tighter of the two per box."""
+        assert callable(val)
+        norms = [m]
+        mn = self.program.nodes[m]
+        if mn.op == "call" and mn.name == "fmax":
+            norms = list(mn.args)
+        norm = next(n for n in norms if ia in self._norm_members(n))
+        members = self._square_sum(self.program.nodes[norm].args[0])
+        if not members:
+            return old
+        layer = layer_of(self.program, members, norm, m)
+        prop, bound_f, bound_x, _ = unit_component(self.program, layer, ia, val(g), val(m),
+                                                   val, self._splits)
+        # where the rule does not apply (M's lower bound 0): the old rule's enclosures
+        bound_f = np.where(np.isfinite(bound_f), bound_f, _mag(old.flo, old.fhi))
+        bound_x = np.where(np.isfinite(bound_x), bound_x, _mag(old.xlo, old.xhi))
+        new = self._rounded(-bound_f, bound_f, prop, -bound_x, bound_x, flag, where)
+        return Value(np.maximum(old.xlo, new.xlo), np.minimum(old.xhi, new.xhi),
+                     np.maximum(old.flo, new.flo), np.minimum(old.fhi, new.fhi),
+                     np.minimum(old.err, new.err))
 
     def _call(self, node: Node, args: Sequence[Value], where: str, flag: object) -> Value:
         assert callable(flag)

@@ -188,6 +188,96 @@ def boundary_points(program: Program, symbols: Sequence[sp.Symbol],
     return np.concatenate(found) if found else np.empty((0, len(symbols)))
 
 
+def _norm_entries(program: Program, n: int) -> list[int]:
+    """The entries x_i of the 2-norm ``n`` = sqrt(x_0*x_0 + x_1*x_1 + ...)."""
+    out: list[int] = []
+    stack = [program.nodes[n].args[0]]
+    while stack:
+        node = program.nodes[stack.pop()]
+        if node.op == "add":
+            stack += list(node.args)
+        elif node.op == "mul" and node.args[0] == node.args[1]:
+            out.append(node.args[0])
+    return out
+
+
+def cancelling_points(program: Program, symbols: Sequence[sp.Symbol],
+                      lo: npt.NDArray[np.float64], hi: npt.NDArray[np.float64], count: int,
+                      rng: np.random.Generator, jitter: int = 16) -> npt.NDArray[np.float64]:
+    """Points where the switching term's float32 error is largest: every input at an end
+    of its range (the largest gain and terms of s), the width c of fmax(||s||, c) at its
+    low end, and each entry s_i of s brought to a random target t_i (||t|| between 0.5 c
+    and 1.5 c: inside the layer and just outside it) by moving one input only it reads,
+    so that s_i's terms stay at their largest and cancel; then ``jitter`` float32
+    variants of each (a few ulp on every input, which changes the roundings but not the
+    place), of which those whose float32 error against the same program in double is
+    largest, per output, are kept (the double's own error is 2^-29 times smaller)."""
+    deps = dependencies(program)
+    col = {program.inputs[s]: k for k, s in enumerate(symbols)}
+    found: list[npt.NDArray[np.float64]] = []
+    grid = 64
+    rows = np.arange(count)
+
+    def values(p: npt.NDArray[np.float64], dtype: type[np.floating[Any]]) -> list[Any]:
+        return node_values(program, {s: p[:, k] for k, s in enumerate(symbols)}, dtype)
+
+    for n, c in boundary_layers(program):
+        entries = _norm_entries(program, n)
+        own = []
+        for j, x in enumerate(entries):
+            others = set().union(*(deps[y] for i, y in enumerate(entries) if i != j))
+            cols = [col[i] for i in sorted(deps[x] - others)
+                    if i in col and hi[col[i]] > lo[col[i]]]
+            own.append(cols)
+        if not all(own):
+            continue
+        p = np.where(rng.random((count, len(symbols))) < 0.5, lo, hi)
+        if c in col:
+            k = col[c]
+            p[:, k] = np.where(rng.random(count) < 0.5, lo[k],
+                               lo[k] + 0.05 * (hi[k] - lo[k]) * rng.random(count))
+        width = np.abs(np.asarray(values(p, np.float64)[c], dtype=np.float64))
+        direction = rng.normal(size=(count, len(entries)))
+        direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+        target = direction * (width * rng.uniform(0.5, 1.5, count))[:, None]
+        for j, x in enumerate(entries):  # each entry's own inputs: the one that meets t_j
+            best, gap = p.copy(), np.full(count, np.inf)
+            for k in own[j]:
+                trial_p = p.copy()
+                span = hi[k] - lo[k]
+                centre = np.full(count, lo[k] + 0.5 * span)
+                for scale in (1.0, 1.0 / 16, 1.0 / 256, 1.0 / 4096):
+                    t = np.linspace(-0.5, 0.5, grid) * span * scale
+                    vals = np.clip(centre[None, :] + t[:, None], lo[k], hi[k])
+                    trial = np.tile(trial_p, (grid, 1))
+                    trial[:, k] = vals.reshape(-1)
+                    v = np.asarray(values(trial, np.float64)[x], dtype=np.float64)
+                    g = np.abs(v.reshape(grid, count) - target[None, :, j])
+                    g = np.where(np.isfinite(g), g, np.inf)
+                    centre = vals[g.argmin(axis=0), rows]
+                    here = g.min(axis=0)
+                trial_p[:, k] = centre
+                better = here < gap
+                best[better], gap[better] = trial_p[better], here[better]
+            p = best
+        # float32 variants: a few ulp on every input, within the box
+        jit = np.repeat(p, jitter, axis=0).astype(np.float32)
+        steps = rng.integers(-4, 5, size=jit.shape)
+        for _ in range(4):
+            jit = np.where(steps > 0, np.nextafter(jit, np.float32(np.inf)),
+                           np.where(steps < 0, np.nextafter(jit, np.float32(-np.inf)), jit))
+            steps = steps - np.sign(steps)
+        cand = np.clip(jit.astype(np.float64), lo, hi).astype(np.float32).astype(np.float64)
+        got = values(cand, np.float32)
+        ref = values(cand, np.float64)
+        err = np.stack([np.abs(np.asarray(got[i], np.float64) - np.asarray(ref[i], np.float64))
+                        for _, i in program.outputs], axis=1)
+        err = np.where(np.isfinite(err), err, 0.0)
+        keep = {int(i) for col_err in err.T for i in np.argsort(-col_err)[:max(1, count // 8)]}
+        found.append(cand[sorted(keep)])
+    return np.concatenate(found) if found else np.empty((0, len(symbols)))
+
+
 @dataclass(frozen=True)
 class Found:
     """The largest error found per output, where, and how many points were tried."""
@@ -235,7 +325,8 @@ def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float
     corners = rng.integers(0, 2, size=(random_points // 4, len(symbols)))
     pts = np.concatenate([lo + (hi - lo) * rng.random((random_points, len(symbols))),
                           np.where(corners == 1, hi, lo),
-                          boundary_points(program, symbols, lo, hi, random_points, rng)])
+                          boundary_points(program, symbols, lo, hi, random_points, rng),
+                          cancelling_points(program, symbols, lo, hi, random_points, rng)])
     pts32 = inside(pts)
     err = errors_at(program, exact, pts32)
     evaluated = len(pts32)
