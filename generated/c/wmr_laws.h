@@ -354,7 +354,7 @@ void wmr_paper_tdc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.42, s 5.4e-07, s_norm 5.4e-06 (largest entry).
+ * u 0.052, s 5.4e-07, s_norm 5.4e-06 (largest entry).
  */
 void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -413,7 +413,7 @@ void wmr_paper_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.41, s 5.4e-07, s_norm 5.4e-06 (largest entry).
+ * u 0.052, s 5.4e-07, s_norm 5.4e-06 (largest entry).
  */
 void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -471,7 +471,7 @@ void wmr_paper_tdroc_law_trig(const wmr_params_t *p, const wmr_real_t *trig, con
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.39, s 5.4e-07, s_norm 5.4e-06, gain 7.7e-05 (largest entry).
+ * u 0.055, s 5.4e-07, s_norm 5.4e-06, gain 7.7e-05 (largest entry).
  */
 void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -531,7 +531,7 @@ void wmr_paper_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_rea
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.42, s 5.4e-07, s_norm 5.4e-06, gain_next 1.3e-05 (largest entry).
+ * u 0.056, s 5.4e-07, s_norm 5.4e-06, gain_next 1.3e-05 (largest entry).
  */
 void wmr_paper_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -733,7 +733,7 @@ void wmr_minimal_tdc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.0082, s 5.4e-07, s_norm 2.3e-06 (largest entry).
+ * u 0.0011, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
 void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *e,
     const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2,
@@ -788,7 +788,7 @@ void wmr_minimal_tdroc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.0051, s 5.4e-07, s_norm 2.3e-06, gain 4e-05 (largest entry).
+ * u 0.0008, s 5.4e-07, s_norm 2.3e-06, gain 4e-05 (largest entry).
  */
 void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
@@ -845,7 +845,7 @@ void wmr_minimal_roc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_r
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.0081, s 5.4e-07, s_norm 2.3e-06, gain_next 9.4e-06 (largest entry).
+ * u 0.0011, s 5.4e-07, s_norm 2.3e-06, gain_next 9.4e-06 (largest entry).
  */
 void wmr_minimal_asmc_law(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_t *qdot,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,

@@ -405,7 +405,7 @@ void trailer_minimal_tdc_law_mhat(const trailer_params_t *p, const trailer_real_
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.016, s 5.4e-07, s_norm 2.3e-06 (largest entry).
+ * u 0.0026, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
 void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -464,7 +464,7 @@ void trailer_minimal_tdroc_law(const trailer_params_t *p, const trailer_real_t *
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.0053, s 5.4e-07, s_norm 2.3e-06 (largest entry).
+ * u 0.00067, s 5.4e-07, s_norm 2.3e-06 (largest entry).
  */
 void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     const trailer_real_t *e, const trailer_real_t *edot, const trailer_real_t *qddot_des,
@@ -523,7 +523,7 @@ void trailer_minimal_tdroc_law_mhat(const trailer_params_t *p, const trailer_rea
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.016, s 5.4e-07, s_norm 2.3e-06, gain 4e-05 (largest entry).
+ * u 0.0073, s 5.4e-07, s_norm 2.3e-06, gain 4e-05 (largest entry).
  */
 void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
@@ -585,7 +585,7 @@ void trailer_minimal_roc_law(const trailer_params_t *p, const trailer_real_t *q,
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * u 0.022, s 5.4e-07, s_norm 2.3e-06, gain_next 9.4e-06 (largest entry).
+ * u 0.0083, s 5.4e-07, s_norm 2.3e-06, gain_next 9.4e-06 (largest entry).
  */
 void trailer_minimal_asmc_law(const trailer_params_t *p, const trailer_real_t *q,
     const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
