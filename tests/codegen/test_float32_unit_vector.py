@@ -132,7 +132,8 @@ def test_the_rule_replaces_the_per_operation_one() -> None:
 def test_search_finds_the_cancelling_points(found: npt.NDArray[np.float64]) -> None:
     """The search's cancelling points (every input at an end of its range but one per
     entry, solved so that the entries cancel near the layer) reach within 10x of the
-    worst error the constructed points find, without being told the structure."""
+    worst error the constructed points find, without being told the structure, and
+    never beat the rule's bound."""
     prog = _program()
     box = _box(prog)
     symbols = sorted(prog.inputs, key=lambda s: prog.inputs[s])
@@ -143,3 +144,5 @@ def test_search_finds_the_cancelling_points(found: npt.NDArray[np.float64]) -> N
     err = _errors(prog, {str(s): pts[:, k].astype(np.float32) for k, s in enumerate(symbols)})
     assert np.all(err.max(axis=0) * 10 >= found.max(axis=0)), (err.max(axis=0),
                                                                found.max(axis=0))
+    cert = certify(prog, box, seconds=600.0, max_boxes=BOXES)  # and never beat the rule
+    assert np.all(err.max(axis=0) <= np.array(cert.bounds)), (err.max(axis=0), cert.bounds)

@@ -58,6 +58,7 @@ Array = npt.NDArray[np.float64]
 U = 2.0**-24
 TINY = 2.0**-150
 UP = 1.0 + 2.0**-50
+MAX_DEPTH = 200  # split errors this far up an entry's graph (Python's recursion limit)
 
 
 class Enclosed:
@@ -75,21 +76,24 @@ def _mag(lo: Array, hi: Array) -> Array:
 
 
 def split_errors(program: Program, nid: int, val: Callable[[int], Enclosed],
-                 memo: dict[int, tuple[Array, Array]]) -> tuple[Array, Array]:
+                 memo: dict[int, tuple[Array, Array]], depth: int = 0) -> tuple[Array, Array]:
     """``(A, B)`` per box with ``|f - x| <= A + B |x|`` for node ``nid`` (module
-    docstring); ``memo`` caches the nodes already split in this run."""
+    docstring); ``memo`` caches the nodes already split in this run. Beyond
+    :data:`MAX_DEPTH` operations up the graph a node takes ``(E, 0)``."""
     if nid in memo:
         return memo[nid]
     node = program.nodes[nid]
     v = val(nid)
     zero = np.zeros_like(v.err)
     a_err, b_rel = v.err, zero
+    if depth >= MAX_DEPTH:
+        return a_err, b_rel
     if node.op == "neg":
-        a_err, b_rel = split_errors(program, node.args[0], val, memo)
+        a_err, b_rel = split_errors(program, node.args[0], val, memo, depth + 1)
     elif node.op == "mul":
         ia, ib = node.args
-        aa, ba = split_errors(program, ia, val, memo)
-        ab, bb = split_errors(program, ib, val, memo)
+        aa, ba = split_errors(program, ia, val, memo, depth + 1)
+        ab, bb = split_errors(program, ib, val, memo, depth + 1)
         xa, xb = val(ia), val(ib)
         ma, mb = _mag(xa.xlo, xa.xhi), _mag(xb.xlo, xb.xhi)
         a_err = ma * ab * (1 + ba) + mb * aa * (1 + bb) + aa * ab
@@ -97,8 +101,8 @@ def split_errors(program: Program, nid: int, val: Callable[[int], Enclosed],
         a_err, b_rel = a_err * (1 + U) + TINY, b_rel + U * (1 + b_rel)
     elif node.op in ("add", "sub"):
         ia, ib = node.args
-        aa, ba = split_errors(program, ia, val, memo)
-        ab, bb = split_errors(program, ib, val, memo)
+        aa, ba = split_errors(program, ia, val, memo, depth + 1)
+        ab, bb = split_errors(program, ib, val, memo, depth + 1)
         xa, xb = val(ia), val(ib)
         ma, mb = _mag(xa.xlo, xa.xhi), _mag(xb.xlo, xb.xhi)
         # the larger term's |x| is at most |s| plus the smaller's
