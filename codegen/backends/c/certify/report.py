@@ -12,6 +12,7 @@ from codegen.backends.c.backend import config_for
 from codegen.backends.c.certify.analysis import TRIG_ULPS
 from codegen.backends.c.certify.boxes import ENVELOPE, Interval
 from codegen.backends.c.certify.compose import ComposedExact
+from codegen.backends.c.certify.divisor_search import merge, search_divisors
 from codegen.backends.c.certify.robot import certify_robot, programs
 from codegen.backends.c.certify.search import search
 from codegen.backends.c.lowering import function_context
@@ -39,6 +40,8 @@ def certify_and_search(target: RobotTarget, seconds: float, points: int,
             exact_of = partial(ComposedExact, first, ir, first_prog, second, prog.wiring)
         found = search(prog, ir, box, random_points=points, climbs=1, rounds=2,
                        exact_of=exact_of)
+        # and where a computed divisor is smallest (nothing for a program with none)
+        found = merge(found, search_divisors(prog, ir, box, exact_of=exact_of))
         ratios = [b / e if e > 0 else float("inf")
                   for b, e in zip(cert.bounds, found.errors, strict=True)]
         worst = max(range(len(cert.bounds)), key=lambda j: cert.bounds[j])
