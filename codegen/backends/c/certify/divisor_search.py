@@ -104,10 +104,12 @@ def divisor_points(program: Program, symbols: list[sp.Symbol], lo: F64, hi: F64,
 
 def search_divisors(program: Program, ir: FunctionIR,
                     box: Mapping[sp.Symbol, tuple[float, float]], *, points: int = 40,
-                    climbs: int = 1, rounds: int = 2, seed: int = 0,
+                    climbs: int = 1, rounds: int = 2, seed: int = 0, outputs: int = 8,
                     exact_of: Callable[[list[sp.Symbol]], Exact] | None = None) -> Found:
     """The largest error per output at :func:`divisor_points` (``points`` per divisor) and
-    on a coordinate search from the worst of them: each input moved by a step shrinking
+    on a coordinate search from the worst of them, for the ``outputs`` outputs with the
+    largest errors there (a linearization's hundred outputs would each cost a climb of
+    mpmath evaluations): each input moved by a step shrinking
     fourfold a round, starting at 1/4 of its range for the inputs no divisor reads and
     1/1000 for those one does (a step of 1/4 would leave the thin region where the divisor
     is small). A program with no computed divisor: nothing evaluated, errors 0."""
@@ -137,7 +139,7 @@ def search_divisors(program: Program, ir: FunctionIR,
     evaluated = len(pts32)
     best = err.max(axis=0)
     where = [pts32[i] for i in err.argmax(axis=0)]
-    for j in range(err.shape[1]):
+    for j in np.argsort(-best)[:outputs]:
         for start in np.argsort(-err[:, j])[:climbs]:
             x = pts32[start].astype(np.float64)
             cur = float(err[start, j])
