@@ -19,13 +19,14 @@ import numpy.typing as npt
 import sympy as sp
 
 from codegen.backends.c.certify.analysis import Analysis
-from codegen.backends.c.certify.divisors import divisor_enclosures
+from codegen.backends.c.certify.divisors import Pieces, divisor_enclosures
 from codegen.backends.c.certify.program import Program
 
 Box = Mapping[sp.Symbol, tuple[float, float]]
 # the divisors' branch and bound: at least this much processor time (it stops earlier once
 # the proved bound is within 2x of the smallest value seen)
 DIVISOR_SECONDS = 40.0
+CHUNK = 512  # boxes analysed in one batch (the affine forms hold boxes x inputs per node)
 
 
 @dataclass(frozen=True)
@@ -79,15 +80,46 @@ def certify(program: Program, box: Box, in_err: Mapping[sp.Symbol, float] | None
     if cert.proved or "divisor may be 0" not in cert.reason:
         return replace(cert, seconds=time.process_time() - t0)
     # a divisor the subdivision did not prove nonzero: a branch and bound over its own
-    # inputs, then the subdivision again with the proved enclosures
+    # inputs, then the subdivision again with the proved enclosures, starting from the
+    # branch and bound's pieces (see seeded)
+    pieces: dict[int, Pieces] = {}
     known, _ = divisor_enclosures(
         program, {program.inputs[s]: lo[0, k] for k, s in enumerate(symbols)},
         {program.inputs[s]: hi[0, k] for k, s in enumerate(symbols)},
-        seconds=max(2 * seconds, DIVISOR_SECONDS))
+        seconds=max(2 * seconds, DIVISOR_SECONDS), pieces=pieces)
     if not known:
         return replace(cert, seconds=time.process_time() - t0)
-    cert = _subdivide(program, symbols, lo, hi, errs, known, seconds, max_boxes, batch)
+    slo, shi = seeded(program, symbols, lo, hi, pieces)
+    cert = _subdivide(program, symbols, slo, shi, errs, known, seconds,
+                      max_boxes + len(slo) - 1, batch)
     return replace(cert, seconds=time.process_time() - t0)
+
+
+def seeded(program: Program, symbols: list[sp.Symbol], lo: npt.NDArray[np.float64],
+           hi: npt.NDArray[np.float64], pieces: Mapping[int, Pieces]
+           ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """The boxes the subdivision starts from once a divisor is proved: the declared box
+    (one row of ``lo``/``hi``) cut, in the divisor's inputs, into its branch and bound's
+    pieces (the divisor with the most; every other input at its whole range).
+
+    A quotient's error ``|a/b| δb/|b|`` is bounded per box by ``b``'s largest rounding
+    over the box over ``b``'s smallest magnitude there; over a box two turns wide in the
+    angles ``b``'s smallest magnitude is the whole box's, met with the roundings of
+    configurations where ``b`` is large. The pieces are finest where ``|b|`` is smallest,
+    so each carries ``b``'s magnitude and rounding where it is (the per-box relative
+    form of the division rule), and the bisection then spends its budget on the pieces
+    whose bound is worst. Sound as the pieces cover the box: their union in ``b``'s
+    inputs is the declared extent, and every other input is whole."""
+    if not pieces:
+        return lo, hi
+    chosen = max(pieces.values(), key=lambda p: len(p.lo))
+    col = {program.inputs[s]: k for k, s in enumerate(symbols)}
+    slo = np.repeat(lo, len(chosen.lo), axis=0)
+    shi = np.repeat(hi, len(chosen.lo), axis=0)
+    for j, node in enumerate(chosen.dims):
+        slo[:, col[node]] = chosen.lo[:, j]
+        shi[:, col[node]] = chosen.hi[:, j]
+    return slo, shi
 
 
 def _subdivide(program: Program, symbols: list[sp.Symbol], lo: npt.NDArray[np.float64],
@@ -101,6 +133,17 @@ def _subdivide(program: Program, symbols: list[sp.Symbol], lo: npt.NDArray[np.fl
     def run(lo: npt.NDArray[np.float64], hi: npt.NDArray[np.float64]
             ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.bool_], list[str],
                        npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        if len(lo) > CHUNK:  # many seeded boxes: in batches, for memory
+            parts, guards = [], set()
+            for k in range(0, len(lo), CHUNK):
+                parts.append(run(lo[k:k + CHUNK], hi[k:k + CHUNK]))
+                guards |= set(analysis.open_guards)
+            analysis.open_guards = sorted(guards)  # those of every batch
+            return (np.concatenate([p[0] for p in parts]),
+                    np.concatenate([p[1] for p in parts]),
+                    [w for p in parts for w in p[2]],
+                    np.concatenate([p[3] for p in parts]),
+                    np.concatenate([p[4] for p in parts]))
         a, b = _arrays(program, symbols, lo, hi)
         e = {n: np.full(len(lo), v) for n, v in errs.items()}
         values, unsafe, why = analysis.run(a, b, e)
@@ -110,8 +153,10 @@ def _subdivide(program: Program, symbols: list[sp.Symbol], lo: npt.NDArray[np.fl
         return err, unsafe, why, xlo, xhi
 
     err, unsafe, why, xlo, xhi = run(lo, hi)
-    splittable = np.nonzero(hi[0] > lo[0])[0]
-    width = np.where(hi[0] > lo[0], hi[0] - lo[0], 1.0)
+    # the declared box's extent (the rows may be seeded pieces of it: see seeded)
+    top, bottom = hi.max(axis=0), lo.min(axis=0)
+    splittable = np.nonzero(top > bottom)[0]
+    width = np.where(top > bottom, top - bottom, 1.0)
     while (len(splittable) and len(lo) < max_boxes
            and time.process_time() - start < seconds):
         scale = np.maximum(err.max(axis=0), 1e-300)

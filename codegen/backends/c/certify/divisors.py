@@ -42,6 +42,17 @@ DEBUG = False
 
 
 @dataclass(frozen=True)
+class Pieces:
+    """The final pieces of a divisor's branch and bound: boxes over the input nodes
+    ``dims`` (rows of ``lo``/``hi``, columns in ``dims``' order) that cover the declared
+    box's extent in them, split finest where the divisor's magnitude is smallest."""
+
+    dims: tuple[int, ...]
+    lo: npt.NDArray[np.float64]
+    hi: npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
 class Enclosure:
     """A proved enclosure of node ``node``'s exact value over the whole box."""
 
@@ -74,11 +85,15 @@ def _prefix(program: Program, node: int) -> Program:
 
 
 def divisor_enclosures(program: Program, lo: Mapping[int, float], hi: Mapping[int, float],
-                       *, seconds: float = 4.0, max_boxes: int = 20000, batch: int = 64
+                       *, seconds: float = 4.0, max_boxes: int = 20000, batch: int = 64,
+                       pieces: dict[int, Pieces] | None = None,
                        ) -> tuple[dict[int, tuple[float, float]], list[str]]:
     """Enclosures of the exact value of every divisor that the interval and affine
     enclosures over the whole box (``lo``/``hi`` per input node) do not prove nonzero.
-    Returns the proved enclosures (node -> (lo, hi)) and, per divisor left unproved, why."""
+    Returns the proved enclosures (node -> (lo, hi)) and, per divisor left unproved, why.
+    ``pieces``, if given, receives per proved divisor the branch and bound's final pieces
+    (:class:`Pieces`: they cover the box in the divisor's inputs, finest where it is
+    smallest)."""
     deps = dependencies(program)
     known: dict[int, tuple[float, float]] = {}
     failed: list[str] = []
@@ -102,7 +117,7 @@ def divisor_enclosures(program: Program, lo: Mapping[int, float], hi: Mapping[in
             continue
         budget = max(seconds - (time.process_time() - start), 0.0)
         found = _branch_and_bound(sub, sorted(deps[d]), one, two, known, budget, max_boxes,
-                                  batch)
+                                  batch, pieces, d)
         if found is None:
             failed.append(f"node {idx} (div): its divisor's enclosure over "
                           f"{len(deps[d])} inputs still contains 0")
@@ -185,13 +200,15 @@ def _inputs(program: Program) -> set[int]:
 
 def _branch_and_bound(sub: Program, dims: list[int], lo: Mapping[int, Array],
                       hi: Mapping[int, Array], known: Mapping[int, tuple[float, float]],
-                      seconds: float, max_boxes: int, batch: int
+                      seconds: float, max_boxes: int, batch: int,
+                      pieces: dict[int, Pieces] | None = None, node: int = -1,
                       ) -> tuple[float, float] | None:
     """Split the pieces (over ``dims``) whose lower bound of the node's magnitude is
     smallest, each along the dimension whose halving raises that bound most, until every
     piece excludes 0 with the sign of the node at the box's centre and the smallest
     bound is within a factor 2 of the smallest value seen at a piece's centre (or the
-    budget ends with 0 excluded); None if 0 is not excluded when the budget ends."""
+    budget ends with 0 excluded); None if 0 is not excluded when the budget ends. The
+    final pieces go to ``pieces[node]`` when given."""
     start = time.process_time()
     others = sorted(_inputs(sub) - set(dims))
     analysis = Analysis(sub, known=known)
@@ -284,4 +301,6 @@ def _branch_and_bound(sub: Program, dims: list[int], lo: Mapping[int, Array],
         xlo = np.concatenate([xlo[keep], nxlo])
         xhi = np.concatenate([xhi[keep], nxhi])
         smear = np.concatenate([smear[keep], nsm])
+    if pieces is not None:
+        pieces[node] = Pieces(tuple(dims), blo, bhi)
     return float(xlo.min()), float(xhi.max())
