@@ -23,5 +23,5 @@ def check_function(prefix: str, controller: str) -> str:
 def checked_by(prefix: str, controller: str) -> str:
     """"checked by `<function>`" for a step row of a controller with a check, else ""."""
     info = next((c for c in REGISTRY if c.name == controller), None)
-    return (f"checked after each step by `{check_function(prefix, controller)}`"
+    return (f"run-time check: `{check_function(prefix, controller)}`, called after the step"
             if info is not None and has_check(info) else "")
