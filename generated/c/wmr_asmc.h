@@ -106,7 +106,7 @@ wmr_status_t wmr_asmc_check_config_detail(const wmr_asmc_config_t *config,
 
 /* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
    stated over for the adapted gain, which the step produces and does not check:
-   the certifier's own declaration (codegen/backends/c/certify/boxes.py), rendered here. */
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
 #define WMR_ASMC_CERT_GAIN_MIN WMR_LIT(0.0) /* the law's switching gain (adapted) */
 #define WMR_ASMC_CERT_GAIN_MAX WMR_LIT(100.0)
 

@@ -126,7 +126,7 @@ wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
 
 /* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
    stated over for (25)'s k-hat and its inputs, which the step produces and does not check:
-   the certifier's own declaration (codegen/backends/c/certify/boxes.py), rendered here. */
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
 #define WMR_TDROC_CERT_GAIN_MIN WMR_LIT(0.0) /* the law's switching gain k-hat */
 #define WMR_TDROC_CERT_GAIN_MAX WMR_LIT(100.0)
 #define WMR_TDROC_CERT_NORM_MIN WMR_LIT(0.0) /* ||Mhat^-1||_F of (25) */

@@ -573,7 +573,7 @@ class TDROC(_Controller):
     error_dynamics = True
     integrator = False
     formulations = ("paper", "minimal",)
-    # the boxes of wmr_tdroc.h's WMR_TDROC_CERT_* (codegen/backends/c/certify/gate.py)
+    # the boxes of wmr_tdroc.h's WMR_TDROC_CERT_* (codegen/certify/runtime_check.py)
     certificate_gain = (0.0, 100.0)
     certificate_norm = (0.0, 10.0)
     certificate_window = (0.0, 10.0)
@@ -634,7 +634,7 @@ class ASMC(_Controller):
     error_dynamics = True
     integrator = False
     formulations = ("paper", "minimal",)
-    # the boxes of wmr_asmc.h's WMR_ASMC_CERT_* (codegen/backends/c/certify/gate.py)
+    # the boxes of wmr_asmc.h's WMR_ASMC_CERT_* (codegen/certify/runtime_check.py)
     certificate_gain = (0.0, 100.0)
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("gamma", "real"), ("gain0", "real"), )

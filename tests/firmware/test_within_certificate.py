@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from codegen.backends.c.certify.gate import gate_of
+from codegen.certify.runtime_check import gate_of
 from codegen.certify.stored import robot_results
 from generated.python import controllers as drishti_py
 from runtime.bindings import cbuild

@@ -12,10 +12,10 @@ from typing import Any
 
 from codegen import template_util
 from codegen.backend import RobotTarget
-from codegen.backends.c.certify.gate import gate_context
 from codegen.backends.python.config import PythonConfig
 from codegen.backends.python.printer import PyPrinter
 from codegen.backends.python.render import TEMPLATE_DIR, render_module
+from codegen.certify.runtime_check import gate_context
 from codegen.contact_forces import contact_rows
 from codegen.controller_api import (
     MAX_ABS_INPUT,

@@ -109,7 +109,7 @@ trailer_status_t trailer_asmc_check_config_detail(const trailer_asmc_config_t *c
 
 /* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
    stated over for the adapted gain, which the step produces and does not check:
-   the certifier's own declaration (codegen/backends/c/certify/boxes.py), rendered here. */
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
 #define TRAILER_ASMC_CERT_GAIN_MIN TRAILER_LIT(0.0) /* the law's switching gain (adapted) */
 #define TRAILER_ASMC_CERT_GAIN_MAX TRAILER_LIT(100.0)
 

@@ -129,7 +129,7 @@ trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t 
 
 /* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
    stated over for (25)'s k-hat and its inputs, which the step produces and does not check:
-   the certifier's own declaration (codegen/backends/c/certify/boxes.py), rendered here. */
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
 #define TRAILER_TDROC_CERT_GAIN_MIN TRAILER_LIT(0.0) /* the law's switching gain k-hat */
 #define TRAILER_TDROC_CERT_GAIN_MAX TRAILER_LIT(100.0)
 #define TRAILER_TDROC_CERT_NORM_MIN TRAILER_LIT(0.0) /* ||Mhat^-1||_F of (25) */

@@ -113,7 +113,7 @@ trailer3_status_t trailer3_asmc_check_config_detail(const trailer3_asmc_config_t
 
 /* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
    stated over for the adapted gain, which the step produces and does not check:
-   the certifier's own declaration (codegen/backends/c/certify/boxes.py), rendered here. */
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
 #define TRAILER3_ASMC_CERT_GAIN_MIN TRAILER3_LIT(0.0) /* the law's switching gain (adapted) */
 #define TRAILER3_ASMC_CERT_GAIN_MAX TRAILER3_LIT(100.0)
 

@@ -131,7 +131,7 @@ trailer3_status_t trailer3_tdroc_check_config_detail(const trailer3_tdroc_config
 
 /* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
    stated over for (25)'s k-hat and its inputs, which the step produces and does not check:
-   the certifier's own declaration (codegen/backends/c/certify/boxes.py), rendered here. */
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
 #define TRAILER3_TDROC_CERT_GAIN_MIN TRAILER3_LIT(0.0) /* the law's switching gain k-hat */
 #define TRAILER3_TDROC_CERT_GAIN_MAX TRAILER3_LIT(100.0)
 #define TRAILER3_TDROC_CERT_NORM_MIN TRAILER3_LIT(0.0) /* ||Mhat^-1||_F of (25) */

@@ -107,7 +107,7 @@ train5_status_t train5_asmc_check_config_detail(const train5_asmc_config_t *conf
 
 /* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
    stated over for the adapted gain, which the step produces and does not check:
-   the certifier's own declaration (codegen/backends/c/certify/boxes.py), rendered here. */
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
 #define TRAIN5_ASMC_CERT_GAIN_MIN TRAIN5_LIT(0.0) /* the law's switching gain (adapted) */
 #define TRAIN5_ASMC_CERT_GAIN_MAX TRAIN5_LIT(100.0)
 

@@ -125,7 +125,7 @@ train5_status_t train5_tdroc_check_config_detail(const train5_tdroc_config_t *co
 
 /* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
    stated over for (25)'s k-hat and its inputs, which the step produces and does not check:
-   the certifier's own declaration (codegen/backends/c/certify/boxes.py), rendered here. */
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
 #define TRAIN5_TDROC_CERT_GAIN_MIN TRAIN5_LIT(0.0) /* the law's switching gain k-hat */
 #define TRAIN5_TDROC_CERT_GAIN_MAX TRAIN5_LIT(100.0)
 #define TRAIN5_TDROC_CERT_NORM_MIN TRAIN5_LIT(0.0) /* ||Mhat^-1||_F of (25) */

@@ -561,7 +561,7 @@ class TDROC(_Controller):
     error_dynamics = True
     integrator = False
     formulations = ("paper", "minimal",)
-    # the boxes of train5_tdroc.h's TRAIN5_TDROC_CERT_* (codegen/backends/c/certify/gate.py)
+    # the boxes of train5_tdroc.h's TRAIN5_TDROC_CERT_* (codegen/certify/runtime_check.py)
     certificate_gain = (0.0, 100.0)
     certificate_norm = (0.0, 10.0)
     certificate_window = (0.0, 10.0)
@@ -622,7 +622,7 @@ class ASMC(_Controller):
     error_dynamics = True
     integrator = False
     formulations = ("paper", "minimal",)
-    # the boxes of train5_asmc.h's TRAIN5_ASMC_CERT_* (codegen/backends/c/certify/gate.py)
+    # the boxes of train5_asmc.h's TRAIN5_ASMC_CERT_* (codegen/certify/runtime_check.py)
     certificate_gain = (0.0, 100.0)
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("gamma", "real"), ("gain0", "real"), )
