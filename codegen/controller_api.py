@@ -109,6 +109,9 @@ def status_codes(layout: ControllerLayout) -> tuple[StatusCode, ...]:
         StatusCode(f"{P}_WARN_SATURATED", 1, "success, but a torque was clipped to the limit"),
         StatusCode(f"{P}_WARN_TRACTION", 2,
                    "traction_check: a driven wheel's traction margin is <= 0 (it slips)"),
+        StatusCode(f"{P}_WARN_UNCERTIFIED", 3,
+                   "within_certificate: the last step's switching gain or (25)'s inputs left "
+                   "the float32 certificate's box (its torque bound does not apply)"),
         StatusCode(f"{P}_ERR_NULL_POINTER", -1, "a pointer argument is NULL"),
         StatusCode(f"{P}_ERR_NONFINITE_INPUT", -2, "an input is NaN or infinite"),
         StatusCode(f"{P}_ERR_BAD_PARAMS", -3, "robot parameters do not give a valid model"),

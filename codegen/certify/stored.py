@@ -9,6 +9,8 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+from codegen.certify.runtime_check import checked_by
+
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
 
 
@@ -47,8 +49,18 @@ def model_section(prefix: str) -> str:
               "|---|---|---|---|---|"]
     for st in data.get("steps", []):
         reason = "; ".join(dict.fromkeys(st["reason"].split("; ")))
-        holds = "proved" if st["proved"] else reason if reason.startswith("if ") else (
+        check = checked_by(prefix, st["controller"])
+        holds = "proved" if st["proved"] else (
+            reason + (f" ({check})" if check else "")) if reason.startswith("if ") else (
             f"not proved ({reason})")
         lines.append(f"| {st['controller'].upper()} | {st['formulation']} | {st['bound']:.3g} "
                      f"| {st['tau_max']:g} | {holds} |")
+    if any(not st["proved"] and checked_by(prefix, st["controller"])
+           for st in data.get("steps", [])):
+        lines += ["", "A conditional row (\"if ...\") holds for a step whose inputs are in the",
+                  "declared box and after which the function it names returns `OK`: it",
+                  "reads the state the step left (the switching gain, and for TDROC the",
+                  "‖M̂⁻¹‖ and window difference norms (25) read) against the certificate's",
+                  "boxes, rendered in the controller's header as `<PREFIX>_<CTRL>_CERT_*`;",
+                  "no step calls it."]
     return "\n".join(lines) + "\n"

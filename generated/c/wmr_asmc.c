@@ -395,3 +395,17 @@ wmr_status_t wmr_asmc_step_detail(wmr_asmc_state_t *state, const wmr_asmc_config
         : WMR_FORMULATION_MINIMAL);
 #endif
 }
+
+/* Reads the state a step left; no step calls it (a firmware calls it when it relies on the
+   certified torque bound): the header says what it checks and why. */
+wmr_status_t wmr_asmc_within_certificate(const wmr_asmc_state_t *state)
+{
+    if (state == NULL) {
+        return WMR_ERR_NULL_POINTER;
+    }
+    if (state->magic != WMR_STATE_MAGIC) {
+        return WMR_ERR_NOT_INITIALISED;
+    }
+    return wmr_within(state->gain, WMR_ASMC_CERT_GAIN_MIN, WMR_ASMC_CERT_GAIN_MAX) != 0 ? WMR_OK
+        : WMR_WARN_UNCERTIFIED;
+}

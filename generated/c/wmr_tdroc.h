@@ -124,6 +124,30 @@ wmr_status_t wmr_tdroc_check_config(const wmr_tdroc_config_t *config);
 wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
     wmr_error_detail_t *detail);
 
+/* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
+   stated over for (25)'s k-hat and its inputs, which the step produces and does not check:
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
+#define WMR_TDROC_CERT_GAIN_MIN WMR_LIT(0.0) /* the law's switching gain k-hat */
+#define WMR_TDROC_CERT_GAIN_MAX WMR_LIT(100.0)
+#define WMR_TDROC_CERT_NORM_MIN WMR_LIT(0.0) /* ||Mhat^-1||_F of (25) */
+#define WMR_TDROC_CERT_NORM_MAX WMR_LIT(10.0)
+#define WMR_TDROC_CERT_WINDOW_MIN WMR_LIT(0.0) /* each ||Omega(i) - Omega(i+1)|| (25) reads */
+#define WMR_TDROC_CERT_WINDOW_MAX WMR_LIT(10.0)
+
+/**
+ * Whether the float32 torque bound certified for this step holds for the last step: it holds
+ * for a step whose inputs are in the declared box (docs/FLOAT32.md) after which this returns
+ * WMR_OK. Checks, on the state the step left, what that bound is conditional on:
+ * the k-hat it used in [WMR_TDROC_CERT_GAIN_MIN, _GAIN_MAX] and, when (25) computed it (not
+ * held, two Omega's seen), ||Mhat^-1|| in [_NORM_MIN, _NORM_MAX] and the WMR_MAX_WINDOW
+ * difference norms (25) read in [_WINDOW_MIN, _WINDOW_MAX].
+ * Reads the state only and no step calls it: it costs a step nothing.
+ * @return WMR_OK (the bound holds), WMR_WARN_UNCERTIFIED (the step's torque was
+ *         computed, but the certified bound does not apply to it), WMR_ERR_NULL_POINTER or
+ *         WMR_ERR_NOT_INITIALISED (not initialised by _init, or corrupted).
+ */
+wmr_status_t wmr_tdroc_within_certificate(const wmr_tdroc_state_t *state);
+
 #ifdef WMR_TDROC_FROZEN
 /* A build with the configuration compiled in (-DWMR_TDROC_FROZEN): the toolchain's
    `freeze` command validated it on the host with this code, ran _init there and wrote

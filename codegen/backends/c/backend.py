@@ -21,6 +21,7 @@ import sympy as sp
 
 from codegen import template_util
 from codegen.backend import RobotTarget
+from codegen.backends.c.certify.gate import certified_gate_context
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.files import (
     TEMPLATE_DIR,
@@ -201,7 +202,8 @@ class CBackend:
             context = dict(
                 layout=layout, c=info, max_abs_input=MAX_ABS_INPUT, step_kernel_prefix=kp,
                 **c_controller_context(info, param_fields, layout, target.model),
-                **kernels.controller_context(info.name, kernels_h))
+                **kernels.controller_context(info.name, kernels_h),
+                gate=certified_gate_context(info, pre))
             step = context.pop("step_kernels")
             files[f"{pre}_{info.name}.h"] = _template("controller.h.jinja", law, **context)
             files[f"{pre}_{info.name}.c"] = _template("controller.c.jinja", law,

@@ -15,6 +15,7 @@ from codegen.backend import RobotTarget
 from codegen.backends.python.config import PythonConfig
 from codegen.backends.python.printer import PyPrinter
 from codegen.backends.python.render import TEMPLATE_DIR, render_module
+from codegen.certify.runtime_check import gate_context
 from codegen.contact_forces import contact_rows
 from codegen.controller_api import (
     MAX_ABS_INPUT,
@@ -168,6 +169,7 @@ class PythonBackend:
             layout=layout,
             status_codes=status_codes(layout),
             controllers=target.controllers,
+            gates={c.name: gate_context(c, layout.prefix) for c in target.controllers},
             law_signatures={c.name: law_signature(c, target.model)
                             for c in target.controllers},
             base_checks=BASE_CHECKS,

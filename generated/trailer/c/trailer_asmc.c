@@ -318,3 +318,17 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     return status;
     }
 }
+
+/* Reads the state a step left; no step calls it (a firmware calls it when it relies on the
+   certified torque bound): the header says what it checks and why. */
+trailer_status_t trailer_asmc_within_certificate(const trailer_asmc_state_t *state)
+{
+    if (state == NULL) {
+        return TRAILER_ERR_NULL_POINTER;
+    }
+    if (state->magic != TRAILER_STATE_MAGIC) {
+        return TRAILER_ERR_NOT_INITIALISED;
+    }
+    return trailer_within(state->gain, TRAILER_ASMC_CERT_GAIN_MIN, TRAILER_ASMC_CERT_GAIN_MAX) != 0
+        ? TRAILER_OK : TRAILER_WARN_UNCERTIFIED;
+}

@@ -107,6 +107,27 @@ trailer_status_t trailer_asmc_check_config(const trailer_asmc_config_t *config);
 trailer_status_t trailer_asmc_check_config_detail(const trailer_asmc_config_t *config,
     trailer_error_detail_t *detail);
 
+/* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
+   stated over for the adapted gain, which the step produces and does not check:
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
+#define TRAILER_ASMC_CERT_GAIN_MIN TRAILER_LIT(0.0) /* the law's switching gain (adapted) */
+#define TRAILER_ASMC_CERT_GAIN_MAX TRAILER_LIT(100.0)
+
+/**
+ * Whether the float32 torque bound certified for this step holds for the last step: it holds
+ * for a step whose inputs are in the declared box (docs/FLOAT32.md) after which this returns
+ * TRAILER_OK. Checks, on the state the step left, what that bound is conditional on:
+ * the adapted gain the state carries in [TRAILER_ASMC_CERT_GAIN_MIN, _GAIN_MAX]: the one the next
+ * step
+ * uses, at least the last step's (the adaptation never lowers it, from gain0 >= 0), so OK
+ * covers both.
+ * Reads the state only and no step calls it: it costs a step nothing.
+ * @return TRAILER_OK (the bound holds), TRAILER_WARN_UNCERTIFIED (the step's torque was
+ *         computed, but the certified bound does not apply to it), TRAILER_ERR_NULL_POINTER or
+ *         TRAILER_ERR_NOT_INITIALISED (not initialised by _init, or corrupted).
+ */
+trailer_status_t trailer_asmc_within_certificate(const trailer_asmc_state_t *state);
+
 #ifdef TRAILER_ASMC_FROZEN
 /* A build with the configuration compiled in (-DTRAILER_ASMC_FROZEN): the toolchain's
    `freeze` command validated it on the host with this code, ran _init there and wrote

@@ -182,7 +182,7 @@ void trailer_minimal_minv_norm(const trailer_params_t *p, const trailer_real_t *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its derived inputs as minimal_mhat computes them in float32 from its
  * declared box (its rounding included): no intermediate overflows or is NaN; |float32 -
- * exact| <= norm 0.0018 (largest entry).
+ * exact| <= norm 0.0014 (largest entry).
  */
 void trailer_minimal_minv_norm_mhat(const trailer_params_t *p, const trailer_real_t *mhat,
     trailer_real_t *norm);

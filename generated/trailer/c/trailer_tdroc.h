@@ -127,6 +127,31 @@ trailer_status_t trailer_tdroc_check_config(const trailer_tdroc_config_t *config
 trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t *config,
     trailer_error_detail_t *detail);
 
+/* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
+   stated over for (25)'s k-hat and its inputs, which the step produces and does not check:
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
+#define TRAILER_TDROC_CERT_GAIN_MIN TRAILER_LIT(0.0) /* the law's switching gain k-hat */
+#define TRAILER_TDROC_CERT_GAIN_MAX TRAILER_LIT(100.0)
+#define TRAILER_TDROC_CERT_NORM_MIN TRAILER_LIT(0.0) /* ||Mhat^-1||_F of (25) */
+#define TRAILER_TDROC_CERT_NORM_MAX TRAILER_LIT(10.0)
+#define TRAILER_TDROC_CERT_WINDOW_MIN TRAILER_LIT(0.0) /* each ||Omega(i) - Omega(i+1)|| (25) reads */
+#define TRAILER_TDROC_CERT_WINDOW_MAX TRAILER_LIT(10.0)
+
+/**
+ * Whether the float32 torque bound certified for this step holds for the last step: it holds
+ * for a step whose inputs are in the declared box (docs/FLOAT32.md) after which this returns
+ * TRAILER_OK. Checks, on the state the step left, what that bound is conditional on:
+ * the k-hat it used in [TRAILER_TDROC_CERT_GAIN_MIN, _GAIN_MAX] and, when (25) computed it (not
+ * held, two Omega's seen), ||Mhat^-1|| at that step's q in [_NORM_MIN, _NORM_MAX] and the
+ * TRAILER_MAX_WINDOW
+ * difference norms (25) read in [_WINDOW_MIN, _WINDOW_MAX].
+ * Reads the state only and no step calls it: it costs a step nothing.
+ * @return TRAILER_OK (the bound holds), TRAILER_WARN_UNCERTIFIED (the step's torque was
+ *         computed, but the certified bound does not apply to it), TRAILER_ERR_NULL_POINTER or
+ *         TRAILER_ERR_NOT_INITIALISED (not initialised by _init, or corrupted).
+ */
+trailer_status_t trailer_tdroc_within_certificate(const trailer_tdroc_state_t *state);
+
 #ifdef TRAILER_TDROC_FROZEN
 /* A build with the configuration compiled in (-DTRAILER_TDROC_FROZEN): the toolchain's
    `freeze` command validated it on the host with this code, ran _init there and wrote

@@ -330,3 +330,17 @@ trailer2_status_t trailer2_asmc_step_detail(trailer2_asmc_state_t *state,
     return status;
     }
 }
+
+/* Reads the state a step left; no step calls it (a firmware calls it when it relies on the
+   certified torque bound): the header says what it checks and why. */
+trailer2_status_t trailer2_asmc_within_certificate(const trailer2_asmc_state_t *state)
+{
+    if (state == NULL) {
+        return TRAILER2_ERR_NULL_POINTER;
+    }
+    if (state->magic != TRAILER2_STATE_MAGIC) {
+        return TRAILER2_ERR_NOT_INITIALISED;
+    }
+    return trailer2_within(state->gain, TRAILER2_ASMC_CERT_GAIN_MIN, TRAILER2_ASMC_CERT_GAIN_MAX)
+        != 0 ? TRAILER2_OK : TRAILER2_WARN_UNCERTIFIED;
+}

@@ -111,6 +111,27 @@ trailer2_status_t trailer2_asmc_check_config(const trailer2_asmc_config_t *confi
 trailer2_status_t trailer2_asmc_check_config_detail(const trailer2_asmc_config_t *config,
     trailer2_error_detail_t *detail);
 
+/* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
+   stated over for the adapted gain, which the step produces and does not check:
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
+#define TRAILER2_ASMC_CERT_GAIN_MIN TRAILER2_LIT(0.0) /* the law's switching gain (adapted) */
+#define TRAILER2_ASMC_CERT_GAIN_MAX TRAILER2_LIT(100.0)
+
+/**
+ * Whether the float32 torque bound certified for this step holds for the last step: it holds
+ * for a step whose inputs are in the declared box (docs/FLOAT32.md) after which this returns
+ * TRAILER2_OK. Checks, on the state the step left, what that bound is conditional on:
+ * the adapted gain the state carries in [TRAILER2_ASMC_CERT_GAIN_MIN, _GAIN_MAX]: the one the next
+ * step
+ * uses, at least the last step's (the adaptation never lowers it, from gain0 >= 0), so OK
+ * covers both.
+ * Reads the state only and no step calls it: it costs a step nothing.
+ * @return TRAILER2_OK (the bound holds), TRAILER2_WARN_UNCERTIFIED (the step's torque was
+ *         computed, but the certified bound does not apply to it), TRAILER2_ERR_NULL_POINTER or
+ *         TRAILER2_ERR_NOT_INITIALISED (not initialised by _init, or corrupted).
+ */
+trailer2_status_t trailer2_asmc_within_certificate(const trailer2_asmc_state_t *state);
+
 #ifdef TRAILER2_ASMC_FROZEN
 /* A build with the configuration compiled in (-DTRAILER2_ASMC_FROZEN): the toolchain's
    `freeze` command validated it on the host with this code, ran _init there and wrote

@@ -329,3 +329,17 @@ trailer3_status_t trailer3_asmc_step_detail(trailer3_asmc_state_t *state,
     return status;
     }
 }
+
+/* Reads the state a step left; no step calls it (a firmware calls it when it relies on the
+   certified torque bound): the header says what it checks and why. */
+trailer3_status_t trailer3_asmc_within_certificate(const trailer3_asmc_state_t *state)
+{
+    if (state == NULL) {
+        return TRAILER3_ERR_NULL_POINTER;
+    }
+    if (state->magic != TRAILER3_STATE_MAGIC) {
+        return TRAILER3_ERR_NOT_INITIALISED;
+    }
+    return trailer3_within(state->gain, TRAILER3_ASMC_CERT_GAIN_MIN, TRAILER3_ASMC_CERT_GAIN_MAX)
+        != 0 ? TRAILER3_OK : TRAILER3_WARN_UNCERTIFIED;
+}

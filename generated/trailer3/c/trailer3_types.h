@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER3_CODE_ID 0x938a65cau
+#define TRAILER3_CODE_ID 0xec1aee34u
 
 #ifdef TRAILER3_FLOAT32
 typedef float trailer3_real_t;
@@ -364,6 +364,9 @@ typedef enum {
     TRAILER3_WARN_SATURATED = 1, /* success, but a torque was clipped to the limit */
     TRAILER3_WARN_TRACTION = 2, /* traction_check: a driven wheel's traction margin is <= 0 (it
                                    slips) */
+    TRAILER3_WARN_UNCERTIFIED = 3, /* within_certificate: the last step's switching gain or (25)'s
+                                      inputs left the float32 certificate's box (its torque bound
+                                      does not apply) */
     TRAILER3_ERR_NULL_POINTER = -1, /* a pointer argument is NULL */
     TRAILER3_ERR_NONFINITE_INPUT = -2, /* an input is NaN or infinite */
     TRAILER3_ERR_BAD_PARAMS = -3, /* robot parameters do not give a valid model */

@@ -33,6 +33,7 @@ STATUS: dict[str, int] = {
     "TRAILER3_OK": 0,  # success
     "TRAILER3_WARN_SATURATED": 1,  # success, but a torque was clipped to the limit
     "TRAILER3_WARN_TRACTION": 2,  # traction_check: a driven wheel's traction margin is <= 0 (it slips)
+    "TRAILER3_WARN_UNCERTIFIED": 3,  # within_certificate: the last step's switching gain or (25)'s inputs left the float32 certificate's box (its torque bound does not apply)
     "TRAILER3_ERR_NULL_POINTER": -1,  # a pointer argument is NULL
     "TRAILER3_ERR_NONFINITE_INPUT": -2,  # an input is NaN or infinite
     "TRAILER3_ERR_BAD_PARAMS": -3,  # robot parameters do not give a valid model
@@ -240,6 +241,10 @@ class _Controller:
     error_dynamics = True
     integrator = False
     formulations: tuple[str, ...] = ()
+    # the float32 certificate's boxes ``within_certificate`` checks (None: no check)
+    certificate_gain: tuple[float, float] | None = None
+    certificate_norm: tuple[float, float] = (0.0, 0.0)
+    certificate_window: tuple[float, float] = (0.0, 0.0)
 
     def __init__(self, config: Config) -> None:
         self.check_config(config)
@@ -397,6 +402,25 @@ class _Controller:
             out["trig_prev"] = self.trig_prev
         return out
 
+    def within_certificate(self) -> str:
+        """Mirrors ``trailer3_<ctrl>_within_certificate`` (TDROC and ASMC): the status name,
+        ``TRAILER3_OK`` when the state the last step left is in the float32 certificate's
+        boxes for what that step produced (``certificate_gain``; with (25)'s window gain
+        also ``certificate_norm`` for ||Mhat^-1|| and ``certificate_window`` for each
+        difference norm it read, when it computed k-hat), else ``TRAILER3_WARN_UNCERTIFIED``."""
+        if self.certificate_gain is None:
+            raise AttributeError(f"{self.name}: its step's float32 bound has no condition to "
+                                 "check (no within_certificate)")
+        lo, hi = self.certificate_gain
+        within = lo <= self.gain <= hi
+        if self.window and not self.config.hold_gain and self.omega_count >= 2:
+            c, p = self.config, {k: float(self.config.nominal[k]) for k in PARAM_KEYS}
+            minv_norm = float(laws.minimal_minv_norm(self.q_prev, p)[0])  # the last step's q
+            (nlo, nhi), (wlo, whi) = self.certificate_norm, self.certificate_window
+            within = within and nlo <= minv_norm <= nhi and all(
+                wlo <= d <= whi for d in self.omega_dnorm)
+        return "TRAILER3_OK" if within else "TRAILER3_WARN_UNCERTIFIED"
+
     def step(self, q: ArrayLike, qdot: ArrayLike, q_des: ArrayLike, qdot_des: ArrayLike,
              qddot_des: ArrayLike, config: Config | None = None) -> NDArray[np.float64]:
         """One step; mirrors ``trailer3_<ctrl>_step``. Returns tau (2,)."""
@@ -537,6 +561,10 @@ class TDROC(_Controller):
     error_dynamics = True
     integrator = False
     formulations = ("paper", "minimal",)
+    # the boxes of trailer3_tdroc.h's TRAILER3_TDROC_CERT_* (codegen/certify/runtime_check.py)
+    certificate_gain = (0.0, 100.0)
+    certificate_norm = (0.0, 10.0)
+    certificate_window = (0.0, 10.0)
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("accel_estimator", "int"), ("rate_window", "real"), ("eps", "real"), ("n", "int"), ("a", "real"), ("hold_gain", "int"), ("held_gain", "real"), )
     # the fields validated after the ones every controller has, in the C's order
@@ -594,6 +622,8 @@ class ASMC(_Controller):
     error_dynamics = True
     integrator = False
     formulations = ("paper", "minimal",)
+    # the boxes of trailer3_asmc.h's TRAILER3_ASMC_CERT_* (codegen/certify/runtime_check.py)
+    certificate_gain = (0.0, 100.0)
     # the configuration's fields after ``nominal`` in C struct order, compared by ``step``
     config_fields = (("formulation", "int"), ("k1", "vector"), ("k2", "vector"), ("q_pos", "real"), ("q_vel", "real"), ("h", "real"), ("tau_max", "real"), ("eps", "real"), ("gamma", "real"), ("gain0", "real"), )
     # the fields validated after the ones every controller has, in the C's order

@@ -316,3 +316,17 @@ train5_status_t train5_asmc_step_detail(train5_asmc_state_t *state,
     return status;
     }
 }
+
+/* Reads the state a step left; no step calls it (a firmware calls it when it relies on the
+   certified torque bound): the header says what it checks and why. */
+train5_status_t train5_asmc_within_certificate(const train5_asmc_state_t *state)
+{
+    if (state == NULL) {
+        return TRAIN5_ERR_NULL_POINTER;
+    }
+    if (state->magic != TRAIN5_STATE_MAGIC) {
+        return TRAIN5_ERR_NOT_INITIALISED;
+    }
+    return train5_within(state->gain, TRAIN5_ASMC_CERT_GAIN_MIN, TRAIN5_ASMC_CERT_GAIN_MAX) != 0
+        ? TRAIN5_OK : TRAIN5_WARN_UNCERTIFIED;
+}

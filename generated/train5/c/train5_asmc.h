@@ -105,6 +105,27 @@ train5_status_t train5_asmc_check_config(const train5_asmc_config_t *config);
 train5_status_t train5_asmc_check_config_detail(const train5_asmc_config_t *config,
     train5_error_detail_t *detail);
 
+/* The boxes the float32 certificate of this step's torque (docs/FLOAT32.md, MODEL.md) is
+   stated over for the adapted gain, which the step produces and does not check:
+   the certifier's envelope (codegen/certify/envelope.py; its boxes.py), rendered here. */
+#define TRAIN5_ASMC_CERT_GAIN_MIN TRAIN5_LIT(0.0) /* the law's switching gain (adapted) */
+#define TRAIN5_ASMC_CERT_GAIN_MAX TRAIN5_LIT(100.0)
+
+/**
+ * Whether the float32 torque bound certified for this step holds for the last step: it holds
+ * for a step whose inputs are in the declared box (docs/FLOAT32.md) after which this returns
+ * TRAIN5_OK. Checks, on the state the step left, what that bound is conditional on:
+ * the adapted gain the state carries in [TRAIN5_ASMC_CERT_GAIN_MIN, _GAIN_MAX]: the one the next
+ * step
+ * uses, at least the last step's (the adaptation never lowers it, from gain0 >= 0), so OK
+ * covers both.
+ * Reads the state only and no step calls it: it costs a step nothing.
+ * @return TRAIN5_OK (the bound holds), TRAIN5_WARN_UNCERTIFIED (the step's torque was
+ *         computed, but the certified bound does not apply to it), TRAIN5_ERR_NULL_POINTER or
+ *         TRAIN5_ERR_NOT_INITIALISED (not initialised by _init, or corrupted).
+ */
+train5_status_t train5_asmc_within_certificate(const train5_asmc_state_t *state);
+
 #ifdef TRAIN5_ASMC_FROZEN
 /* A build with the configuration compiled in (-DTRAIN5_ASMC_FROZEN): the toolchain's
    `freeze` command validated it on the host with this code, ran _init there and wrote

@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAIN5_CODE_ID 0xe6df9a9du
+#define TRAIN5_CODE_ID 0x5705c377u
 
 #ifdef TRAIN5_FLOAT32
 typedef float train5_real_t;
@@ -363,6 +363,9 @@ typedef enum {
     TRAIN5_WARN_SATURATED = 1, /* success, but a torque was clipped to the limit */
     TRAIN5_WARN_TRACTION = 2, /* traction_check: a driven wheel's traction margin is <= 0 (it
                                  slips) */
+    TRAIN5_WARN_UNCERTIFIED = 3, /* within_certificate: the last step's switching gain or (25)'s
+                                    inputs left the float32 certificate's box (its torque bound does
+                                    not apply) */
     TRAIN5_ERR_NULL_POINTER = -1, /* a pointer argument is NULL */
     TRAIN5_ERR_NONFINITE_INPUT = -2, /* an input is NaN or infinite */
     TRAIN5_ERR_BAD_PARAMS = -3, /* robot parameters do not give a valid model */

@@ -17,6 +17,7 @@ from codegen.backends.c.certify.robot import certify_robot, programs
 from codegen.backends.c.certify.search import search
 from codegen.backends.c.lowering import function_context
 from codegen.certify.header import body_hash
+from codegen.certify.runtime_check import checked_by
 
 
 def certify_and_search(target: RobotTarget, seconds: float, points: int,
@@ -245,11 +246,24 @@ def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
         "  estimate's enclosure reach 2e3–2e5, the trailer's ‖M̂⁻¹‖ 66.7. Certifying the",
         "  gain and the law over those enclosures instead would put the law's k̂ anywhere",
         "  up to its cap, GAIN_MAX = 1e6, 10⁴ times the declared box (not attempted).",
-        "  Nothing in the step checks the condition (k̂ is capped at GAIN_MAX only): it",
-        "  holds while each new difference norm and ‖M̂⁻¹‖ stay ≤ 10 and k̂ ≤ 100; a",
-        "  firmware that relies on the TDROC bound should check k̂ and the new difference",
-        "  norm against those values. Each row states its conditions and the enclosure",
-        "  that fails to prove them (codegen/backends/c/certify/steps.py).",
+        "  ASMC's bound likewise holds while the adapted gain the state carries stays in",
+        "  [0, 100]. The step checks none of this (k̂ and the adapted gain are capped at",
+        "  GAIN_MAX only), and a check there would cost every step; instead each such",
+        "  controller has `<prefix>_<ctrl>_within_certificate(const state *)`, which a",
+        "  firmware calls after a step: it reads the state the step left (TDROC: the k̂",
+        "  the step used and, when (25) computed it, ‖M̂⁻¹‖ and the window's difference",
+        "  norms (25) read; ASMC: the adapted gain, which the next step uses and which",
+        "  is at least the last step's) against these boxes and returns `OK`, or",
+        "  `WARN_UNCERTIFIED` (the torque was computed but its bound does not apply), or",
+        "  `ERR_NOT_INITIALISED`. **The certified bound holds for a step whose inputs",
+        "  are in the declared box and after which it returns `OK`.** Its thresholds",
+        "  are the certifier's envelope (codegen/certify/envelope.py: `adaptive_gain`,",
+        "  `norm`), the fields boxes.py's `input_range` gives `gain`, `minv_norm`,",
+        "  `dn_new`, `dn_kept` (checked before the C is generated), in the controller's",
+        "  header as `<PREFIX>_<CTRL>_CERT_*`; the Python mirror has",
+        "  `within_certificate()`. Each row states its conditions and the enclosure",
+        "  that fails to prove them (codegen/backends/c/certify/steps.py) and names the",
+        "  check.",
         "",
     ]
     for res in results:
@@ -278,8 +292,10 @@ def render_markdown(results: Sequence[Mapping[str, Any]]) -> str:
                 " bound / τ_max | proved |", "|---|---|---|---|---|---|---|"]
         for st in res["steps"]:
             reason = "; ".join(dict.fromkeys(st["reason"].split("; ")))
-            proved = "yes" if st["proved"] else f"**{reason}**" if reason.startswith(
-                "if ") else f"**no**: {reason}"
+            check = checked_by(res["prefix"], st["controller"])
+            proved = "yes" if st["proved"] else f"**{reason}**" + (
+                f" ({check})" if check else "") if reason.startswith("if ") else (
+                f"**no**: {reason}")
             out.append(f"| {st['controller'].upper()} | {st['formulation']} | `{st['law']}` "
                        f"| {st['bound']:.3g} | {st['tau_max']:g} | "
                        f"{st['bound'] / st['tau_max']:.2g} | {proved} |")

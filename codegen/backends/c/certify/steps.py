@@ -111,7 +111,10 @@ def _gain_conditions(certs: Mapping[str, tuple[Program, Mapping[object, Interval
     these: k-hat is capped at GAIN_MAX = 1e6 only): k-hat's enclosure against the law's
     gain box; ||M-hat^-1||'s (the norm function's enclosure) and the window's difference
     norms' (at most 2 sqrt(sum of max|H1hat_i|^2) over the law's H1hat box, i.e. the
-    estimator's enclosure) against the gain function's boxes."""
+    estimator's enclosure) against the gain function's boxes. The step checks none of them;
+    ``<prefix>_tdroc_within_certificate`` (:mod:`codegen.certify.runtime_check`, the same
+    boxes) checks them after a step, and the reports name it in these rows
+    (:func:`~codegen.certify.runtime_check.checked_by`)."""
     notes: list[str] = []
     gprog, gbox, gcert = certs[step.gain]
     top = max(r[1] for r in gcert.ranges)
@@ -181,7 +184,9 @@ def step_certificates(target: RobotTarget,
                 errs[sym] = bound_of(gain)
                 gain_box = box[sym]
             elif arg == "gain" and step.adaptive:
-                # the adapted gain is the state's, which nothing keeps in the law's box
+                # the adapted gain is the state's, which the step does not keep in the law's
+                # box: <prefix>_asmc_within_certificate (codegen.certify.runtime_check)
+                # checks it after a step
                 notes.append(f"if the adapted gain the state carries stays in the law's "
                              f"gain box [{box[sym][0]:g}, {box[sym][1]:g}] (the step caps "
                              "it at GAIN_MAX only)")
