@@ -16,10 +16,19 @@
 
 #include "wmr_types.h"
 
+/* Each kernel inlined wherever it is called, as the steps' bodies are (gcc -O2 declines
+   once a kernel has two callers: a step's body is in both _step and _step_detail);
+   optimising for size (-Os, the firmware images), as the compiler likes. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define WMR_KERNEL_INLINE static inline __attribute__((always_inline))
+#else
+#define WMR_KERNEL_INLINE static inline
+#endif
+
 /* wmr_k_tdroc_weighted_gain: the body of wmr_tdroc_weighted_gain (wmr_laws.h documents it).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_tdroc_weighted_gain(const wmr_real_t *minv_norm, const wmr_real_t *dn_new,
-    const wmr_real_t *dn_kept, const wmr_real_t *w, wmr_real_t *gain)
+WMR_KERNEL_INLINE void wmr_k_tdroc_weighted_gain(const wmr_real_t *minv_norm,
+    const wmr_real_t *dn_new, const wmr_real_t *dn_kept, const wmr_real_t *w, wmr_real_t *gain)
 {
     const wmr_real_t dn1 = dn_kept[0];
     const wmr_real_t dn2 = dn_kept[1];
@@ -45,7 +54,7 @@ static inline void wmr_k_tdroc_weighted_gain(const wmr_real_t *minv_norm, const 
 /* wmr_k_paper_tde_trig_keep: the parameter-only part of wmr_paper_tde_trig (wmr_laws.h documents
    it).
    operations after CSE: 1 add, 10 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
+WMR_KERNEL_INLINE void wmr_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_real_t *span,
     wmr_real_t kept[13])
 {
     const wmr_real_t m = p->m;
@@ -83,7 +92,7 @@ static inline void wmr_k_paper_tde_trig_keep(const wmr_params_t *p, const wmr_re
 
 /* wmr_k_paper_tde_trig: the per-step part of wmr_paper_tde_trig (wmr_laws.h documents it).
    operations after CSE: 34 add, 37 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_real_t *trig_prev,
+WMR_KERNEL_INLINE void wmr_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_real_t *trig_prev,
     const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
     wmr_real_t *H1hat)
 {
@@ -147,8 +156,8 @@ static inline void wmr_k_paper_tde_trig(const wmr_real_t kept[13], const wmr_rea
 
 /* wmr_k_paper_omega_difference: the body of wmr_paper_omega_difference (wmr_laws.h documents it).
    operations after CSE: 9 add, 5 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void wmr_k_paper_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
-    wmr_real_t *norm)
+WMR_KERNEL_INLINE void wmr_k_paper_omega_difference(const wmr_real_t *newer,
+    const wmr_real_t *older, wmr_real_t *norm)
 {
     const wmr_real_t Om_new0 = newer[0];
     const wmr_real_t Om_old0 = older[0];
@@ -171,7 +180,7 @@ static inline void wmr_k_paper_omega_difference(const wmr_real_t *newer, const w
 /* wmr_k_paper_tdc_law_trig_keep: the parameter-only part of wmr_paper_tdc_law_trig (wmr_laws.h
    documents it).
    operations after CSE: 1 add, 4 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_paper_tdc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
+WMR_KERNEL_INLINE void wmr_k_paper_tdc_law_trig_keep(const wmr_params_t *p, wmr_real_t kept[9])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -198,7 +207,7 @@ static inline void wmr_k_paper_tdc_law_trig_keep(const wmr_params_t *p, wmr_real
 
 /* wmr_k_paper_tdc_law_trig: the per-step part of wmr_paper_tdc_law_trig (wmr_laws.h documents it).
    operations after CSE: 39 add, 42 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_paper_tdc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
+WMR_KERNEL_INLINE void wmr_k_paper_tdc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
     wmr_real_t *u)
@@ -276,7 +285,7 @@ static inline void wmr_k_paper_tdc_law_trig(const wmr_real_t kept[9], const wmr_
 /* wmr_k_paper_tdroc_law_trig: the per-step part of wmr_paper_tdroc_law_trig (wmr_laws.h documents
    it).
    operations after CSE: 53 add, 62 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void wmr_k_paper_tdroc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
+WMR_KERNEL_INLINE void wmr_k_paper_tdroc_law_trig(const wmr_real_t kept[9], const wmr_real_t *trig,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
     const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
@@ -376,7 +385,7 @@ static inline void wmr_k_paper_tdroc_law_trig(const wmr_real_t kept[9], const wm
 
 /* wmr_k_paper_roc_law_keep: the parameter-only part of wmr_paper_roc_law (wmr_laws.h documents it).
    operations after CSE: 1 add, 12 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_paper_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[15])
+WMR_KERNEL_INLINE void wmr_k_paper_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[15])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -417,7 +426,7 @@ static inline void wmr_k_paper_roc_law_keep(const wmr_params_t *p, wmr_real_t ke
 
 /* wmr_k_paper_roc_law: the per-step part of wmr_paper_roc_law (wmr_laws.h documents it).
    operations after CSE: 73 add, 91 mul, 2 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static inline void wmr_k_paper_roc_law(const wmr_real_t kept[15], const wmr_real_t *q,
+WMR_KERNEL_INLINE void wmr_k_paper_roc_law(const wmr_real_t kept[15], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
     const wmr_real_t *p22, const wmr_real_t *bounds, const wmr_real_t *eps, wmr_real_t *u,
@@ -543,7 +552,7 @@ static inline void wmr_k_paper_roc_law(const wmr_real_t kept[15], const wmr_real
 
 /* wmr_k_paper_asmc_law: the per-step part of wmr_paper_asmc_law (wmr_laws.h documents it).
    operations after CSE: 63 add, 82 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void wmr_k_paper_asmc_law(const wmr_real_t kept[15], const wmr_real_t *q,
+WMR_KERNEL_INLINE void wmr_k_paper_asmc_law(const wmr_real_t kept[15], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
     const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt,
@@ -662,7 +671,7 @@ static inline void wmr_k_paper_asmc_law(const wmr_real_t kept[15], const wmr_rea
 
 /* wmr_k_minimal_tde_keep: the parameter-only part of wmr_minimal_tde (wmr_laws.h documents it).
    operations after CSE: 5 add, 14 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
+WMR_KERNEL_INLINE void wmr_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_t *span,
     wmr_real_t kept[3])
 {
     const wmr_real_t m = p->m;
@@ -688,7 +697,7 @@ static inline void wmr_k_minimal_tde_keep(const wmr_params_t *p, const wmr_real_
 
 /* wmr_k_minimal_tde: the per-step part of wmr_minimal_tde (wmr_laws.h documents it).
    operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
+WMR_KERNEL_INLINE void wmr_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t *q_prev,
     const wmr_real_t *u_prev, const wmr_real_t *qdot_now, const wmr_real_t *qdot_then,
     wmr_real_t *H1hat)
 {
@@ -711,8 +720,8 @@ static inline void wmr_k_minimal_tde(const wmr_real_t kept[3], const wmr_real_t 
 /* wmr_k_minimal_omega_difference: the body of wmr_minimal_omega_difference (wmr_laws.h documents
    it).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void wmr_k_minimal_omega_difference(const wmr_real_t *newer, const wmr_real_t *older,
-    wmr_real_t *norm)
+WMR_KERNEL_INLINE void wmr_k_minimal_omega_difference(const wmr_real_t *newer,
+    const wmr_real_t *older, wmr_real_t *norm)
 {
     const wmr_real_t Om_new0 = newer[0];
     const wmr_real_t Om_old0 = older[0];
@@ -726,7 +735,7 @@ static inline void wmr_k_minimal_omega_difference(const wmr_real_t *newer, const
 /* wmr_k_minimal_tdc_law_keep: the parameter-only part of wmr_minimal_tdc_law (wmr_laws.h documents
    it).
    operations after CSE: 5 add, 14 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_minimal_tdc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
+WMR_KERNEL_INLINE void wmr_k_minimal_tdc_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -748,7 +757,7 @@ static inline void wmr_k_minimal_tdc_law_keep(const wmr_params_t *p, wmr_real_t 
 
 /* wmr_k_minimal_tdc_law: the per-step part of wmr_minimal_tdc_law (wmr_laws.h documents it).
    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_minimal_tdc_law(const wmr_real_t kept[2], const wmr_real_t *q,
+WMR_KERNEL_INLINE void wmr_k_minimal_tdc_law(const wmr_real_t kept[2], const wmr_real_t *q,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
     wmr_real_t *u)
@@ -778,7 +787,7 @@ static inline void wmr_k_minimal_tdc_law(const wmr_real_t kept[2], const wmr_rea
 
 /* wmr_k_minimal_tdroc_law: the per-step part of wmr_minimal_tdroc_law (wmr_laws.h documents it).
    operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void wmr_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_real_t *q,
+WMR_KERNEL_INLINE void wmr_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_real_t *q,
     const wmr_real_t *e, const wmr_real_t *edot, const wmr_real_t *qddot_des, const wmr_real_t *k1,
     const wmr_real_t *k2, const wmr_real_t *p12, const wmr_real_t *p22, const wmr_real_t *H1hat,
     const wmr_real_t *gain, const wmr_real_t *eps, wmr_real_t *u, wmr_real_t *s, wmr_real_t *s_norm)
@@ -822,7 +831,7 @@ static inline void wmr_k_minimal_tdroc_law(const wmr_real_t kept[2], const wmr_r
 /* wmr_k_minimal_roc_law_keep: the parameter-only part of wmr_minimal_roc_law (wmr_laws.h documents
    it).
    operations after CSE: 7 add, 20 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_minimal_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[4])
+WMR_KERNEL_INLINE void wmr_k_minimal_roc_law_keep(const wmr_params_t *p, wmr_real_t kept[4])
 {
     const wmr_real_t m = p->m;
     const wmr_real_t I = p->Iz;
@@ -851,7 +860,7 @@ static inline void wmr_k_minimal_roc_law_keep(const wmr_params_t *p, wmr_real_t 
 
 /* wmr_k_minimal_roc_law: the per-step part of wmr_minimal_roc_law (wmr_laws.h documents it).
    operations after CSE: 22 add, 33 mul, 2 div, 0 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static inline void wmr_k_minimal_roc_law(const wmr_real_t kept[4], const wmr_real_t *q,
+WMR_KERNEL_INLINE void wmr_k_minimal_roc_law(const wmr_real_t kept[4], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
     const wmr_real_t *p22, const wmr_real_t *bounds, const wmr_real_t *eps, wmr_real_t *u,
@@ -907,7 +916,7 @@ static inline void wmr_k_minimal_roc_law(const wmr_real_t kept[4], const wmr_rea
 
 /* wmr_k_minimal_asmc_law: the per-step part of wmr_minimal_asmc_law (wmr_laws.h documents it).
    operations after CSE: 18 add, 30 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void wmr_k_minimal_asmc_law(const wmr_real_t kept[4], const wmr_real_t *q,
+WMR_KERNEL_INLINE void wmr_k_minimal_asmc_law(const wmr_real_t kept[4], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *e, const wmr_real_t *edot,
     const wmr_real_t *qddot_des, const wmr_real_t *k1, const wmr_real_t *k2, const wmr_real_t *p12,
     const wmr_real_t *p22, const wmr_real_t *gain, const wmr_real_t *eps, const wmr_real_t *adapt,
@@ -961,7 +970,7 @@ static inline void wmr_k_minimal_asmc_law(const wmr_real_t kept[4], const wmr_re
 /* wmr_k_minimal_pi_law_keep: the parameter-only part of wmr_minimal_pi_law (wmr_laws.h documents
    it).
    operations after CSE: 0 add, 2 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void wmr_k_minimal_pi_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
+WMR_KERNEL_INLINE void wmr_k_minimal_pi_law_keep(const wmr_params_t *p, wmr_real_t kept[2])
 {
     const wmr_real_t r = p->r;
     const wmr_real_t b = p->b;
@@ -973,7 +982,7 @@ static inline void wmr_k_minimal_pi_law_keep(const wmr_params_t *p, wmr_real_t k
 
 /* wmr_k_minimal_pi_law: the per-step part of wmr_minimal_pi_law (wmr_laws.h documents it).
    operations after CSE: 17 add, 19 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static inline void wmr_k_minimal_pi_law(const wmr_real_t kept[2], const wmr_real_t *q,
+WMR_KERNEL_INLINE void wmr_k_minimal_pi_law(const wmr_real_t kept[2], const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *q_des, const wmr_real_t *qdot_des,
     const wmr_real_t *integral, const wmr_real_t *gains, const wmr_real_t *limits, wmr_real_t *u,
     wmr_real_t *integral_next)

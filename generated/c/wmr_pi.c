@@ -203,18 +203,19 @@ wmr_status_t wmr_pi_reset(wmr_pi_state_t *state)
     return WMR_OK;
 }
 
-wmr_status_t wmr_pi_step(wmr_pi_state_t *state, const wmr_pi_config_t *config,
+/* The step's body, with or without an error detail to fill: inlined into both entries below
+   (optimising for size: _step_detail itself). */
+#if WMR_STEP_PER_ENTRY
+WMR_STEP_INLINE wmr_status_t wmr_pi_step_of(wmr_pi_state_t *state, const wmr_pi_config_t *config,
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
-    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2])
-{
-    return wmr_pi_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
-}
-
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail)
+#else  /* the body is _step_detail's, as _step calls it */
 wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *config,
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
     wmr_error_detail_t *detail)
-
+#endif
 {
     wmr_status_t status = WMR_OK;
     const wmr_pi_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
@@ -320,4 +321,26 @@ wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *co
     }
     return status;
     }
+}
+#if WMR_STEP_PER_ENTRY
+
+wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail)
+{
+    return wmr_pi_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail);
+}
+#endif
+
+wmr_status_t wmr_pi_step(wmr_pi_state_t *state, const wmr_pi_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2])
+{
+#if WMR_STEP_PER_ENTRY
+    /* its own copy of the body: no 9-argument call first (not a tail call on x86-64) */
+    return wmr_pi_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#else
+    return wmr_pi_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#endif
 }

@@ -228,13 +228,6 @@ wmr_status_t wmr_roc_reset(wmr_roc_state_t *state)
     return WMR_OK;
 }
 
-wmr_status_t wmr_roc_step(wmr_roc_state_t *state, const wmr_roc_config_t *config,
-    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
-    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2])
-{
-    return wmr_roc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
-}
-
 /* The step of one formulation: called with a constant one (below), so that the compiler
    specialises the body to it (the other formulation's branches gone, the controlled rows'
    loops of a known count) as a frozen build's compiled-in configuration lets it. */
@@ -372,11 +365,19 @@ WMR_STEP_INLINE wmr_status_t wmr_roc_step_as(wmr_roc_state_t *state, const wmr_r
     }
 }
 
+/* The step of the formulation _init kept, with or without an error detail to fill: inlined
+   into both entries below (optimising for size: _step_detail itself). */
+#if WMR_STEP_PER_ENTRY
+WMR_STEP_INLINE wmr_status_t wmr_roc_step_of(wmr_roc_state_t *state, const wmr_roc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail)
+#else  /* the body is _step_detail's, as _step calls it */
 wmr_status_t wmr_roc_step_detail(wmr_roc_state_t *state, const wmr_roc_config_t *config,
     const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
     const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
     wmr_error_detail_t *detail)
-
+#endif
 {
 #ifdef WMR_ROC_FROZEN
     return wmr_roc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
@@ -384,16 +385,36 @@ wmr_status_t wmr_roc_step_detail(wmr_roc_state_t *state, const wmr_roc_config_t 
 #elif WMR_STEP_PER_FORMULATION
     /* the formulation _init validated and kept; a step given another configuration fails its
        comparison before the formulation is read */
-    if ((state != NULL) && (state->magic == WMR_STATE_MAGIC)
-            && WMR_IS_PAPER(state->config.formulation)) {
-        return wmr_roc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
-            WMR_FORMULATION_PAPER);
-    }
-    return wmr_roc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
+    return ((state != NULL) && (state->magic == WMR_STATE_MAGIC)
+        && WMR_IS_PAPER(state->config.formulation)) ? wmr_roc_step_as(state, config, q, qdot, q_des,
+        qdot_des, qddot_des, tau, detail, WMR_FORMULATION_PAPER)
+        : wmr_roc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
         WMR_FORMULATION_MINIMAL);
 #else
     return wmr_roc_step_as(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail,
         ((state != NULL) && (state->magic == WMR_STATE_MAGIC)) ? state->config.formulation
         : WMR_FORMULATION_MINIMAL);
+#endif
+}
+#if WMR_STEP_PER_ENTRY
+
+wmr_status_t wmr_roc_step_detail(wmr_roc_state_t *state, const wmr_roc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2],
+    wmr_error_detail_t *detail)
+{
+    return wmr_roc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail);
+}
+#endif
+
+wmr_status_t wmr_roc_step(wmr_roc_state_t *state, const wmr_roc_config_t *config,
+    const wmr_real_t q[5], const wmr_real_t qdot[5], const wmr_real_t q_des[5],
+    const wmr_real_t qdot_des[5], const wmr_real_t qddot_des[5], wmr_real_t tau[2])
+{
+#if WMR_STEP_PER_ENTRY
+    /* its own copy of the body: no 9-argument call first (not a tail call on x86-64) */
+    return wmr_roc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#else
+    return wmr_roc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
 #endif
 }

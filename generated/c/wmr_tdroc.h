@@ -131,7 +131,7 @@ wmr_status_t wmr_tdroc_check_config_detail(const wmr_tdroc_config_t *config,
 #define WMR_TDROC_CERT_GAIN_MAX WMR_LIT(100.0)
 #define WMR_TDROC_CERT_NORM_MIN WMR_LIT(0.0) /* ||Mhat^-1||_F of (25) */
 #define WMR_TDROC_CERT_NORM_MAX WMR_LIT(10.0)
-#define WMR_TDROC_CERT_WINDOW_MIN WMR_LIT(0.0) /* each ||Omega(i) - Omega(i+1)|| (25) reads */
+#define WMR_TDROC_CERT_WINDOW_MIN WMR_LIT(0.0) /* each difference norm (25) reads */
 #define WMR_TDROC_CERT_WINDOW_MAX WMR_LIT(10.0)
 
 /**

@@ -145,8 +145,8 @@ def c_texts() -> dict[str, str]:
 
 def _function_body(text: str, name: str) -> str:
     """The body of C function ``name`` (from its definition to the closing brace)."""
-    match = re.search(rf"^(?:static inline )?\w+ {re.escape(name)}\(.*?^\{{\n(.*?)^\}}\n", text,
-                      re.S | re.M)
+    match = re.search(rf"^(?:static inline |\w+_STEP_INLINE )?\w+ {re.escape(name)}\("
+                      r".*?^\{\n(.*?)^\}\n", text, re.S | re.M)
     assert match, f"no definition of {name}"
     return match.group(1)
 
@@ -172,7 +172,7 @@ def test_sizes_come_from_the_layout(c_texts: dict[str, str]) -> None:
         assert "[8]" in c_texts[name], name
         assert "[2]" in c_texts[name], name
         assert not re.search(r"_t \w+\[5\]", c_texts[name]), name  # no 5-wide array
-    step = _function_body(c_texts["tdroc.c"], "toy_tdroc_step_detail")
+    step = _function_body(c_texts["tdroc.c"], "toy_tdroc_step_of")
     assert "off = 4;" in step
     assert "out_tau[1] = u[1];" in step
     history = _function_body(c_texts["controller.h"], "toy_push_history")  # static inline
@@ -199,7 +199,7 @@ def test_formulation_paper_is_rejected(c_texts: dict[str, str]) -> None:
 
 def test_minv_norm_is_evaluated_at_q_in_the_step(c_texts: dict[str, str]) -> None:
     tdroc = c_texts["tdroc.c"]
-    step = _function_body(tdroc, "toy_tdroc_step_detail")
+    step = _function_body(tdroc, "toy_tdroc_step_of")
     assert "toy_minimal_minv_norm(&cfg->nominal, q, &minv_norm);" in step
     assert "state->minv_norm = minv_norm;" in step  # committed with the rest
     assert "same_params" not in step

@@ -58,7 +58,7 @@ def test_the_step_evaluates_mhat_once(robot: str) -> None:
     pre = code.prefix
     for ctrl in ("tdroc", "tdc"):
         text = (code.c_dir / f"{pre}_{ctrl}.c").read_text()
-        body = text[text.index(f"{pre}_status_t {pre}_{ctrl}_step_detail("):]
+        body = text[text.index(f"{pre}_status_t {pre}_{ctrl}_step_of("):]
         assert len(re.findall(rf"{pre}_k_minimal_mhat\(", body)) == 1
         assert re.search(rf"{pre}_k_minimal_tde_mhat\([^;]*state->mhat_prev", body)
         assert re.search(rf"{pre}_k_minimal_{ctrl}_law_mhat\(", body)

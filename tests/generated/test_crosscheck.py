@@ -190,7 +190,8 @@ def test_trailer_crosscheck_fails_on_a_modified_c_function(tmp_path: Path) -> No
     # the kernel is written once (trailer_kernels.h): the laws function wraps it
     kernels = copy / "c" / "trailer_kernels.h"
     text = kernels.read_text()
-    end = text.index("\n}\n", text.index("static inline void trailer_k_minimal_tdc_law_mhat("))
+    start = text.index("TRAILER_KERNEL_INLINE void trailer_k_minimal_tdc_law_mhat(")
+    end = text.index("\n}\n", start)
     kernels.write_text(text[:end] + "\n    u[0] *= TRAILER_LIT(1.000001);" + text[end:])
     out_file = tmp_path / "report.txt"
     status = crosscheck.main(["--robot", str(copy), "--quick", "--out", str(out_file)])

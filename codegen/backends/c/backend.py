@@ -193,7 +193,8 @@ class CBackend:
             )
         text = template_util.render(TEMPLATE_DIR, "step_kernels.c.jinja",
                                     functions=list(kernels.contexts), laws=laws.name,
-                                    config=config) if kernels.contexts else ""
+                                    config=config, inline=f"{pre.upper()}_KERNEL_INLINE"
+                                    ) if kernels.contexts else ""
         files[kernels_h] = _template(
             "kernels.h.jinja", law, guard=f"{pre.upper()}_KERNELS_H", kernels=text,
             laws=laws.name, prefix=pre, types_header=config.types_header)

@@ -195,18 +195,19 @@ trailer_status_t trailer_asmc_reset(trailer_asmc_state_t *state)
     return TRAILER_OK;
 }
 
-trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_asmc_config_t *config,
-    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t q_des[8],
-    const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8], trailer_real_t tau[2])
-{
-    return trailer_asmc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
-}
-
+/* The step's body, with or without an error detail to fill: inlined into both entries below
+   (optimising for size: _step_detail itself). */
+#if TRAILER_STEP_PER_ENTRY
+TRAILER_STEP_INLINE trailer_status_t trailer_asmc_step_of(trailer_asmc_state_t *state,
+    const trailer_asmc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
+#else  /* the body is _step_detail's, as _step calls it */
 trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     const trailer_asmc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
-
+#endif
 {
     trailer_status_t status = TRAILER_OK;
     const trailer_asmc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
@@ -317,6 +318,28 @@ trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
     }
     return status;
     }
+}
+#if TRAILER_STEP_PER_ENTRY
+
+trailer_status_t trailer_asmc_step_detail(trailer_asmc_state_t *state,
+    const trailer_asmc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
+{
+    return trailer_asmc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail);
+}
+#endif
+
+trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_asmc_config_t *config,
+    const trailer_real_t q[8], const trailer_real_t qdot[8], const trailer_real_t q_des[8],
+    const trailer_real_t qdot_des[8], const trailer_real_t qddot_des[8], trailer_real_t tau[2])
+{
+#if TRAILER_STEP_PER_ENTRY
+    /* its own copy of the body: no 9-argument call first (not a tail call on x86-64) */
+    return trailer_asmc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#else
+    return trailer_asmc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#endif
 }
 
 /* Reads the state a step left; no step calls it (a firmware calls it when it relies on the

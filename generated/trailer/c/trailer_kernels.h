@@ -16,10 +16,19 @@
 
 #include "trailer_types.h"
 
+/* Each kernel inlined wherever it is called, as the steps' bodies are (gcc -O2 declines
+   once a kernel has two callers: a step's body is in both _step and _step_detail);
+   optimising for size (-Os, the firmware images), as the compiler likes. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define TRAILER_KERNEL_INLINE static inline __attribute__((always_inline))
+#else
+#define TRAILER_KERNEL_INLINE static inline
+#endif
+
 /* trailer_k_tdroc_weighted_gain: the body of trailer_tdroc_weighted_gain (trailer_laws.h documents
    it).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_tdroc_weighted_gain(const trailer_real_t *minv_norm,
+TRAILER_KERNEL_INLINE void trailer_k_tdroc_weighted_gain(const trailer_real_t *minv_norm,
     const trailer_real_t *dn_new, const trailer_real_t *dn_kept, const trailer_real_t *w,
     trailer_real_t *gain)
 {
@@ -47,7 +56,7 @@ static inline void trailer_k_tdroc_weighted_gain(const trailer_real_t *minv_norm
 /* trailer_k_minimal_tde_mhat_keep: the parameter-only part of trailer_minimal_tde_mhat
    (trailer_laws.h documents it).
    operations after CSE: 0 add, 0 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tde_mhat_keep(const trailer_params_t *p,
+TRAILER_KERNEL_INLINE void trailer_k_minimal_tde_mhat_keep(const trailer_params_t *p,
     const trailer_real_t *span, trailer_real_t kept[1])
 {
     (void)p;
@@ -59,7 +68,7 @@ static inline void trailer_k_minimal_tde_mhat_keep(const trailer_params_t *p,
 /* trailer_k_minimal_tde_mhat: the per-step part of trailer_minimal_tde_mhat (trailer_laws.h
    documents it).
    operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tde_mhat(const trailer_real_t kept[1],
+TRAILER_KERNEL_INLINE void trailer_k_minimal_tde_mhat(const trailer_real_t kept[1],
     const trailer_real_t *mhat_prev, const trailer_real_t *u_prev, const trailer_real_t *qdot_now,
     const trailer_real_t *qdot_then, trailer_real_t *H1hat)
 {
@@ -82,7 +91,7 @@ static inline void trailer_k_minimal_tde_mhat(const trailer_real_t kept[1],
 /* trailer_k_minimal_minv_norm_mhat: the body of trailer_minimal_minv_norm_mhat (trailer_laws.h
    documents it).
    operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
-static inline void trailer_k_minimal_minv_norm_mhat(const trailer_params_t *p,
+TRAILER_KERNEL_INLINE void trailer_k_minimal_minv_norm_mhat(const trailer_params_t *p,
     const trailer_real_t *mhat, trailer_real_t *norm)
 {
     (void)p;
@@ -97,7 +106,8 @@ static inline void trailer_k_minimal_minv_norm_mhat(const trailer_params_t *p,
 /* trailer_k_minimal_mhat_keep: the parameter-only part of trailer_minimal_mhat (trailer_laws.h
    documents it).
    operations after CSE: 51 add, 88 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_mhat_keep(const trailer_params_t *p, trailer_real_t kept[9])
+TRAILER_KERNEL_INLINE void trailer_k_minimal_mhat_keep(const trailer_params_t *p,
+    trailer_real_t kept[9])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
     const trailer_real_t J_theta_cart_left = p->J_theta_cart_left;
@@ -174,8 +184,8 @@ static inline void trailer_k_minimal_mhat_keep(const trailer_params_t *p, traile
 
 /* trailer_k_minimal_mhat: the per-step part of trailer_minimal_mhat (trailer_laws.h documents it).
    operations after CSE: 7 add, 8 mul, 0 div, 2 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_mhat(const trailer_real_t kept[9], const trailer_real_t *q,
-    trailer_real_t *M)
+TRAILER_KERNEL_INLINE void trailer_k_minimal_mhat(const trailer_real_t kept[9],
+    const trailer_real_t *q, trailer_real_t *M)
 {
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t theta_cart = q[3];
@@ -202,7 +212,7 @@ static inline void trailer_k_minimal_mhat(const trailer_real_t kept[9], const tr
 /* trailer_k_minimal_omega_difference: the body of trailer_minimal_omega_difference (trailer_laws.h
    documents it).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer_k_minimal_omega_difference(const trailer_real_t *newer,
+TRAILER_KERNEL_INLINE void trailer_k_minimal_omega_difference(const trailer_real_t *newer,
     const trailer_real_t *older, trailer_real_t *norm)
 {
     const trailer_real_t Om_new0 = newer[0];
@@ -217,7 +227,7 @@ static inline void trailer_k_minimal_omega_difference(const trailer_real_t *newe
 /* trailer_k_minimal_tdc_law_mhat: the body of trailer_minimal_tdc_law_mhat (trailer_laws.h
    documents it).
    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_tdc_law_mhat(const trailer_params_t *p,
+TRAILER_KERNEL_INLINE void trailer_k_minimal_tdc_law_mhat(const trailer_params_t *p,
     const trailer_real_t *mhat, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
     const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
@@ -250,7 +260,7 @@ static inline void trailer_k_minimal_tdc_law_mhat(const trailer_params_t *p,
 /* trailer_k_minimal_tdroc_law_mhat: the body of trailer_minimal_tdroc_law_mhat (trailer_laws.h
    documents it).
    operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer_k_minimal_tdroc_law_mhat(const trailer_params_t *p,
+TRAILER_KERNEL_INLINE void trailer_k_minimal_tdroc_law_mhat(const trailer_params_t *p,
     const trailer_real_t *mhat, const trailer_real_t *e, const trailer_real_t *edot,
     const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
     const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *H1hat,
@@ -297,7 +307,7 @@ static inline void trailer_k_minimal_tdroc_law_mhat(const trailer_params_t *p,
 /* trailer_k_minimal_roc_law_keep: the parameter-only part of trailer_minimal_roc_law
    (trailer_laws.h documents it).
    operations after CSE: 3 add, 16 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
+TRAILER_KERNEL_INLINE void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
     trailer_real_t kept[18])
 {
     const trailer_real_t J_theta_cart = p->J_theta_cart;
@@ -355,12 +365,12 @@ static inline void trailer_k_minimal_roc_law_keep(const trailer_params_t *p,
 /* trailer_k_minimal_roc_law: the per-step part of trailer_minimal_roc_law (trailer_laws.h documents
    it).
    operations after CSE: 81 add, 122 mul, 2 div, 2 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[18], const trailer_real_t *q,
-    const trailer_real_t *qdot, const trailer_real_t *e, const trailer_real_t *edot,
-    const trailer_real_t *qddot_des, const trailer_real_t *k1, const trailer_real_t *k2,
-    const trailer_real_t *p12, const trailer_real_t *p22, const trailer_real_t *bounds,
-    const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s, trailer_real_t *s_norm,
-    trailer_real_t *gain)
+TRAILER_KERNEL_INLINE void trailer_k_minimal_roc_law(const trailer_real_t kept[18],
+    const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *e,
+    const trailer_real_t *edot, const trailer_real_t *qddot_des, const trailer_real_t *k1,
+    const trailer_real_t *k2, const trailer_real_t *p12, const trailer_real_t *p22,
+    const trailer_real_t *bounds, const trailer_real_t *eps, trailer_real_t *u, trailer_real_t *s,
+    trailer_real_t *s_norm, trailer_real_t *gain)
 {
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t theta_cart = q[3];
@@ -499,7 +509,7 @@ static inline void trailer_k_minimal_roc_law(const trailer_real_t kept[18], cons
 /* trailer_k_minimal_asmc_law: the per-step part of trailer_minimal_asmc_law (trailer_laws.h
    documents it).
    operations after CSE: 77 add, 119 mul, 1 div, 2 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[18],
+TRAILER_KERNEL_INLINE void trailer_k_minimal_asmc_law(const trailer_real_t kept[18],
     const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *e,
     const trailer_real_t *edot, const trailer_real_t *qddot_des, const trailer_real_t *k1,
     const trailer_real_t *k2, const trailer_real_t *p12, const trailer_real_t *p22,
@@ -640,7 +650,8 @@ static inline void trailer_k_minimal_asmc_law(const trailer_real_t kept[18],
 /* trailer_k_minimal_pi_law_keep: the parameter-only part of trailer_minimal_pi_law (trailer_laws.h
    documents it).
    operations after CSE: 0 add, 0 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void trailer_k_minimal_pi_law_keep(const trailer_params_t *p, trailer_real_t kept[2])
+TRAILER_KERNEL_INLINE void trailer_k_minimal_pi_law_keep(const trailer_params_t *p,
+    trailer_real_t kept[2])
 {
     const trailer_real_t radius_left = p->radius_left;
     const trailer_real_t radius_right = p->radius_right;
@@ -653,10 +664,10 @@ static inline void trailer_k_minimal_pi_law_keep(const trailer_params_t *p, trai
 /* trailer_k_minimal_pi_law: the per-step part of trailer_minimal_pi_law (trailer_laws.h documents
    it).
    operations after CSE: 17 add, 20 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static inline void trailer_k_minimal_pi_law(const trailer_real_t kept[2], const trailer_real_t *q,
-    const trailer_real_t *qdot, const trailer_real_t *q_des, const trailer_real_t *qdot_des,
-    const trailer_real_t *integral, const trailer_real_t *gains, const trailer_real_t *limits,
-    trailer_real_t *u, trailer_real_t *integral_next)
+TRAILER_KERNEL_INLINE void trailer_k_minimal_pi_law(const trailer_real_t kept[2],
+    const trailer_real_t *q, const trailer_real_t *qdot, const trailer_real_t *q_des,
+    const trailer_real_t *qdot_des, const trailer_real_t *integral, const trailer_real_t *gains,
+    const trailer_real_t *limits, trailer_real_t *u, trailer_real_t *integral_next)
 {
     const trailer_real_t theta_tractor = q[2];
     const trailer_real_t qd_2 = q_des[2];

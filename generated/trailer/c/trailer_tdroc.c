@@ -242,19 +242,19 @@ trailer_status_t trailer_tdroc_reset(trailer_tdroc_state_t *state)
     return TRAILER_OK;
 }
 
-trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state,
+/* The step's body, with or without an error detail to fill: inlined into both entries below
+   (optimising for size: _step_detail itself). */
+#if TRAILER_STEP_PER_ENTRY
+TRAILER_STEP_INLINE trailer_status_t trailer_tdroc_step_of(trailer_tdroc_state_t *state,
     const trailer_tdroc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
-    const trailer_real_t qddot_des[8], trailer_real_t tau[2])
-{
-    return trailer_tdroc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
-}
-
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
+#else  /* the body is _step_detail's, as _step calls it */
 trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     const trailer_tdroc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
     const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
     const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
-
+#endif
 {
     trailer_status_t status = TRAILER_OK;
     const trailer_tdroc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
@@ -471,6 +471,29 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     return status;
     }
 }
+#if TRAILER_STEP_PER_ENTRY
+
+trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
+    const trailer_tdroc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2], trailer_error_detail_t *detail)
+{
+    return trailer_tdroc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail);
+}
+#endif
+
+trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state,
+    const trailer_tdroc_config_t *config, const trailer_real_t q[8], const trailer_real_t qdot[8],
+    const trailer_real_t q_des[8], const trailer_real_t qdot_des[8],
+    const trailer_real_t qddot_des[8], trailer_real_t tau[2])
+{
+#if TRAILER_STEP_PER_ENTRY
+    /* its own copy of the body: no 9-argument call first (not a tail call on x86-64) */
+    return trailer_tdroc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#else
+    return trailer_tdroc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#endif
+}
 
 /* Reads the state a step left; no step calls it (a firmware calls it when it relies on the
    certified torque bound): the header says what it checks and why. */
@@ -492,8 +515,8 @@ trailer_status_t trailer_tdroc_within_certificate(const trailer_tdroc_state_t *s
 #endif
         bool within = trailer_within(state->gain, TRAILER_TDROC_CERT_GAIN_MIN,
                 TRAILER_TDROC_CERT_GAIN_MAX) != 0;
-        int i;
         if ((held == 0) && (state->omega_count >= 2)) {
+            int i;
             /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left them:
                omega_ring[omega_head ...], the newest norm then the kept ones */
             within = within && (trailer_within(state->minv_norm, TRAILER_TDROC_CERT_NORM_MIN,

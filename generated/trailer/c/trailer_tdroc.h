@@ -134,7 +134,7 @@ trailer_status_t trailer_tdroc_check_config_detail(const trailer_tdroc_config_t 
 #define TRAILER_TDROC_CERT_GAIN_MAX TRAILER_LIT(100.0)
 #define TRAILER_TDROC_CERT_NORM_MIN TRAILER_LIT(0.0) /* ||Mhat^-1||_F of (25) */
 #define TRAILER_TDROC_CERT_NORM_MAX TRAILER_LIT(10.0)
-#define TRAILER_TDROC_CERT_WINDOW_MIN TRAILER_LIT(0.0) /* each ||Omega(i) - Omega(i+1)|| (25) reads */
+#define TRAILER_TDROC_CERT_WINDOW_MIN TRAILER_LIT(0.0) /* each difference norm (25) reads */
 #define TRAILER_TDROC_CERT_WINDOW_MAX TRAILER_LIT(10.0)
 
 /**

@@ -16,10 +16,19 @@
 
 #include "trailer2_types.h"
 
+/* Each kernel inlined wherever it is called, as the steps' bodies are (gcc -O2 declines
+   once a kernel has two callers: a step's body is in both _step and _step_detail);
+   optimising for size (-Os, the firmware images), as the compiler likes. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define TRAILER2_KERNEL_INLINE static inline __attribute__((always_inline))
+#else
+#define TRAILER2_KERNEL_INLINE static inline
+#endif
+
 /* trailer2_k_tdroc_weighted_gain: the body of trailer2_tdroc_weighted_gain (trailer2_laws.h
    documents it).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_tdroc_weighted_gain(const trailer2_real_t *minv_norm,
+TRAILER2_KERNEL_INLINE void trailer2_k_tdroc_weighted_gain(const trailer2_real_t *minv_norm,
     const trailer2_real_t *dn_new, const trailer2_real_t *dn_kept, const trailer2_real_t *w,
     trailer2_real_t *gain)
 {
@@ -47,7 +56,7 @@ static inline void trailer2_k_tdroc_weighted_gain(const trailer2_real_t *minv_no
 /* trailer2_k_minimal_tde_mhat_keep: the parameter-only part of trailer2_minimal_tde_mhat
    (trailer2_laws.h documents it).
    operations after CSE: 0 add, 0 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_tde_mhat_keep(const trailer2_params_t *p,
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_tde_mhat_keep(const trailer2_params_t *p,
     const trailer2_real_t *span, trailer2_real_t kept[1])
 {
     (void)p;
@@ -59,7 +68,7 @@ static inline void trailer2_k_minimal_tde_mhat_keep(const trailer2_params_t *p,
 /* trailer2_k_minimal_tde_mhat: the per-step part of trailer2_minimal_tde_mhat (trailer2_laws.h
    documents it).
    operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_tde_mhat(const trailer2_real_t kept[1],
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_tde_mhat(const trailer2_real_t kept[1],
     const trailer2_real_t *mhat_prev, const trailer2_real_t *u_prev,
     const trailer2_real_t *qdot_now, const trailer2_real_t *qdot_then, trailer2_real_t *H1hat)
 {
@@ -82,7 +91,7 @@ static inline void trailer2_k_minimal_tde_mhat(const trailer2_real_t kept[1],
 /* trailer2_k_minimal_minv_norm_mhat: the body of trailer2_minimal_minv_norm_mhat (trailer2_laws.h
    documents it).
    operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
-static inline void trailer2_k_minimal_minv_norm_mhat(const trailer2_params_t *p,
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_minv_norm_mhat(const trailer2_params_t *p,
     const trailer2_real_t *mhat, trailer2_real_t *norm)
 {
     (void)p;
@@ -97,7 +106,7 @@ static inline void trailer2_k_minimal_minv_norm_mhat(const trailer2_params_t *p,
 /* trailer2_k_minimal_mhat_keep: the parameter-only part of trailer2_minimal_mhat (trailer2_laws.h
    documents it).
    operations after CSE: 4 add, 35 mul, 3 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_mhat_keep(const trailer2_params_t *p,
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_mhat_keep(const trailer2_params_t *p,
     trailer2_real_t kept[31])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
@@ -186,8 +195,8 @@ static inline void trailer2_k_minimal_mhat_keep(const trailer2_params_t *p,
 /* trailer2_k_minimal_mhat: the per-step part of trailer2_minimal_mhat (trailer2_laws.h documents
    it).
    operations after CSE: 60 add, 117 mul, 0 div, 4 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_mhat(const trailer2_real_t kept[31], const trailer2_real_t *q,
-    trailer2_real_t *M)
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_mhat(const trailer2_real_t kept[31],
+    const trailer2_real_t *q, trailer2_real_t *M)
 {
     const trailer2_real_t theta_tractor = q[2];
     const trailer2_real_t _t29 = -theta_tractor;
@@ -295,7 +304,7 @@ static inline void trailer2_k_minimal_mhat(const trailer2_real_t kept[31], const
 /* trailer2_k_minimal_omega_difference: the body of trailer2_minimal_omega_difference
    (trailer2_laws.h documents it).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer2_k_minimal_omega_difference(const trailer2_real_t *newer,
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_omega_difference(const trailer2_real_t *newer,
     const trailer2_real_t *older, trailer2_real_t *norm)
 {
     const trailer2_real_t Om_new0 = newer[0];
@@ -310,7 +319,7 @@ static inline void trailer2_k_minimal_omega_difference(const trailer2_real_t *ne
 /* trailer2_k_minimal_tdc_law_mhat: the body of trailer2_minimal_tdc_law_mhat (trailer2_laws.h
    documents it).
    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_tdc_law_mhat(const trailer2_params_t *p,
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_tdc_law_mhat(const trailer2_params_t *p,
     const trailer2_real_t *mhat, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
     const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *H1hat,
@@ -343,7 +352,7 @@ static inline void trailer2_k_minimal_tdc_law_mhat(const trailer2_params_t *p,
 /* trailer2_k_minimal_tdroc_law_mhat: the body of trailer2_minimal_tdroc_law_mhat (trailer2_laws.h
    documents it).
    operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer2_k_minimal_tdroc_law_mhat(const trailer2_params_t *p,
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_tdroc_law_mhat(const trailer2_params_t *p,
     const trailer2_real_t *mhat, const trailer2_real_t *e, const trailer2_real_t *edot,
     const trailer2_real_t *qddot_des, const trailer2_real_t *k1, const trailer2_real_t *k2,
     const trailer2_real_t *p12, const trailer2_real_t *p22, const trailer2_real_t *H1hat,
@@ -390,7 +399,7 @@ static inline void trailer2_k_minimal_tdroc_law_mhat(const trailer2_params_t *p,
 /* trailer2_k_minimal_roc_law_keep: the parameter-only part of trailer2_minimal_roc_law
    (trailer2_laws.h documents it).
    operations after CSE: 4 add, 36 mul, 3 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_roc_law_keep(const trailer2_params_t *p,
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_roc_law_keep(const trailer2_params_t *p,
     trailer2_real_t kept[33])
 {
     const trailer2_real_t J_theta_cart = p->J_theta_cart;
@@ -483,7 +492,7 @@ static inline void trailer2_k_minimal_roc_law_keep(const trailer2_params_t *p,
 /* trailer2_k_minimal_roc_law: the per-step part of trailer2_minimal_roc_law (trailer2_laws.h
    documents it).
    operations after CSE: 140 add, 245 mul, 2 div, 4 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[33],
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_roc_law(const trailer2_real_t kept[33],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *e,
     const trailer2_real_t *edot, const trailer2_real_t *qddot_des, const trailer2_real_t *k1,
     const trailer2_real_t *k2, const trailer2_real_t *p12, const trailer2_real_t *p22,
@@ -690,7 +699,7 @@ static inline void trailer2_k_minimal_roc_law(const trailer2_real_t kept[33],
 /* trailer2_k_minimal_asmc_law: the per-step part of trailer2_minimal_asmc_law (trailer2_laws.h
    documents it).
    operations after CSE: 136 add, 242 mul, 1 div, 4 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[33],
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[33],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *e,
     const trailer2_real_t *edot, const trailer2_real_t *qddot_des, const trailer2_real_t *k1,
     const trailer2_real_t *k2, const trailer2_real_t *p12, const trailer2_real_t *p22,
@@ -894,7 +903,7 @@ static inline void trailer2_k_minimal_asmc_law(const trailer2_real_t kept[33],
 /* trailer2_k_minimal_pi_law_keep: the parameter-only part of trailer2_minimal_pi_law
    (trailer2_laws.h documents it).
    operations after CSE: 0 add, 0 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void trailer2_k_minimal_pi_law_keep(const trailer2_params_t *p,
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_pi_law_keep(const trailer2_params_t *p,
     trailer2_real_t kept[2])
 {
     const trailer2_real_t radius_left = p->radius_left;
@@ -908,7 +917,7 @@ static inline void trailer2_k_minimal_pi_law_keep(const trailer2_params_t *p,
 /* trailer2_k_minimal_pi_law: the per-step part of trailer2_minimal_pi_law (trailer2_laws.h
    documents it).
    operations after CSE: 17 add, 20 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static inline void trailer2_k_minimal_pi_law(const trailer2_real_t kept[2],
+TRAILER2_KERNEL_INLINE void trailer2_k_minimal_pi_law(const trailer2_real_t kept[2],
     const trailer2_real_t *q, const trailer2_real_t *qdot, const trailer2_real_t *q_des,
     const trailer2_real_t *qdot_des, const trailer2_real_t *integral, const trailer2_real_t *gains,
     const trailer2_real_t *limits, trailer2_real_t *u, trailer2_real_t *integral_next)

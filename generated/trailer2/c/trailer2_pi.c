@@ -207,18 +207,19 @@ trailer2_status_t trailer2_pi_reset(trailer2_pi_state_t *state)
     return TRAILER2_OK;
 }
 
-trailer2_status_t trailer2_pi_step(trailer2_pi_state_t *state, const trailer2_pi_config_t *config,
-    const trailer2_real_t q[11], const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
-    const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11], trailer2_real_t tau[2])
-{
-    return trailer2_pi_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
-}
-
+/* The step's body, with or without an error detail to fill: inlined into both entries below
+   (optimising for size: _step_detail itself). */
+#if TRAILER2_STEP_PER_ENTRY
+TRAILER2_STEP_INLINE trailer2_status_t trailer2_pi_step_of(trailer2_pi_state_t *state,
+    const trailer2_pi_config_t *config, const trailer2_real_t q[11], const trailer2_real_t qdot[11],
+    const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
+    const trailer2_real_t qddot_des[11], trailer2_real_t tau[2], trailer2_error_detail_t *detail)
+#else  /* the body is _step_detail's, as _step calls it */
 trailer2_status_t trailer2_pi_step_detail(trailer2_pi_state_t *state,
     const trailer2_pi_config_t *config, const trailer2_real_t q[11], const trailer2_real_t qdot[11],
     const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
     const trailer2_real_t qddot_des[11], trailer2_real_t tau[2], trailer2_error_detail_t *detail)
-
+#endif
 {
     trailer2_status_t status = TRAILER2_OK;
     const trailer2_pi_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
@@ -324,4 +325,26 @@ trailer2_status_t trailer2_pi_step_detail(trailer2_pi_state_t *state,
     }
     return status;
     }
+}
+#if TRAILER2_STEP_PER_ENTRY
+
+trailer2_status_t trailer2_pi_step_detail(trailer2_pi_state_t *state,
+    const trailer2_pi_config_t *config, const trailer2_real_t q[11], const trailer2_real_t qdot[11],
+    const trailer2_real_t q_des[11], const trailer2_real_t qdot_des[11],
+    const trailer2_real_t qddot_des[11], trailer2_real_t tau[2], trailer2_error_detail_t *detail)
+{
+    return trailer2_pi_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail);
+}
+#endif
+
+trailer2_status_t trailer2_pi_step(trailer2_pi_state_t *state, const trailer2_pi_config_t *config,
+    const trailer2_real_t q[11], const trailer2_real_t qdot[11], const trailer2_real_t q_des[11],
+    const trailer2_real_t qdot_des[11], const trailer2_real_t qddot_des[11], trailer2_real_t tau[2])
+{
+#if TRAILER2_STEP_PER_ENTRY
+    /* its own copy of the body: no 9-argument call first (not a tail call on x86-64) */
+    return trailer2_pi_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#else
+    return trailer2_pi_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#endif
 }

@@ -136,7 +136,7 @@ trailer2_status_t trailer2_tdroc_check_config_detail(const trailer2_tdroc_config
 #define TRAILER2_TDROC_CERT_GAIN_MAX TRAILER2_LIT(100.0)
 #define TRAILER2_TDROC_CERT_NORM_MIN TRAILER2_LIT(0.0) /* ||Mhat^-1||_F of (25) */
 #define TRAILER2_TDROC_CERT_NORM_MAX TRAILER2_LIT(10.0)
-#define TRAILER2_TDROC_CERT_WINDOW_MIN TRAILER2_LIT(0.0) /* each ||Omega(i) - Omega(i+1)|| (25) reads */
+#define TRAILER2_TDROC_CERT_WINDOW_MIN TRAILER2_LIT(0.0) /* each difference norm (25) reads */
 #define TRAILER2_TDROC_CERT_WINDOW_MAX TRAILER2_LIT(10.0)
 
 /**

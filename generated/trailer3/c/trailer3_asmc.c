@@ -204,20 +204,21 @@ trailer3_status_t trailer3_asmc_reset(trailer3_asmc_state_t *state)
     return TRAILER3_OK;
 }
 
-trailer3_status_t trailer3_asmc_step(trailer3_asmc_state_t *state,
+/* The step's body, with or without an error detail to fill: inlined into both entries below
+   (optimising for size: _step_detail itself). */
+#if TRAILER3_STEP_PER_ENTRY
+TRAILER3_STEP_INLINE trailer3_status_t trailer3_asmc_step_of(trailer3_asmc_state_t *state,
     const trailer3_asmc_config_t *config, const trailer3_real_t q[14],
     const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
-    const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14], trailer3_real_t tau[2])
-{
-    return trailer3_asmc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
-}
-
+    const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14], trailer3_real_t tau[2],
+    trailer3_error_detail_t *detail)
+#else  /* the body is _step_detail's, as _step calls it */
 trailer3_status_t trailer3_asmc_step_detail(trailer3_asmc_state_t *state,
     const trailer3_asmc_config_t *config, const trailer3_real_t q[14],
     const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
     const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14], trailer3_real_t tau[2],
     trailer3_error_detail_t *detail)
-
+#endif
 {
     trailer3_status_t status = TRAILER3_OK;
     const trailer3_asmc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
@@ -328,6 +329,30 @@ trailer3_status_t trailer3_asmc_step_detail(trailer3_asmc_state_t *state,
     }
     return status;
     }
+}
+#if TRAILER3_STEP_PER_ENTRY
+
+trailer3_status_t trailer3_asmc_step_detail(trailer3_asmc_state_t *state,
+    const trailer3_asmc_config_t *config, const trailer3_real_t q[14],
+    const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
+    const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14], trailer3_real_t tau[2],
+    trailer3_error_detail_t *detail)
+{
+    return trailer3_asmc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail);
+}
+#endif
+
+trailer3_status_t trailer3_asmc_step(trailer3_asmc_state_t *state,
+    const trailer3_asmc_config_t *config, const trailer3_real_t q[14],
+    const trailer3_real_t qdot[14], const trailer3_real_t q_des[14],
+    const trailer3_real_t qdot_des[14], const trailer3_real_t qddot_des[14], trailer3_real_t tau[2])
+{
+#if TRAILER3_STEP_PER_ENTRY
+    /* its own copy of the body: no 9-argument call first (not a tail call on x86-64) */
+    return trailer3_asmc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#else
+    return trailer3_asmc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#endif
 }
 
 /* Reads the state a step left; no step calls it (a firmware calls it when it relies on the

@@ -16,10 +16,19 @@
 
 #include "trailer3_types.h"
 
+/* Each kernel inlined wherever it is called, as the steps' bodies are (gcc -O2 declines
+   once a kernel has two callers: a step's body is in both _step and _step_detail);
+   optimising for size (-Os, the firmware images), as the compiler likes. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define TRAILER3_KERNEL_INLINE static inline __attribute__((always_inline))
+#else
+#define TRAILER3_KERNEL_INLINE static inline
+#endif
+
 /* trailer3_k_tdroc_weighted_gain: the body of trailer3_tdroc_weighted_gain (trailer3_laws.h
    documents it).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_tdroc_weighted_gain(const trailer3_real_t *minv_norm,
+TRAILER3_KERNEL_INLINE void trailer3_k_tdroc_weighted_gain(const trailer3_real_t *minv_norm,
     const trailer3_real_t *dn_new, const trailer3_real_t *dn_kept, const trailer3_real_t *w,
     trailer3_real_t *gain)
 {
@@ -47,7 +56,7 @@ static inline void trailer3_k_tdroc_weighted_gain(const trailer3_real_t *minv_no
 /* trailer3_k_minimal_tde_mhat_keep: the parameter-only part of trailer3_minimal_tde_mhat
    (trailer3_laws.h documents it).
    operations after CSE: 0 add, 0 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tde_mhat_keep(const trailer3_params_t *p,
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_tde_mhat_keep(const trailer3_params_t *p,
     const trailer3_real_t *span, trailer3_real_t kept[1])
 {
     (void)p;
@@ -59,7 +68,7 @@ static inline void trailer3_k_minimal_tde_mhat_keep(const trailer3_params_t *p,
 /* trailer3_k_minimal_tde_mhat: the per-step part of trailer3_minimal_tde_mhat (trailer3_laws.h
    documents it).
    operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tde_mhat(const trailer3_real_t kept[1],
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_tde_mhat(const trailer3_real_t kept[1],
     const trailer3_real_t *mhat_prev, const trailer3_real_t *u_prev,
     const trailer3_real_t *qdot_now, const trailer3_real_t *qdot_then, trailer3_real_t *H1hat)
 {
@@ -82,7 +91,7 @@ static inline void trailer3_k_minimal_tde_mhat(const trailer3_real_t kept[1],
 /* trailer3_k_minimal_minv_norm_mhat: the body of trailer3_minimal_minv_norm_mhat (trailer3_laws.h
    documents it).
    operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
-static inline void trailer3_k_minimal_minv_norm_mhat(const trailer3_params_t *p,
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_minv_norm_mhat(const trailer3_params_t *p,
     const trailer3_real_t *mhat, trailer3_real_t *norm)
 {
     (void)p;
@@ -97,7 +106,7 @@ static inline void trailer3_k_minimal_minv_norm_mhat(const trailer3_params_t *p,
 /* trailer3_k_minimal_mhat_keep: the parameter-only part of trailer3_minimal_mhat (trailer3_laws.h
    documents it).
    operations after CSE: 4 add, 42 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_mhat_keep(const trailer3_params_t *p,
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_mhat_keep(const trailer3_params_t *p,
     trailer3_real_t kept[42])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
@@ -212,8 +221,8 @@ static inline void trailer3_k_minimal_mhat_keep(const trailer3_params_t *p,
 /* trailer3_k_minimal_mhat: the per-step part of trailer3_minimal_mhat (trailer3_laws.h documents
    it).
    operations after CSE: 93 add, 176 mul, 0 div, 6 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_mhat(const trailer3_real_t kept[42], const trailer3_real_t *q,
-    trailer3_real_t *M)
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_mhat(const trailer3_real_t kept[42],
+    const trailer3_real_t *q, trailer3_real_t *M)
 {
     const trailer3_real_t theta_tractor = q[2];
     const trailer3_real_t _t37 = -theta_tractor;
@@ -366,7 +375,7 @@ static inline void trailer3_k_minimal_mhat(const trailer3_real_t kept[42], const
 /* trailer3_k_minimal_omega_difference: the body of trailer3_minimal_omega_difference
    (trailer3_laws.h documents it).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void trailer3_k_minimal_omega_difference(const trailer3_real_t *newer,
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_omega_difference(const trailer3_real_t *newer,
     const trailer3_real_t *older, trailer3_real_t *norm)
 {
     const trailer3_real_t Om_new0 = newer[0];
@@ -381,7 +390,7 @@ static inline void trailer3_k_minimal_omega_difference(const trailer3_real_t *ne
 /* trailer3_k_minimal_tdc_law_mhat: the body of trailer3_minimal_tdc_law_mhat (trailer3_laws.h
    documents it).
    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_tdc_law_mhat(const trailer3_params_t *p,
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_tdc_law_mhat(const trailer3_params_t *p,
     const trailer3_real_t *mhat, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
     const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
@@ -414,7 +423,7 @@ static inline void trailer3_k_minimal_tdc_law_mhat(const trailer3_params_t *p,
 /* trailer3_k_minimal_tdroc_law_mhat: the body of trailer3_minimal_tdroc_law_mhat (trailer3_laws.h
    documents it).
    operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer3_k_minimal_tdroc_law_mhat(const trailer3_params_t *p,
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_tdroc_law_mhat(const trailer3_params_t *p,
     const trailer3_real_t *mhat, const trailer3_real_t *e, const trailer3_real_t *edot,
     const trailer3_real_t *qddot_des, const trailer3_real_t *k1, const trailer3_real_t *k2,
     const trailer3_real_t *p12, const trailer3_real_t *p22, const trailer3_real_t *H1hat,
@@ -461,7 +470,7 @@ static inline void trailer3_k_minimal_tdroc_law_mhat(const trailer3_params_t *p,
 /* trailer3_k_minimal_roc_law_keep: the parameter-only part of trailer3_minimal_roc_law
    (trailer3_laws.h documents it).
    operations after CSE: 4 add, 43 mul, 4 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
     trailer3_real_t kept[44])
 {
     const trailer3_real_t J_theta_cart = p->J_theta_cart;
@@ -580,7 +589,7 @@ static inline void trailer3_k_minimal_roc_law_keep(const trailer3_params_t *p,
 /* trailer3_k_minimal_roc_law: the per-step part of trailer3_minimal_roc_law (trailer3_laws.h
    documents it).
    operations after CSE: 207 add, 354 mul, 2 div, 6 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[44],
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_roc_law(const trailer3_real_t kept[44],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
     const trailer3_real_t *k2, const trailer3_real_t *p12, const trailer3_real_t *p22,
@@ -862,7 +871,7 @@ static inline void trailer3_k_minimal_roc_law(const trailer3_real_t kept[44],
 /* trailer3_k_minimal_asmc_law: the per-step part of trailer3_minimal_asmc_law (trailer3_laws.h
    documents it).
    operations after CSE: 203 add, 351 mul, 1 div, 6 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[44],
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[44],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *e,
     const trailer3_real_t *edot, const trailer3_real_t *qddot_des, const trailer3_real_t *k1,
     const trailer3_real_t *k2, const trailer3_real_t *p12, const trailer3_real_t *p22,
@@ -1141,7 +1150,7 @@ static inline void trailer3_k_minimal_asmc_law(const trailer3_real_t kept[44],
 /* trailer3_k_minimal_pi_law_keep: the parameter-only part of trailer3_minimal_pi_law
    (trailer3_laws.h documents it).
    operations after CSE: 0 add, 0 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void trailer3_k_minimal_pi_law_keep(const trailer3_params_t *p,
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_pi_law_keep(const trailer3_params_t *p,
     trailer3_real_t kept[2])
 {
     const trailer3_real_t radius_left = p->radius_left;
@@ -1155,7 +1164,7 @@ static inline void trailer3_k_minimal_pi_law_keep(const trailer3_params_t *p,
 /* trailer3_k_minimal_pi_law: the per-step part of trailer3_minimal_pi_law (trailer3_laws.h
    documents it).
    operations after CSE: 17 add, 20 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static inline void trailer3_k_minimal_pi_law(const trailer3_real_t kept[2],
+TRAILER3_KERNEL_INLINE void trailer3_k_minimal_pi_law(const trailer3_real_t kept[2],
     const trailer3_real_t *q, const trailer3_real_t *qdot, const trailer3_real_t *q_des,
     const trailer3_real_t *qdot_des, const trailer3_real_t *integral, const trailer3_real_t *gains,
     const trailer3_real_t *limits, trailer3_real_t *u, trailer3_real_t *integral_next)

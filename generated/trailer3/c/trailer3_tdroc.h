@@ -136,7 +136,7 @@ trailer3_status_t trailer3_tdroc_check_config_detail(const trailer3_tdroc_config
 #define TRAILER3_TDROC_CERT_GAIN_MAX TRAILER3_LIT(100.0)
 #define TRAILER3_TDROC_CERT_NORM_MIN TRAILER3_LIT(0.0) /* ||Mhat^-1||_F of (25) */
 #define TRAILER3_TDROC_CERT_NORM_MAX TRAILER3_LIT(10.0)
-#define TRAILER3_TDROC_CERT_WINDOW_MIN TRAILER3_LIT(0.0) /* each ||Omega(i) - Omega(i+1)|| (25) reads */
+#define TRAILER3_TDROC_CERT_WINDOW_MIN TRAILER3_LIT(0.0) /* each difference norm (25) reads */
 #define TRAILER3_TDROC_CERT_WINDOW_MAX TRAILER3_LIT(10.0)
 
 /**

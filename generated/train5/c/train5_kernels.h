@@ -16,10 +16,19 @@
 
 #include "train5_types.h"
 
+/* Each kernel inlined wherever it is called, as the steps' bodies are (gcc -O2 declines
+   once a kernel has two callers: a step's body is in both _step and _step_detail);
+   optimising for size (-Os, the firmware images), as the compiler likes. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define TRAIN5_KERNEL_INLINE static inline __attribute__((always_inline))
+#else
+#define TRAIN5_KERNEL_INLINE static inline
+#endif
+
 /* train5_k_tdroc_weighted_gain: the body of train5_tdroc_weighted_gain (train5_laws.h documents
    it).
    operations after CSE: 7 add, 9 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void train5_k_tdroc_weighted_gain(const train5_real_t *minv_norm,
+TRAIN5_KERNEL_INLINE void train5_k_tdroc_weighted_gain(const train5_real_t *minv_norm,
     const train5_real_t *dn_new, const train5_real_t *dn_kept, const train5_real_t *w,
     train5_real_t *gain)
 {
@@ -47,7 +56,7 @@ static inline void train5_k_tdroc_weighted_gain(const train5_real_t *minv_norm,
 /* train5_k_minimal_tde_mhat_keep: the parameter-only part of train5_minimal_tde_mhat (train5_laws.h
    documents it).
    operations after CSE: 0 add, 0 mul, 1 div, 0 sin/cos, 0 sqrt */
-static inline void train5_k_minimal_tde_mhat_keep(const train5_params_t *p,
+TRAIN5_KERNEL_INLINE void train5_k_minimal_tde_mhat_keep(const train5_params_t *p,
     const train5_real_t *span, train5_real_t kept[1])
 {
     (void)p;
@@ -59,7 +68,7 @@ static inline void train5_k_minimal_tde_mhat_keep(const train5_params_t *p,
 /* train5_k_minimal_tde_mhat: the per-step part of train5_minimal_tde_mhat (train5_laws.h documents
    it).
    operations after CSE: 6 add, 6 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void train5_k_minimal_tde_mhat(const train5_real_t kept[1],
+TRAIN5_KERNEL_INLINE void train5_k_minimal_tde_mhat(const train5_real_t kept[1],
     const train5_real_t *mhat_prev, const train5_real_t *u_prev, const train5_real_t *qdot_now,
     const train5_real_t *qdot_then, train5_real_t *H1hat)
 {
@@ -82,7 +91,7 @@ static inline void train5_k_minimal_tde_mhat(const train5_real_t kept[1],
 /* train5_k_minimal_minv_norm_mhat: the body of train5_minimal_minv_norm_mhat (train5_laws.h
    documents it).
    operations after CSE: 3 add, 6 mul, 1 div, 0 sin/cos, 1 sqrt, 1 fabs */
-static inline void train5_k_minimal_minv_norm_mhat(const train5_params_t *p,
+TRAIN5_KERNEL_INLINE void train5_k_minimal_minv_norm_mhat(const train5_params_t *p,
     const train5_real_t *mhat, train5_real_t *norm)
 {
     (void)p;
@@ -97,7 +106,8 @@ static inline void train5_k_minimal_minv_norm_mhat(const train5_params_t *p,
 /* train5_k_minimal_mhat_keep: the parameter-only part of train5_minimal_mhat (train5_laws.h
    documents it).
    operations after CSE: 4 add, 56 mul, 6 div, 0 sin/cos, 0 sqrt */
-static inline void train5_k_minimal_mhat_keep(const train5_params_t *p, train5_real_t kept[64])
+TRAIN5_KERNEL_INLINE void train5_k_minimal_mhat_keep(const train5_params_t *p,
+    train5_real_t kept[64])
 {
     const train5_real_t J_theta_cart = p->J_theta_cart;
     const train5_real_t J_theta_cart2 = p->J_theta_cart2;
@@ -262,8 +272,8 @@ static inline void train5_k_minimal_mhat_keep(const train5_params_t *p, train5_r
 
 /* train5_k_minimal_mhat: the per-step part of train5_minimal_mhat (train5_laws.h documents it).
    operations after CSE: 159 add, 294 mul, 0 div, 10 sin/cos, 0 sqrt */
-static inline void train5_k_minimal_mhat(const train5_real_t kept[64], const train5_real_t *q,
-    train5_real_t *M)
+TRAIN5_KERNEL_INLINE void train5_k_minimal_mhat(const train5_real_t kept[64],
+    const train5_real_t *q, train5_real_t *M)
 {
     const train5_real_t theta_tractor = q[2];
     const train5_real_t _t53 = -theta_tractor;
@@ -506,7 +516,7 @@ static inline void train5_k_minimal_mhat(const train5_real_t kept[64], const tra
 /* train5_k_minimal_omega_difference: the body of train5_minimal_omega_difference (train5_laws.h
    documents it).
    operations after CSE: 3 add, 2 mul, 0 div, 0 sin/cos, 1 sqrt, 1 cmp */
-static inline void train5_k_minimal_omega_difference(const train5_real_t *newer,
+TRAIN5_KERNEL_INLINE void train5_k_minimal_omega_difference(const train5_real_t *newer,
     const train5_real_t *older, train5_real_t *norm)
 {
     const train5_real_t Om_new0 = newer[0];
@@ -521,7 +531,7 @@ static inline void train5_k_minimal_omega_difference(const train5_real_t *newer,
 /* train5_k_minimal_tdc_law_mhat: the body of train5_minimal_tdc_law_mhat (train5_laws.h documents
    it).
    operations after CSE: 8 add, 8 mul, 0 div, 0 sin/cos, 0 sqrt */
-static inline void train5_k_minimal_tdc_law_mhat(const train5_params_t *p,
+TRAIN5_KERNEL_INLINE void train5_k_minimal_tdc_law_mhat(const train5_params_t *p,
     const train5_real_t *mhat, const train5_real_t *e, const train5_real_t *edot,
     const train5_real_t *qddot_des, const train5_real_t *k1, const train5_real_t *k2,
     const train5_real_t *p12, const train5_real_t *p22, const train5_real_t *H1hat,
@@ -554,7 +564,7 @@ static inline void train5_k_minimal_tdc_law_mhat(const train5_params_t *p,
 /* train5_k_minimal_tdroc_law_mhat: the body of train5_minimal_tdroc_law_mhat (train5_laws.h
    documents it).
    operations after CSE: 15 add, 22 mul, 1 div, 0 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void train5_k_minimal_tdroc_law_mhat(const train5_params_t *p,
+TRAIN5_KERNEL_INLINE void train5_k_minimal_tdroc_law_mhat(const train5_params_t *p,
     const train5_real_t *mhat, const train5_real_t *e, const train5_real_t *edot,
     const train5_real_t *qddot_des, const train5_real_t *k1, const train5_real_t *k2,
     const train5_real_t *p12, const train5_real_t *p22, const train5_real_t *H1hat,
@@ -601,7 +611,8 @@ static inline void train5_k_minimal_tdroc_law_mhat(const train5_params_t *p,
 /* train5_k_minimal_roc_law_keep: the parameter-only part of train5_minimal_roc_law (train5_laws.h
    documents it).
    operations after CSE: 4 add, 57 mul, 6 div, 0 sin/cos, 0 sqrt */
-static inline void train5_k_minimal_roc_law_keep(const train5_params_t *p, train5_real_t kept[66])
+TRAIN5_KERNEL_INLINE void train5_k_minimal_roc_law_keep(const train5_params_t *p,
+    train5_real_t kept[66])
 {
     const train5_real_t J_theta_cart = p->J_theta_cart;
     const train5_real_t J_theta_cart2 = p->J_theta_cart2;
@@ -771,12 +782,12 @@ static inline void train5_k_minimal_roc_law_keep(const train5_params_t *p, train
 /* train5_k_minimal_roc_law: the per-step part of train5_minimal_roc_law (train5_laws.h documents
    it).
    operations after CSE: 341 add, 572 mul, 2 div, 10 sin/cos, 3 sqrt, 3 cmp, 1 fmax */
-static inline void train5_k_minimal_roc_law(const train5_real_t kept[66], const train5_real_t *q,
-    const train5_real_t *qdot, const train5_real_t *e, const train5_real_t *edot,
-    const train5_real_t *qddot_des, const train5_real_t *k1, const train5_real_t *k2,
-    const train5_real_t *p12, const train5_real_t *p22, const train5_real_t *bounds,
-    const train5_real_t *eps, train5_real_t *u, train5_real_t *s, train5_real_t *s_norm,
-    train5_real_t *gain)
+TRAIN5_KERNEL_INLINE void train5_k_minimal_roc_law(const train5_real_t kept[66],
+    const train5_real_t *q, const train5_real_t *qdot, const train5_real_t *e,
+    const train5_real_t *edot, const train5_real_t *qddot_des, const train5_real_t *k1,
+    const train5_real_t *k2, const train5_real_t *p12, const train5_real_t *p22,
+    const train5_real_t *bounds, const train5_real_t *eps, train5_real_t *u, train5_real_t *s,
+    train5_real_t *s_norm, train5_real_t *gain)
 {
     const train5_real_t theta_tractor = q[2];
     const train5_real_t _t54 = -theta_tractor;
@@ -1199,12 +1210,12 @@ static inline void train5_k_minimal_roc_law(const train5_real_t kept[66], const 
 /* train5_k_minimal_asmc_law: the per-step part of train5_minimal_asmc_law (train5_laws.h documents
    it).
    operations after CSE: 337 add, 569 mul, 1 div, 10 sin/cos, 1 sqrt, 1 cmp, 1 fmax */
-static inline void train5_k_minimal_asmc_law(const train5_real_t kept[66], const train5_real_t *q,
-    const train5_real_t *qdot, const train5_real_t *e, const train5_real_t *edot,
-    const train5_real_t *qddot_des, const train5_real_t *k1, const train5_real_t *k2,
-    const train5_real_t *p12, const train5_real_t *p22, const train5_real_t *gain,
-    const train5_real_t *eps, const train5_real_t *adapt, train5_real_t *u, train5_real_t *s,
-    train5_real_t *s_norm, train5_real_t *gain_next)
+TRAIN5_KERNEL_INLINE void train5_k_minimal_asmc_law(const train5_real_t kept[66],
+    const train5_real_t *q, const train5_real_t *qdot, const train5_real_t *e,
+    const train5_real_t *edot, const train5_real_t *qddot_des, const train5_real_t *k1,
+    const train5_real_t *k2, const train5_real_t *p12, const train5_real_t *p22,
+    const train5_real_t *gain, const train5_real_t *eps, const train5_real_t *adapt,
+    train5_real_t *u, train5_real_t *s, train5_real_t *s_norm, train5_real_t *gain_next)
 {
     const train5_real_t theta_tractor = q[2];
     const train5_real_t _t54 = -theta_tractor;
@@ -1624,7 +1635,8 @@ static inline void train5_k_minimal_asmc_law(const train5_real_t kept[66], const
 /* train5_k_minimal_pi_law_keep: the parameter-only part of train5_minimal_pi_law (train5_laws.h
    documents it).
    operations after CSE: 0 add, 0 mul, 2 div, 0 sin/cos, 0 sqrt */
-static inline void train5_k_minimal_pi_law_keep(const train5_params_t *p, train5_real_t kept[2])
+TRAIN5_KERNEL_INLINE void train5_k_minimal_pi_law_keep(const train5_params_t *p,
+    train5_real_t kept[2])
 {
     const train5_real_t radius_left = p->radius_left;
     const train5_real_t radius_right = p->radius_right;
@@ -1636,10 +1648,10 @@ static inline void train5_k_minimal_pi_law_keep(const train5_params_t *p, train5
 
 /* train5_k_minimal_pi_law: the per-step part of train5_minimal_pi_law (train5_laws.h documents it).
    operations after CSE: 17 add, 20 mul, 0 div, 6 sin/cos, 0 sqrt, 2 fmax, 2 fmin */
-static inline void train5_k_minimal_pi_law(const train5_real_t kept[2], const train5_real_t *q,
-    const train5_real_t *qdot, const train5_real_t *q_des, const train5_real_t *qdot_des,
-    const train5_real_t *integral, const train5_real_t *gains, const train5_real_t *limits,
-    train5_real_t *u, train5_real_t *integral_next)
+TRAIN5_KERNEL_INLINE void train5_k_minimal_pi_law(const train5_real_t kept[2],
+    const train5_real_t *q, const train5_real_t *qdot, const train5_real_t *q_des,
+    const train5_real_t *qdot_des, const train5_real_t *integral, const train5_real_t *gains,
+    const train5_real_t *limits, train5_real_t *u, train5_real_t *integral_next)
 {
     const train5_real_t theta_tractor = q[2];
     const train5_real_t qd_2 = q_des[2];

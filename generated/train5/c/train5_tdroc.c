@@ -240,18 +240,19 @@ train5_status_t train5_tdroc_reset(train5_tdroc_state_t *state)
     return TRAIN5_OK;
 }
 
-train5_status_t train5_tdroc_step(train5_tdroc_state_t *state, const train5_tdroc_config_t *config,
-    const train5_real_t q[20], const train5_real_t qdot[20], const train5_real_t q_des[20],
-    const train5_real_t qdot_des[20], const train5_real_t qddot_des[20], train5_real_t tau[2])
-{
-    return train5_tdroc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
-}
-
+/* The step's body, with or without an error detail to fill: inlined into both entries below
+   (optimising for size: _step_detail itself). */
+#if TRAIN5_STEP_PER_ENTRY
+TRAIN5_STEP_INLINE train5_status_t train5_tdroc_step_of(train5_tdroc_state_t *state,
+    const train5_tdroc_config_t *config, const train5_real_t q[20], const train5_real_t qdot[20],
+    const train5_real_t q_des[20], const train5_real_t qdot_des[20],
+    const train5_real_t qddot_des[20], train5_real_t tau[2], train5_error_detail_t *detail)
+#else  /* the body is _step_detail's, as _step calls it */
 train5_status_t train5_tdroc_step_detail(train5_tdroc_state_t *state,
     const train5_tdroc_config_t *config, const train5_real_t q[20], const train5_real_t qdot[20],
     const train5_real_t q_des[20], const train5_real_t qdot_des[20],
     const train5_real_t qddot_des[20], train5_real_t tau[2], train5_error_detail_t *detail)
-
+#endif
 {
     train5_status_t status = TRAIN5_OK;
     const train5_tdroc_config_t *cfg;  /* config, or in a frozen build the compiled-in one */
@@ -468,6 +469,28 @@ train5_status_t train5_tdroc_step_detail(train5_tdroc_state_t *state,
     return status;
     }
 }
+#if TRAIN5_STEP_PER_ENTRY
+
+train5_status_t train5_tdroc_step_detail(train5_tdroc_state_t *state,
+    const train5_tdroc_config_t *config, const train5_real_t q[20], const train5_real_t qdot[20],
+    const train5_real_t q_des[20], const train5_real_t qdot_des[20],
+    const train5_real_t qddot_des[20], train5_real_t tau[2], train5_error_detail_t *detail)
+{
+    return train5_tdroc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, detail);
+}
+#endif
+
+train5_status_t train5_tdroc_step(train5_tdroc_state_t *state, const train5_tdroc_config_t *config,
+    const train5_real_t q[20], const train5_real_t qdot[20], const train5_real_t q_des[20],
+    const train5_real_t qdot_des[20], const train5_real_t qddot_des[20], train5_real_t tau[2])
+{
+#if TRAIN5_STEP_PER_ENTRY
+    /* its own copy of the body: no 9-argument call first (not a tail call on x86-64) */
+    return train5_tdroc_step_of(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#else
+    return train5_tdroc_step_detail(state, config, q, qdot, q_des, qdot_des, qddot_des, tau, 0);
+#endif
+}
 
 /* Reads the state a step left; no step calls it (a firmware calls it when it relies on the
    certified torque bound): the header says what it checks and why. */
@@ -489,8 +512,8 @@ train5_status_t train5_tdroc_within_certificate(const train5_tdroc_state_t *stat
 #endif
         bool within = train5_within(state->gain, TRAIN5_TDROC_CERT_GAIN_MIN,
                 TRAIN5_TDROC_CERT_GAIN_MAX) != 0;
-        int i;
         if ((held == 0) && (state->omega_count >= 2)) {
+            int i;
             /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left them:
                omega_ring[omega_head ...], the newest norm then the kept ones */
             within = within && (train5_within(state->minv_norm, TRAIN5_TDROC_CERT_NORM_MIN,

@@ -130,7 +130,7 @@ train5_status_t train5_tdroc_check_config_detail(const train5_tdroc_config_t *co
 #define TRAIN5_TDROC_CERT_GAIN_MAX TRAIN5_LIT(100.0)
 #define TRAIN5_TDROC_CERT_NORM_MIN TRAIN5_LIT(0.0) /* ||Mhat^-1||_F of (25) */
 #define TRAIN5_TDROC_CERT_NORM_MAX TRAIN5_LIT(10.0)
-#define TRAIN5_TDROC_CERT_WINDOW_MIN TRAIN5_LIT(0.0) /* each ||Omega(i) - Omega(i+1)|| (25) reads */
+#define TRAIN5_TDROC_CERT_WINDOW_MIN TRAIN5_LIT(0.0) /* each difference norm (25) reads */
 #define TRAIN5_TDROC_CERT_WINDOW_MAX TRAIN5_LIT(10.0)
 
 /**
