@@ -421,12 +421,14 @@ wmr_status_t wmr_asmc_step(wmr_asmc_state_t *state, const wmr_asmc_config_t *con
    certified torque bound): the header says what it checks and why. */
 wmr_status_t wmr_asmc_within_certificate(const wmr_asmc_state_t *state)
 {
-    if (state == NULL) {
-        return WMR_ERR_NULL_POINTER;
+    wmr_status_t status = WMR_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if (state->magic != WMR_STATE_MAGIC) {
+            status = WMR_ERR_NOT_INITIALISED;
+        } else {
+            status = (wmr_within(state->gain, WMR_ASMC_CERT_GAIN_MIN, WMR_ASMC_CERT_GAIN_MAX) != 0)
+                ? WMR_OK : WMR_WARN_UNCERTIFIED;
+        }
     }
-    if (state->magic != WMR_STATE_MAGIC) {
-        return WMR_ERR_NOT_INITIALISED;
-    }
-    return wmr_within(state->gain, WMR_ASMC_CERT_GAIN_MIN, WMR_ASMC_CERT_GAIN_MAX) != 0 ? WMR_OK
-        : WMR_WARN_UNCERTIFIED;
+    return status;
 }

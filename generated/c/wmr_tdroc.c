@@ -600,33 +600,33 @@ wmr_status_t wmr_tdroc_step(wmr_tdroc_state_t *state, const wmr_tdroc_config_t *
    certified torque bound): the header says what it checks and why. */
 wmr_status_t wmr_tdroc_within_certificate(const wmr_tdroc_state_t *state)
 {
-    if (state == NULL) {
-        return WMR_ERR_NULL_POINTER;
-    }
-    if ((state->magic != WMR_STATE_MAGIC) || ((unsigned int)state->omega_head
-        >= (unsigned int)WMR_MAX_WINDOW) || ((unsigned int)state->omega_count
-        > ((unsigned int)WMR_MAX_WINDOW + 1u))) {
-        return WMR_ERR_NOT_INITIALISED;
-    }
-    {
+    wmr_status_t status = WMR_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if ((state->magic != WMR_STATE_MAGIC) || ((unsigned int)state->omega_head
+            >= (unsigned int)WMR_MAX_WINDOW) || ((unsigned int)state->omega_count
+            > ((unsigned int)WMR_MAX_WINDOW + 1u))) {
+            status = WMR_ERR_NOT_INITIALISED;
+        } else {
 #ifdef WMR_TDROC_FROZEN
-        const int held = wmr_tdroc_frozen_config.hold_gain;
+            const int held = wmr_tdroc_frozen_config.hold_gain;
 #else
-        const int held = state->config.hold_gain;
+            const int held = state->config.hold_gain;
 #endif
-        bool within = wmr_within(state->gain, WMR_TDROC_CERT_GAIN_MIN, WMR_TDROC_CERT_GAIN_MAX)
-                != 0;
-        if ((held == 0) && (state->omega_count >= 2)) {
-            int i;
-            /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left them:
-               omega_ring[omega_head ...], the newest norm then the kept ones */
-            within = within && (wmr_within(state->minv_norm, WMR_TDROC_CERT_NORM_MIN,
-                    WMR_TDROC_CERT_NORM_MAX) != 0);
-            for (i = 0; i < WMR_MAX_WINDOW; ++i) {
-                within = within && (wmr_within(state->omega_ring[state->omega_head + i],
-                    WMR_TDROC_CERT_WINDOW_MIN, WMR_TDROC_CERT_WINDOW_MAX) != 0);
+            bool within = wmr_within(state->gain, WMR_TDROC_CERT_GAIN_MIN, WMR_TDROC_CERT_GAIN_MAX)
+                    != 0;
+            if ((held == 0) && (state->omega_count >= 2)) {
+                int i;
+                /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left
+                   them: omega_ring[omega_head ...], the newest norm then the kept ones */
+                within = within && (wmr_within(state->minv_norm, WMR_TDROC_CERT_NORM_MIN,
+                        WMR_TDROC_CERT_NORM_MAX) != 0);
+                for (i = 0; i < WMR_MAX_WINDOW; ++i) {
+                    within = within && (wmr_within(state->omega_ring[state->omega_head + i],
+                        WMR_TDROC_CERT_WINDOW_MIN, WMR_TDROC_CERT_WINDOW_MAX) != 0);
+                }
             }
+            status = within ? WMR_OK : WMR_WARN_UNCERTIFIED;
         }
-        return within ? WMR_OK : WMR_WARN_UNCERTIFIED;
     }
+    return status;
 }

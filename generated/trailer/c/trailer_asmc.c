@@ -346,12 +346,14 @@ trailer_status_t trailer_asmc_step(trailer_asmc_state_t *state, const trailer_as
    certified torque bound): the header says what it checks and why. */
 trailer_status_t trailer_asmc_within_certificate(const trailer_asmc_state_t *state)
 {
-    if (state == NULL) {
-        return TRAILER_ERR_NULL_POINTER;
+    trailer_status_t status = TRAILER_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if (state->magic != TRAILER_STATE_MAGIC) {
+            status = TRAILER_ERR_NOT_INITIALISED;
+        } else {
+            status = (trailer_within(state->gain, TRAILER_ASMC_CERT_GAIN_MIN,
+                TRAILER_ASMC_CERT_GAIN_MAX) != 0) ? TRAILER_OK : TRAILER_WARN_UNCERTIFIED;
+        }
     }
-    if (state->magic != TRAILER_STATE_MAGIC) {
-        return TRAILER_ERR_NOT_INITIALISED;
-    }
-    return trailer_within(state->gain, TRAILER_ASMC_CERT_GAIN_MIN, TRAILER_ASMC_CERT_GAIN_MAX) != 0
-        ? TRAILER_OK : TRAILER_WARN_UNCERTIFIED;
+    return status;
 }

@@ -499,33 +499,33 @@ trailer_status_t trailer_tdroc_step(trailer_tdroc_state_t *state,
    certified torque bound): the header says what it checks and why. */
 trailer_status_t trailer_tdroc_within_certificate(const trailer_tdroc_state_t *state)
 {
-    if (state == NULL) {
-        return TRAILER_ERR_NULL_POINTER;
-    }
-    if ((state->magic != TRAILER_STATE_MAGIC) || ((unsigned int)state->omega_head
-        >= (unsigned int)TRAILER_MAX_WINDOW) || ((unsigned int)state->omega_count
-        > ((unsigned int)TRAILER_MAX_WINDOW + 1u))) {
-        return TRAILER_ERR_NOT_INITIALISED;
-    }
-    {
+    trailer_status_t status = TRAILER_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if ((state->magic != TRAILER_STATE_MAGIC) || ((unsigned int)state->omega_head
+            >= (unsigned int)TRAILER_MAX_WINDOW) || ((unsigned int)state->omega_count
+            > ((unsigned int)TRAILER_MAX_WINDOW + 1u))) {
+            status = TRAILER_ERR_NOT_INITIALISED;
+        } else {
 #ifdef TRAILER_TDROC_FROZEN
-        const int held = trailer_tdroc_frozen_config.hold_gain;
+            const int held = trailer_tdroc_frozen_config.hold_gain;
 #else
-        const int held = state->config.hold_gain;
+            const int held = state->config.hold_gain;
 #endif
-        bool within = trailer_within(state->gain, TRAILER_TDROC_CERT_GAIN_MIN,
-                TRAILER_TDROC_CERT_GAIN_MAX) != 0;
-        if ((held == 0) && (state->omega_count >= 2)) {
-            int i;
-            /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left them:
-               omega_ring[omega_head ...], the newest norm then the kept ones */
-            within = within && (trailer_within(state->minv_norm, TRAILER_TDROC_CERT_NORM_MIN,
-                    TRAILER_TDROC_CERT_NORM_MAX) != 0);
-            for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
-                within = within && (trailer_within(state->omega_ring[state->omega_head + i],
-                    TRAILER_TDROC_CERT_WINDOW_MIN, TRAILER_TDROC_CERT_WINDOW_MAX) != 0);
+            bool within = trailer_within(state->gain, TRAILER_TDROC_CERT_GAIN_MIN,
+                    TRAILER_TDROC_CERT_GAIN_MAX) != 0;
+            if ((held == 0) && (state->omega_count >= 2)) {
+                int i;
+                /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left
+                   them: omega_ring[omega_head ...], the newest norm then the kept ones */
+                within = within && (trailer_within(state->minv_norm, TRAILER_TDROC_CERT_NORM_MIN,
+                        TRAILER_TDROC_CERT_NORM_MAX) != 0);
+                for (i = 0; i < TRAILER_MAX_WINDOW; ++i) {
+                    within = within && (trailer_within(state->omega_ring[state->omega_head + i],
+                        TRAILER_TDROC_CERT_WINDOW_MIN, TRAILER_TDROC_CERT_WINDOW_MAX) != 0);
+                }
             }
+            status = within ? TRAILER_OK : TRAILER_WARN_UNCERTIFIED;
         }
-        return within ? TRAILER_OK : TRAILER_WARN_UNCERTIFIED;
     }
+    return status;
 }

@@ -360,12 +360,14 @@ trailer2_status_t trailer2_asmc_step(trailer2_asmc_state_t *state,
    certified torque bound): the header says what it checks and why. */
 trailer2_status_t trailer2_asmc_within_certificate(const trailer2_asmc_state_t *state)
 {
-    if (state == NULL) {
-        return TRAILER2_ERR_NULL_POINTER;
+    trailer2_status_t status = TRAILER2_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if (state->magic != TRAILER2_STATE_MAGIC) {
+            status = TRAILER2_ERR_NOT_INITIALISED;
+        } else {
+            status = (trailer2_within(state->gain, TRAILER2_ASMC_CERT_GAIN_MIN,
+                TRAILER2_ASMC_CERT_GAIN_MAX) != 0) ? TRAILER2_OK : TRAILER2_WARN_UNCERTIFIED;
+        }
     }
-    if (state->magic != TRAILER2_STATE_MAGIC) {
-        return TRAILER2_ERR_NOT_INITIALISED;
-    }
-    return trailer2_within(state->gain, TRAILER2_ASMC_CERT_GAIN_MIN, TRAILER2_ASMC_CERT_GAIN_MAX)
-        != 0 ? TRAILER2_OK : TRAILER2_WARN_UNCERTIFIED;
+    return status;
 }

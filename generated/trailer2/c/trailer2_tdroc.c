@@ -514,33 +514,33 @@ trailer2_status_t trailer2_tdroc_step(trailer2_tdroc_state_t *state,
    certified torque bound): the header says what it checks and why. */
 trailer2_status_t trailer2_tdroc_within_certificate(const trailer2_tdroc_state_t *state)
 {
-    if (state == NULL) {
-        return TRAILER2_ERR_NULL_POINTER;
-    }
-    if ((state->magic != TRAILER2_STATE_MAGIC) || ((unsigned int)state->omega_head
-        >= (unsigned int)TRAILER2_MAX_WINDOW) || ((unsigned int)state->omega_count
-        > ((unsigned int)TRAILER2_MAX_WINDOW + 1u))) {
-        return TRAILER2_ERR_NOT_INITIALISED;
-    }
-    {
+    trailer2_status_t status = TRAILER2_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if ((state->magic != TRAILER2_STATE_MAGIC) || ((unsigned int)state->omega_head
+            >= (unsigned int)TRAILER2_MAX_WINDOW) || ((unsigned int)state->omega_count
+            > ((unsigned int)TRAILER2_MAX_WINDOW + 1u))) {
+            status = TRAILER2_ERR_NOT_INITIALISED;
+        } else {
 #ifdef TRAILER2_TDROC_FROZEN
-        const int held = trailer2_tdroc_frozen_config.hold_gain;
+            const int held = trailer2_tdroc_frozen_config.hold_gain;
 #else
-        const int held = state->config.hold_gain;
+            const int held = state->config.hold_gain;
 #endif
-        bool within = trailer2_within(state->gain, TRAILER2_TDROC_CERT_GAIN_MIN,
-                TRAILER2_TDROC_CERT_GAIN_MAX) != 0;
-        if ((held == 0) && (state->omega_count >= 2)) {
-            int i;
-            /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left them:
-               omega_ring[omega_head ...], the newest norm then the kept ones */
-            within = within && (trailer2_within(state->minv_norm, TRAILER2_TDROC_CERT_NORM_MIN,
-                    TRAILER2_TDROC_CERT_NORM_MAX) != 0);
-            for (i = 0; i < TRAILER2_MAX_WINDOW; ++i) {
-                within = within && (trailer2_within(state->omega_ring[state->omega_head + i],
-                    TRAILER2_TDROC_CERT_WINDOW_MIN, TRAILER2_TDROC_CERT_WINDOW_MAX) != 0);
+            bool within = trailer2_within(state->gain, TRAILER2_TDROC_CERT_GAIN_MIN,
+                    TRAILER2_TDROC_CERT_GAIN_MAX) != 0;
+            if ((held == 0) && (state->omega_count >= 2)) {
+                int i;
+                /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left
+                   them: omega_ring[omega_head ...], the newest norm then the kept ones */
+                within = within && (trailer2_within(state->minv_norm, TRAILER2_TDROC_CERT_NORM_MIN,
+                        TRAILER2_TDROC_CERT_NORM_MAX) != 0);
+                for (i = 0; i < TRAILER2_MAX_WINDOW; ++i) {
+                    within = within && (trailer2_within(state->omega_ring[state->omega_head + i],
+                        TRAILER2_TDROC_CERT_WINDOW_MIN, TRAILER2_TDROC_CERT_WINDOW_MAX) != 0);
+                }
             }
+            status = within ? TRAILER2_OK : TRAILER2_WARN_UNCERTIFIED;
         }
-        return within ? TRAILER2_OK : TRAILER2_WARN_UNCERTIFIED;
     }
+    return status;
 }

@@ -359,12 +359,14 @@ trailer3_status_t trailer3_asmc_step(trailer3_asmc_state_t *state,
    certified torque bound): the header says what it checks and why. */
 trailer3_status_t trailer3_asmc_within_certificate(const trailer3_asmc_state_t *state)
 {
-    if (state == NULL) {
-        return TRAILER3_ERR_NULL_POINTER;
+    trailer3_status_t status = TRAILER3_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if (state->magic != TRAILER3_STATE_MAGIC) {
+            status = TRAILER3_ERR_NOT_INITIALISED;
+        } else {
+            status = (trailer3_within(state->gain, TRAILER3_ASMC_CERT_GAIN_MIN,
+                TRAILER3_ASMC_CERT_GAIN_MAX) != 0) ? TRAILER3_OK : TRAILER3_WARN_UNCERTIFIED;
+        }
     }
-    if (state->magic != TRAILER3_STATE_MAGIC) {
-        return TRAILER3_ERR_NOT_INITIALISED;
-    }
-    return trailer3_within(state->gain, TRAILER3_ASMC_CERT_GAIN_MIN, TRAILER3_ASMC_CERT_GAIN_MAX)
-        != 0 ? TRAILER3_OK : TRAILER3_WARN_UNCERTIFIED;
+    return status;
 }

@@ -514,33 +514,33 @@ trailer3_status_t trailer3_tdroc_step(trailer3_tdroc_state_t *state,
    certified torque bound): the header says what it checks and why. */
 trailer3_status_t trailer3_tdroc_within_certificate(const trailer3_tdroc_state_t *state)
 {
-    if (state == NULL) {
-        return TRAILER3_ERR_NULL_POINTER;
-    }
-    if ((state->magic != TRAILER3_STATE_MAGIC) || ((unsigned int)state->omega_head
-        >= (unsigned int)TRAILER3_MAX_WINDOW) || ((unsigned int)state->omega_count
-        > ((unsigned int)TRAILER3_MAX_WINDOW + 1u))) {
-        return TRAILER3_ERR_NOT_INITIALISED;
-    }
-    {
+    trailer3_status_t status = TRAILER3_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if ((state->magic != TRAILER3_STATE_MAGIC) || ((unsigned int)state->omega_head
+            >= (unsigned int)TRAILER3_MAX_WINDOW) || ((unsigned int)state->omega_count
+            > ((unsigned int)TRAILER3_MAX_WINDOW + 1u))) {
+            status = TRAILER3_ERR_NOT_INITIALISED;
+        } else {
 #ifdef TRAILER3_TDROC_FROZEN
-        const int held = trailer3_tdroc_frozen_config.hold_gain;
+            const int held = trailer3_tdroc_frozen_config.hold_gain;
 #else
-        const int held = state->config.hold_gain;
+            const int held = state->config.hold_gain;
 #endif
-        bool within = trailer3_within(state->gain, TRAILER3_TDROC_CERT_GAIN_MIN,
-                TRAILER3_TDROC_CERT_GAIN_MAX) != 0;
-        if ((held == 0) && (state->omega_count >= 2)) {
-            int i;
-            /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left them:
-               omega_ring[omega_head ...], the newest norm then the kept ones */
-            within = within && (trailer3_within(state->minv_norm, TRAILER3_TDROC_CERT_NORM_MIN,
-                    TRAILER3_TDROC_CERT_NORM_MAX) != 0);
-            for (i = 0; i < TRAILER3_MAX_WINDOW; ++i) {
-                within = within && (trailer3_within(state->omega_ring[state->omega_head + i],
-                    TRAILER3_TDROC_CERT_WINDOW_MIN, TRAILER3_TDROC_CERT_WINDOW_MAX) != 0);
+            bool within = trailer3_within(state->gain, TRAILER3_TDROC_CERT_GAIN_MIN,
+                    TRAILER3_TDROC_CERT_GAIN_MAX) != 0;
+            if ((held == 0) && (state->omega_count >= 2)) {
+                int i;
+                /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left
+                   them: omega_ring[omega_head ...], the newest norm then the kept ones */
+                within = within && (trailer3_within(state->minv_norm, TRAILER3_TDROC_CERT_NORM_MIN,
+                        TRAILER3_TDROC_CERT_NORM_MAX) != 0);
+                for (i = 0; i < TRAILER3_MAX_WINDOW; ++i) {
+                    within = within && (trailer3_within(state->omega_ring[state->omega_head + i],
+                        TRAILER3_TDROC_CERT_WINDOW_MIN, TRAILER3_TDROC_CERT_WINDOW_MAX) != 0);
+                }
             }
+            status = within ? TRAILER3_OK : TRAILER3_WARN_UNCERTIFIED;
         }
-        return within ? TRAILER3_OK : TRAILER3_WARN_UNCERTIFIED;
     }
+    return status;
 }

@@ -344,12 +344,14 @@ train5_status_t train5_asmc_step(train5_asmc_state_t *state, const train5_asmc_c
    certified torque bound): the header says what it checks and why. */
 train5_status_t train5_asmc_within_certificate(const train5_asmc_state_t *state)
 {
-    if (state == NULL) {
-        return TRAIN5_ERR_NULL_POINTER;
+    train5_status_t status = TRAIN5_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if (state->magic != TRAIN5_STATE_MAGIC) {
+            status = TRAIN5_ERR_NOT_INITIALISED;
+        } else {
+            status = (train5_within(state->gain, TRAIN5_ASMC_CERT_GAIN_MIN,
+                TRAIN5_ASMC_CERT_GAIN_MAX) != 0) ? TRAIN5_OK : TRAIN5_WARN_UNCERTIFIED;
+        }
     }
-    if (state->magic != TRAIN5_STATE_MAGIC) {
-        return TRAIN5_ERR_NOT_INITIALISED;
-    }
-    return train5_within(state->gain, TRAIN5_ASMC_CERT_GAIN_MIN, TRAIN5_ASMC_CERT_GAIN_MAX) != 0
-        ? TRAIN5_OK : TRAIN5_WARN_UNCERTIFIED;
+    return status;
 }

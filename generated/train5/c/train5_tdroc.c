@@ -496,33 +496,33 @@ train5_status_t train5_tdroc_step(train5_tdroc_state_t *state, const train5_tdro
    certified torque bound): the header says what it checks and why. */
 train5_status_t train5_tdroc_within_certificate(const train5_tdroc_state_t *state)
 {
-    if (state == NULL) {
-        return TRAIN5_ERR_NULL_POINTER;
-    }
-    if ((state->magic != TRAIN5_STATE_MAGIC) || ((unsigned int)state->omega_head
-        >= (unsigned int)TRAIN5_MAX_WINDOW) || ((unsigned int)state->omega_count
-        > ((unsigned int)TRAIN5_MAX_WINDOW + 1u))) {
-        return TRAIN5_ERR_NOT_INITIALISED;
-    }
-    {
+    train5_status_t status = TRAIN5_ERR_NULL_POINTER;  /* one exit (MISRA 15.5) */
+    if (state != NULL) {
+        if ((state->magic != TRAIN5_STATE_MAGIC) || ((unsigned int)state->omega_head
+            >= (unsigned int)TRAIN5_MAX_WINDOW) || ((unsigned int)state->omega_count
+            > ((unsigned int)TRAIN5_MAX_WINDOW + 1u))) {
+            status = TRAIN5_ERR_NOT_INITIALISED;
+        } else {
 #ifdef TRAIN5_TDROC_FROZEN
-        const int held = train5_tdroc_frozen_config.hold_gain;
+            const int held = train5_tdroc_frozen_config.hold_gain;
 #else
-        const int held = state->config.hold_gain;
+            const int held = state->config.hold_gain;
 #endif
-        bool within = train5_within(state->gain, TRAIN5_TDROC_CERT_GAIN_MIN,
-                TRAIN5_TDROC_CERT_GAIN_MAX) != 0;
-        if ((held == 0) && (state->omega_count >= 2)) {
-            int i;
-            /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left them:
-               omega_ring[omega_head ...], the newest norm then the kept ones */
-            within = within && (train5_within(state->minv_norm, TRAIN5_TDROC_CERT_NORM_MIN,
-                    TRAIN5_TDROC_CERT_NORM_MAX) != 0);
-            for (i = 0; i < TRAIN5_MAX_WINDOW; ++i) {
-                within = within && (train5_within(state->omega_ring[state->omega_head + i],
-                    TRAIN5_TDROC_CERT_WINDOW_MIN, TRAIN5_TDROC_CERT_WINDOW_MAX) != 0);
+            bool within = train5_within(state->gain, TRAIN5_TDROC_CERT_GAIN_MIN,
+                    TRAIN5_TDROC_CERT_GAIN_MAX) != 0;
+            if ((held == 0) && (state->omega_count >= 2)) {
+                int i;
+                /* (25) computed this k-hat, from ||Mhat^-1|| and the window as the step left
+                   them: omega_ring[omega_head ...], the newest norm then the kept ones */
+                within = within && (train5_within(state->minv_norm, TRAIN5_TDROC_CERT_NORM_MIN,
+                        TRAIN5_TDROC_CERT_NORM_MAX) != 0);
+                for (i = 0; i < TRAIN5_MAX_WINDOW; ++i) {
+                    within = within && (train5_within(state->omega_ring[state->omega_head + i],
+                        TRAIN5_TDROC_CERT_WINDOW_MIN, TRAIN5_TDROC_CERT_WINDOW_MAX) != 0);
+                }
             }
+            status = within ? TRAIN5_OK : TRAIN5_WARN_UNCERTIFIED;
         }
-        return within ? TRAIN5_OK : TRAIN5_WARN_UNCERTIFIED;
     }
+    return status;
 }
