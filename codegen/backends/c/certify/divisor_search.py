@@ -27,7 +27,14 @@ import sympy as sp
 from codegen.backend import FunctionIR
 from codegen.backends.c.certify.divisors import dependencies
 from codegen.backends.c.certify.program import Program
-from codegen.backends.c.certify.search import Exact, Found, errors_at, node_values
+from codegen.backends.c.certify.search import (
+    Exact,
+    Found,
+    box_rounder,
+    climb,
+    errors_at,
+    node_values,
+)
 
 F64 = npt.NDArray[np.float64]
 
@@ -128,12 +135,7 @@ def search_divisors(program: Program, ir: FunctionIR,
     for b in divisors(program):
         near[[col[i] for i in deps[b] if i in col]] = True
 
-    def inside(p: F64) -> npt.NDArray[np.float32]:
-        q = np.clip(p, lo, hi).astype(np.float32)
-        # rounding to float32 may leave the box by half an ulp: step back in
-        q = np.where(q < lo, np.nextafter(q, np.float32(np.inf)), q)
-        return np.where(q > hi, np.nextafter(q, np.float32(-np.inf)), q).astype(np.float32)
-
+    inside = box_rounder(lo, hi)
     pts32 = inside(pts)
     err = errors_at(program, exact, pts32)
     evaluated = len(pts32)
@@ -141,23 +143,9 @@ def search_divisors(program: Program, ir: FunctionIR,
     where = [pts32[i] for i in err.argmax(axis=0)]
     for j in np.argsort(-best)[:outputs]:
         for start in np.argsort(-err[:, j])[:climbs]:
-            x = pts32[start].astype(np.float64)
-            cur = float(err[start, j])
-            step = np.where(near, 1e-3, 0.25) * (hi - lo)
-            for _ in range(rounds):
-                for k in rng.permutation(len(symbols)):
-                    if step[k] == 0:
-                        continue
-                    trial = np.stack([x, x])
-                    trial[0, k] += step[k]
-                    trial[1, k] -= step[k]
-                    t32 = inside(trial)
-                    e = errors_at(program, exact, t32)[:, j]
-                    evaluated += 2
-                    if e.max() > cur:
-                        cur = float(e.max())
-                        x = t32[int(e.argmax())].astype(np.float64)
-                step = step / 4
+            cur, x, n = climb(program, exact, inside, pts32[start], float(err[start, j]), j,
+                              np.where(near, 1e-3, 0.25) * (hi - lo), rounds, rng)
+            evaluated += n
             if cur > best[j]:
                 best[j] = cur
                 where[j] = inside(x[None, :])[0]

@@ -303,6 +303,45 @@ def errors_at(program: Program, exact: Exact, pts: npt.NDArray[np.float32]
     return out
 
 
+def box_rounder(lo: npt.NDArray[np.float64], hi: npt.NDArray[np.float64]
+                ) -> Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float32]]:
+    """Points clipped to the box [lo, hi] and rounded to float32, stepped back in by an ulp
+    where the rounding left the box (by half an ulp)."""
+    def inside(p: npt.NDArray[np.float64]) -> npt.NDArray[np.float32]:
+        q = np.clip(p, lo, hi).astype(np.float32)
+        q = np.where(q < lo, np.nextafter(q, np.float32(np.inf)), q)
+        return np.where(q > hi, np.nextafter(q, np.float32(-np.inf)), q).astype(np.float32)
+    return inside
+
+
+def climb(program: Program, exact: Exact,
+          inside: Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float32]],
+          start: npt.NDArray[np.float32], cur: float, j: int, step: npt.NDArray[np.float64],
+          rounds: int, rng: np.random.Generator
+          ) -> tuple[float, npt.NDArray[np.float64], int]:
+    """A coordinate search for output ``j``'s largest error from ``start`` (error ``cur``):
+    each round tries ± ``step`` along every input in a random order, keeping what raises the
+    error, then quarters the step. Returns the error reached, its point and the points
+    evaluated."""
+    x = start.astype(np.float64)
+    evaluated = 0
+    for _ in range(rounds):
+        for k in rng.permutation(len(x)):
+            if step[k] == 0:
+                continue
+            trial = np.stack([x, x])
+            trial[0, k] += step[k]
+            trial[1, k] -= step[k]
+            t32 = inside(trial)
+            e = errors_at(program, exact, t32)[:, j]
+            evaluated += 2
+            if e.max() > cur:
+                cur = float(e.max())
+                x = t32[int(e.argmax())].astype(np.float64)
+        step = step / 4
+    return cur, x, evaluated
+
+
 def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float, float]],
            *, random_points: int = 200, climbs: int = 4, rounds: int = 3,
            seed: int = 0, exact_of: Callable[[list[sp.Symbol]], Exact] | None = None
@@ -316,12 +355,7 @@ def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float
     lo = np.array([box[s][0] for s in symbols], dtype=np.float64)
     hi = np.array([box[s][1] for s in symbols], dtype=np.float64)
 
-    def inside(p: npt.NDArray[np.float64]) -> npt.NDArray[np.float32]:
-        q = np.clip(p, lo, hi).astype(np.float32)
-        # rounding to float32 may leave the box by half an ulp: step back in
-        q = np.where(q < lo, np.nextafter(q, np.float32(np.inf)), q)
-        return np.where(q > hi, np.nextafter(q, np.float32(-np.inf)), q).astype(np.float32)
-
+    inside = box_rounder(lo, hi)
     corners = rng.integers(0, 2, size=(random_points // 4, len(symbols)))
     pts = np.concatenate([lo + (hi - lo) * rng.random((random_points, len(symbols))),
                           np.where(corners == 1, hi, lo),
@@ -334,23 +368,9 @@ def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float
     where = [pts32[i] for i in err.argmax(axis=0)]
     for j in range(err.shape[1]):  # climb from the worst points of each output
         for start in np.argsort(-err[:, j])[:climbs]:
-            x = pts32[start].astype(np.float64)
-            cur = err[start, j]
-            step = 0.25 * (hi - lo)
-            for _ in range(rounds):
-                for k in rng.permutation(len(symbols)):
-                    if step[k] == 0:
-                        continue
-                    trial = np.stack([x, x])
-                    trial[0, k] += step[k]
-                    trial[1, k] -= step[k]
-                    t32 = inside(trial)
-                    e = errors_at(program, exact, t32)[:, j]
-                    evaluated += 2
-                    if e.max() > cur:
-                        cur = float(e.max())
-                        x = t32[int(e.argmax())].astype(np.float64)
-                step = step / 4
+            cur, x, n = climb(program, exact, inside, pts32[start], float(err[start, j]), j,
+                              0.25 * (hi - lo), rounds, rng)
+            evaluated += n
             if cur > best[j]:
                 best[j] = cur
                 where[j] = inside(x[None, :])[0]
