@@ -64,8 +64,9 @@ def _run(tmp: Path, formulation: int, only: str | None) -> tuple[str, set[str]]:
         defines.append(f"-DWMR_FORMULATION_ONLY=WMR_FORMULATION_{only}")
     sources = [str(p) for p in sorted(GENERATED_C.glob("wmr_*.c"))]
     subprocess.run(
-        # -fno-inline: the step's private kernel copies keep their (local) symbols to look for
-        [gcc, "-std=c99", "-O2", "-fno-inline", "-Wall", "-Wextra", "-Werror",
+        # -Os, as the firmware images are built (at -O2 the kernels are always inlined and
+        # leave no symbol); -fno-inline: the kernels keep their (local) symbols to look for
+        [gcc, "-std=c99", "-Os", "-fno-inline", "-Wall", "-Wextra", "-Werror",
          "-ffunction-sections",
          "-Wl,--gc-sections", *defines, f"-I{GENERATED_C}", str(src), *sources, "-lm",
          "-o", str(exe)],
