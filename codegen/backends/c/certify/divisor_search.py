@@ -31,8 +31,7 @@ from codegen.backends.c.certify.search import (
     Exact,
     Found,
     box_rounder,
-    climb,
-    errors_at,
+    climbed,
     node_values,
 )
 
@@ -137,20 +136,8 @@ def search_divisors(program: Program, ir: FunctionIR,
 
     inside = box_rounder(lo, hi)
     pts32 = inside(pts)
-    err = errors_at(program, exact, pts32)
-    evaluated = len(pts32)
-    best = err.max(axis=0)
-    where = [pts32[i] for i in err.argmax(axis=0)]
-    for j in np.argsort(-best)[:outputs]:
-        for start in np.argsort(-err[:, j])[:climbs]:
-            cur, x, n = climb(program, exact, inside, pts32[start], float(err[start, j]), j,
-                              np.where(near, 1e-3, 0.25) * (hi - lo), rounds, rng)
-            evaluated += n
-            if cur > best[j]:
-                best[j] = cur
-                where[j] = inside(x[None, :])[0]
-    return Found(tuple(float(b) for b in best),
-                 tuple(tuple(float(v) for v in w) for w in where), evaluated)
+    return climbed(program, exact, inside, pts32, np.where(near, 1e-3, 0.25) * (hi - lo),
+                   climbs=climbs, rounds=rounds, rng=rng, top=outputs)
 
 
 def merge(first: Found, second: Found) -> Found:

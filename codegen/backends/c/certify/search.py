@@ -342,6 +342,29 @@ def climb(program: Program, exact: Exact,
     return cur, x, evaluated
 
 
+def climbed(program: Program, exact: Exact,
+            inside: Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float32]],
+            pts32: npt.NDArray[np.float32], step: npt.NDArray[np.float64], *, climbs: int,
+            rounds: int, rng: np.random.Generator, top: int | None = None) -> Found:
+    """Each output's largest error over ``pts32``, then :func:`climb` from its ``climbs``
+    worst points (every output in order, or the ``top`` outputs with the largest errors)."""
+    err = errors_at(program, exact, pts32)
+    evaluated = len(pts32)
+    best = err.max(axis=0)
+    where = [pts32[i] for i in err.argmax(axis=0)]
+    order = range(err.shape[1]) if top is None else np.argsort(-best)[:top]
+    for j in order:
+        for start in np.argsort(-err[:, j])[:climbs]:
+            cur, x, n = climb(program, exact, inside, pts32[start], float(err[start, j]), j,
+                              step, rounds, rng)
+            evaluated += n
+            if cur > best[j]:
+                best[j] = cur
+                where[j] = inside(x[None, :])[0]
+    return Found(tuple(float(b) for b in best),
+                 tuple(tuple(float(v) for v in w) for w in where), evaluated)
+
+
 def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float, float]],
            *, random_points: int = 200, climbs: int = 4, rounds: int = 3,
            seed: int = 0, exact_of: Callable[[list[sp.Symbol]], Exact] | None = None
@@ -362,17 +385,5 @@ def search(program: Program, ir: FunctionIR, box: Mapping[sp.Symbol, tuple[float
                           boundary_points(program, symbols, lo, hi, random_points, rng),
                           cancelling_points(program, symbols, lo, hi, random_points, rng)])
     pts32 = inside(pts)
-    err = errors_at(program, exact, pts32)
-    evaluated = len(pts32)
-    best = err.max(axis=0)
-    where = [pts32[i] for i in err.argmax(axis=0)]
-    for j in range(err.shape[1]):  # climb from the worst points of each output
-        for start in np.argsort(-err[:, j])[:climbs]:
-            cur, x, n = climb(program, exact, inside, pts32[start], float(err[start, j]), j,
-                              0.25 * (hi - lo), rounds, rng)
-            evaluated += n
-            if cur > best[j]:
-                best[j] = cur
-                where[j] = inside(x[None, :])[0]
-    return Found(tuple(float(b) for b in best),
-                 tuple(tuple(float(v) for v in w) for w in where), evaluated)
+    return climbed(program, exact, inside, pts32, 0.25 * (hi - lo), climbs=climbs,
+                   rounds=rounds, rng=rng)
