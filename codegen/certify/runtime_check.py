@@ -21,7 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from codegen.certify.envelope import ENVELOPE, Envelope, Interval
-from modeling.controllers import REGISTRY, ControllerSpec
+from modeling.controllers import ControllerSpec
+from modeling.controllers.registry import controller as registered
 
 # The certifier's inputs (``boxes.input_range``'s names) whose boxes the check tests, and
 # the envelope field each is declared by.
@@ -90,6 +91,5 @@ def gate_context(info: ControllerSpec, prefix: str,
 
 def checked_by(prefix: str, controller: str) -> str:
     """The note a step row of the reports gets for a controller with a check, else ""."""
-    info = next((c for c in REGISTRY if c.name == controller), None)
     return (f"run-time check: `{check_function(prefix, controller)}`, called after the step"
-            if info is not None and has_check(info) else "")
+            if has_check(registered(controller)) else "")

@@ -36,6 +36,7 @@ import numpy.typing as npt
 from codegen.backends.c.certify.affine import affine_bounds
 from codegen.backends.c.certify.program import Node, Program
 from codegen.backends.c.certify.unitvector import layer_of, unit_component
+from codegen.backends.c.certify.unitvector import magnitude as _mag
 
 Array = npt.NDArray[np.float64]
 U = 2.0**-24  # float32 unit roundoff
@@ -75,10 +76,6 @@ def _down(a: Array) -> Array:
 
 def _up(a: Array) -> Array:
     return np.nextafter(a, np.inf)
-
-
-def _mag(lo: Array, hi: Array) -> Array:
-    return np.maximum(np.abs(lo), np.abs(hi))
 
 
 def _mig(lo: Array, hi: Array) -> Array:

@@ -71,7 +71,8 @@ class Enclosed:
     err: Array
 
 
-def _mag(lo: Array, hi: Array) -> Array:
+def magnitude(lo: Array, hi: Array) -> Array:
+    """The largest |x| over the interval [lo, hi], elementwise."""
     return np.maximum(np.abs(lo), np.abs(hi))
 
 
@@ -95,7 +96,7 @@ def split_errors(program: Program, nid: int, val: Callable[[int], Enclosed],
         aa, ba = split_errors(program, ia, val, memo, depth + 1)
         ab, bb = split_errors(program, ib, val, memo, depth + 1)
         xa, xb = val(ia), val(ib)
-        ma, mb = _mag(xa.xlo, xa.xhi), _mag(xb.xlo, xb.xhi)
+        ma, mb = magnitude(xa.xlo, xa.xhi), magnitude(xb.xlo, xb.xhi)
         a_err = ma * ab * (1 + ba) + mb * aa * (1 + bb) + aa * ab
         b_rel = ba + bb + ba * bb
         a_err, b_rel = a_err * (1 + U) + TINY, b_rel + U * (1 + b_rel)
@@ -104,7 +105,7 @@ def split_errors(program: Program, nid: int, val: Callable[[int], Enclosed],
         aa, ba = split_errors(program, ia, val, memo, depth + 1)
         ab, bb = split_errors(program, ib, val, memo, depth + 1)
         xa, xb = val(ia), val(ib)
-        ma, mb = _mag(xa.xlo, xa.xhi), _mag(xb.xlo, xb.xhi)
+        ma, mb = magnitude(xa.xlo, xa.xhi), magnitude(xb.xlo, xb.xhi)
         # the larger term's |x| is at most |s| plus the smaller's
         a_big = ma >= mb
         a_err = aa + ab + (ba + bb) * np.where(a_big, mb, ma)
@@ -166,13 +167,13 @@ def unit_component(program: Program, layer: Layer, a: int, g: Enclosed, m: Enclo
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         unit_b = entry_error(a_i, b_i, a_norm, b_max, m_lo)
         unit_a = np.maximum(rel * (1 + floor / f_m) / (1 - rel) + floor / f_m, e_c / f_m)
-        u_max = np.minimum(1.0, _mag(x_a.xlo, x_a.xhi) / m_lo)
+        u_max = np.minimum(1.0, magnitude(x_a.xlo, x_a.xhi) / m_lo)
         ratio = np.minimum((1 + floor / f_m) / (1 - rel),  # bounds |f_a / fM|
-                           _mag(x_a.flo, x_a.fhi) / f_m)
-        gmag_f, gmag_x = _mag(g.flo, g.fhi), _mag(g.xlo, g.xhi)
+                           magnitude(x_a.flo, x_a.fhi) / f_m)
+        gmag_f, gmag_x = magnitude(g.flo, g.fhi), magnitude(g.xlo, g.xhi)
         prop = (gmag_f * (unit_a + unit_b) + g.err * u_max
-                + U * gmag_f * ratio + TINY * _mag(x_a.flo, x_a.fhi)) * UP
-        bound_f = gmag_f * ratio * (1 + U) + TINY * _mag(x_a.flo, x_a.fhi)
+                + U * gmag_f * ratio + TINY * magnitude(x_a.flo, x_a.fhi)) * UP
+        bound_f = gmag_f * ratio * (1 + U) + TINY * magnitude(x_a.flo, x_a.fhi)
     inf = np.full_like(a_i, np.inf)
     return (np.where(ok, prop, inf), np.where(ok, bound_f, inf),
             np.where(ok, gmag_x * u_max, inf), f_m)
