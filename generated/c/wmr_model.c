@@ -120,14 +120,13 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t b = p->b;
     const wmr_real_t d = p->d;
     const wmr_real_t theta = q[2];
+    const wmr_real_t _t17 = WMR_COS(theta);
+    const wmr_real_t _t25 = WMR_SIN(theta);
     const wmr_real_t thetadot_r = qdot[3];
     const wmr_real_t thetadot_l = qdot[4];
     const wmr_real_t tau_r = tau[0];
     const wmr_real_t tau_l = tau[1];
-    if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
-            | wmr_exp_carry(r) | wmr_exp_carry(b) | wmr_exp_carry(d) | wmr_exp_carry(theta)
-            | wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
-            | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
+    if (((wmr_exp_carry(b)) & WMR_EXP_CARRY_TOP) != 0u) {
         return WMR_ERR_NONFINITE_INPUT;
     }
     const wmr_real_t _t0 = WMR_LIT(1.0)/b;
@@ -148,18 +147,45 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t _t15 = _t14*d;
     const wmr_real_t _t16 = -WMR_LIT(0.5)*_t1*_t13;
     if (!(r > WMR_LIT(0.0))) { /* r > 0 */
+        /* an input not checked yet, reaching a result through +, -, *, sin, cos only */
+        if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+                | wmr_exp_carry(r) | wmr_exp_carry(d) | wmr_exp_carry(theta)
+                | wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
+                | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
+            return WMR_ERR_NONFINITE_INPUT;
+        }
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(b > WMR_LIT(0.0))) { /* b > 0 */
+        /* an input not checked yet, reaching a result through +, -, *, sin, cos only */
+        if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+                | wmr_exp_carry(r) | wmr_exp_carry(d) | wmr_exp_carry(theta)
+                | wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
+                | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
+            return WMR_ERR_NONFINITE_INPUT;
+        }
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(_t7 > WMR_LIT(0.0))) { /* (S^T M S)[0][0] > 0 */
+        /* an input not checked yet, reaching a result through +, -, *, sin, cos only */
+        if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+                | wmr_exp_carry(r) | wmr_exp_carry(d) | wmr_exp_carry(theta)
+                | wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
+                | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
+            return WMR_ERR_NONFINITE_INPUT;
+        }
         return WMR_ERR_BAD_PARAMS;
     }
     if (!(_t8 > WMR_LIT(0.0))) { /* det(S^T M S) > 0: a positive-definite model */
+        /* an input not checked yet, reaching a result through +, -, *, sin, cos only */
+        if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+                | wmr_exp_carry(r) | wmr_exp_carry(d) | wmr_exp_carry(theta)
+                | wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
+                | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
+            return WMR_ERR_NONFINITE_INPUT;
+        }
         return WMR_ERR_BAD_PARAMS;
     }
-    const wmr_real_t _t17 = WMR_COS(theta);
     const wmr_real_t _t18 = thetadot_l - thetadot_r;
     const wmr_real_t _t19 = _t10*_t18;
     const wmr_real_t _t20 = _t19*thetadot_l + tau_r;
@@ -167,15 +193,22 @@ wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t _t22 = _t9*(_t20*_t7 - _t21*_t6);
     const wmr_real_t _t23 = _t9*(-_t20*_t6 + _t21*_t7);
     const wmr_real_t _t24 = _t11*(_t22 + _t23) - _t12*_t18*_t18;
-    const wmr_real_t _t25 = WMR_SIN(theta);
     const wmr_real_t _t26 = _t15*(_t22 - _t23) + _t16*_t18*(thetadot_l + thetadot_r);
     const wmr_real_t r_0 = _t17*_t24 - _t25*_t26;
     const wmr_real_t r_1 = _t17*_t26 + _t24*_t25;
     const wmr_real_t r_2 = _t14*(_t22 - _t23);
     const wmr_real_t r_3 = _t22;
     const wmr_real_t r_4 = _t23;
-    if (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1) | wmr_exp_carry(r_2) | wmr_exp_carry(r_3)
-            | wmr_exp_carry(r_4)) & WMR_EXP_CARRY_TOP) != 0u) {
+    if ((((wmr_exp_carry(((r_0 + r_1) + (r_2 + r_3)) + r_4)) & WMR_EXP_CARRY_TOP) != 0u)
+            && (((wmr_exp_carry(r_0) | wmr_exp_carry(r_1) | wmr_exp_carry(r_2) | wmr_exp_carry(r_3)
+            | wmr_exp_carry(r_4)) & WMR_EXP_CARRY_TOP) != 0u)) {
+        /* an input not checked yet, reaching a result through +, -, *, sin, cos only */
+        if (((wmr_exp_carry(m) | wmr_exp_carry(I) | wmr_exp_carry(K) | wmr_exp_carry(I_w)
+                | wmr_exp_carry(r) | wmr_exp_carry(d) | wmr_exp_carry(theta)
+                | wmr_exp_carry(thetadot_r) | wmr_exp_carry(thetadot_l) | wmr_exp_carry(tau_r)
+                | wmr_exp_carry(tau_l)) & WMR_EXP_CARRY_TOP) != 0u) {
+            return WMR_ERR_NONFINITE_INPUT;
+        }
         return WMR_ERR_NONFINITE_OUTPUT;
     }
     qddot[0] = r_0;
