@@ -2,7 +2,8 @@
 (issue 51, ``codegen.shared``): one static helper holds their arithmetic, the model
 functions that read them call it, and the forward dynamics is a call of its prepared pair
 (whose results it equals bit for bit: tests/generated/test_prepared_model.py); Drishti's
-closed-form module has neither. The values are checked by the crosscheck and KKT tests."""
+closed-form module has neither (its one static function tests the forward
+dynamics' late-checked inputs). The values are checked by the crosscheck and KKT tests."""
 
 from __future__ import annotations
 
@@ -46,8 +47,13 @@ def test_the_staged_quantities_are_printed_once_and_called(robot: str) -> None:
 
 
 def test_drishti_prints_no_helper() -> None:
+    """No staged quantities; its one static function is the forward dynamics' test of the
+    inputs it checks late (tests/codegen/test_late_input_checks.py)."""
     text = (ROOT / "generated" / "c" / "wmr_model.c").read_text()
-    assert "static" not in text and "_shared" not in text
+    assert "_shared" not in text and "staged_quantities" not in text
+    assert re.findall(r"^WMR_SHARED_INLINE \w+ (\w+)\(", text, re.M) == [
+        "wmr_forward_dynamics_late_inputs"]
+    assert "static" not in text.split("#endif", 1)[1]  # but the helpers' macro
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None or shutil.which("nm") is None,

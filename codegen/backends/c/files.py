@@ -247,12 +247,12 @@ def module_context(
     for f in functions:
         if f.shared is not None and f.shared.quantities.spec.name not in helpers:
             helpers[f.shared.quantities.spec.name] = helper_context(f.shared, config)
-    clash = {f"{config.prefix}{n}" for n in names} & {str(h["name"]) for h in helpers.values()}
-    if clash:
-        raise ValueError(f"{module}: {sorted(clash)} is already a generated function")
     contexts = []
     for f in functions:
         ctx = function_context(f, config, module)
+        late_helper = ctx.pop("late_helper", None)
+        if isinstance(late_helper, dict):  # one copy of its late input test
+            helpers[str(late_helper["name"])] = late_helper
         ctx["doc_lines"] = [*ctx["doc_lines"],  # type: ignore[misc]
                             *certificate_doc(f.name, ctx["body"], config.prefix.rstrip("_"))]
         if wrappers and f.spec.name in wrappers:
@@ -264,6 +264,9 @@ def module_context(
             if f.spec.calls_prepared:
                 ctx["wrapper"] = prepared_wrapper(f, api, config)
             contexts += [prepare_context(f, api, config), prepared_context(f, api, config)]
+    clash = {f"{config.prefix}{n}" for n in names} & {str(h["name"]) for h in helpers.values()}
+    if clash:
+        raise ValueError(f"{module}: {sorted(clash)} is already a generated function")
     return ModuleContext(module, tuple(contexts), api,
                          context_norms([*contexts, *helpers.values()]),
                          tuple(helpers.values()))
