@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0x05adc874u
+#define TRAILER_CODE_ID 0x95d77b02u
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;
@@ -97,14 +97,19 @@ static inline trailer_exp_bits_t trailer_exp_carry(trailer_real_t x)
    beyond.
    x = k pi/2 + r (Cody and Waite; pi/8 in float32 on x86), minimax polynomials: within 2.5
    ulp of the exact values in double, 2 ulp in float32 (tests). Needs round-to-nearest, no
-   -ffast-math, FLT_EVAL_METHOD 0 (k by adding and subtracting 1.5 * 2^52, or 2^23); FMA
-   contraction costs double up to 3.4 ulp. Forced inline (gcc declines in large functions):
-   a sin and a cos of one angle share one kernel. -DTRAILER_LIBM_TRIG: libm's. */
+   -ffast-math, FLT_EVAL_METHOD 0 (k = x 2/pi + 1.5 * 2^52 - 1.5 * 2^52, or 2^23); FMA
+   contraction costs double 3.4 ulp. Forced inline: a sin and a cos of one angle share one
+   kernel. -DTRAILER_LIBM_TRIG: libm's. */
 #if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
 #define TRAILER_TRIG_INLINE static inline __attribute__((always_inline))
 #else
 #define TRAILER_TRIG_INLINE static inline
 #endif
+/* 1 where the reductions below are exact: |x| <= 2.0e6; 0 for Inf and NaN. */
+TRAILER_TRIG_INLINE int trailer_trig_in_range(trailer_real_t x)
+{
+    return TRAILER_FABS(x) <= TRAILER_LIT(2.0e6);
+}
 #ifdef TRAILER_LIBM_TRIG
 #ifndef TRAILER_FLOAT32
 TRAILER_TRIG_INLINE double trailer_sin(double x)
@@ -128,32 +133,26 @@ TRAILER_TRIG_INLINE float trailer_cos(float x)
 }
 #endif
 
-TRAILER_TRIG_INLINE void trailer_sincos_bounded(trailer_real_t x, trailer_real_t *s,
+TRAILER_TRIG_INLINE void trailer_sincos_kernel(trailer_real_t x, trailer_real_t *s,
     trailer_real_t *c)
 {
     *s = TRAILER_SIN(x);
     *c = TRAILER_COS(x);
 }
-#define trailer_sincos_checked trailer_sincos_bounded
 #else
 #if defined(__FAST_MATH__) || (defined(FLT_EVAL_METHOD) && (FLT_EVAL_METHOD != 0))
 #error "the generated sin/cos need IEEE evaluation: define TRAILER_LIBM_TRIG"
 #endif
-/* 1 where the reductions below are exact: |x| <= 2.0e6; 0 for Inf and NaN. */
-TRAILER_TRIG_INLINE int trailer_trig_in_range(trailer_real_t x)
-{
-    return TRAILER_FABS(x) <= TRAILER_LIT(2.0e6);
-}
 
-/* trailer_sincos_kernel: x's values within the bound, NaN for Inf and NaN, finite beyond. */
+/* The kernels: NaN for Inf and NaN, finite beyond the bound. */
 #ifdef TRAILER_FLOAT32
 #if !defined(__FP_FAST_FMAF) && defined(__SSE2_MATH__)
 /* x86 without -mfma (fmaf a call; double as fast): in double, as glibc's sincosf. x = k
-   pi/8 + r (k part0 and x - k part0 exact for |k| < 2^24), sin r and cos r (minimax,
-   within 2^-29.7 and 2^-26.9), the angle sum with (sin, cos)(k pi/8), rounded once. */
+   pi/8 + r (k part0, x - k part0 exact), sin r, cos r (minimax, within 2^-29.7, 2^-26.9),
+   the angle sum with (sin, cos)(k pi/8), rounded once. */
 TRAILER_TRIG_INLINE void trailer_sincos_kernel(float x, float *s, float *c)
 {
-    /* (sin, cos)(j pi/8): row k mod 16, and 4 on, (cos, -sin); -0.0: sin(-0) = -0 */
+    /* (sin, cos)(j pi/8): row k mod 16, 4 on (cos, -sin); -0.0: sin(-0) = -0 */
     static const double table[20][2] = {
         {-0.0, 1.0}, {0.3826834323650898, 0.9238795325112867},
         {0.7071067811865476, 0.7071067811865476}, {0.9238795325112867, 0.3826834323650898},
@@ -185,26 +184,32 @@ TRAILER_TRIG_INLINE void trailer_sincos_kernel(float x, float *s, float *c)
     }
 }
 #else
-/* In float (Cortex-M4F; x86 -mfma): pi/2 in three floats (products exact inside fmaf, one
-   instruction under __FP_FAST_FMAF; x - k part1 exact for |k| < 2^22), minimax (sin
-   within 2^-37, cos 2^-33), the quadrant from the shifter's low bits. */
+/* In float (Cortex-M4F; x86 -mfma): x - k part1 exact by fmaf, pi/2's other two floats
+   then as a pair r + lo (fmaf's and 2Sum's errors; r alone cost 2.08 ulp), minimax (sin
+   2^-37, cos 2^-33), the quadrant from kf's low bits. */
 TRAILER_TRIG_INLINE void trailer_sincos_kernel(float x, float *s, float *c)
 {
     const float kf = (x * 0.636619772f) + 12582912.0f;
     const float k = kf - 12582912.0f;
     const float r1 = fmaf(-k, 1.57079637f, x);
-    const float r2 = fmaf(-k, -4.37113883e-08f, r1);
-    const float rk = fmaf(-k, -1.71512451e-15f, r2);
-    const float r = (fabsf(x) < 0.78f) ? x : rk;  /* k = 0 there: keeps -0's sign */
+    const float t = k * (-4.37113883e-08f);
+    const float rh = r1 - t;
+    const float b = rh - r1;
+    const float rl = (((r1 - (rh - b)) - (t + b)) - fmaf(k, -4.37113883e-08f, -t))
+                     - (k * (-1.71512451e-15f));
+    /* below 0.78 k = 0: x, and r + -0.0 keeps -0's sign */
+    const float r = (fabsf(x) < 0.78f) ? x : rh;
+    const float lo = (fabsf(x) < 0.78f) ? -0.0f : rl;
     const float z = r * r;
     const float z2 = z * z;
     const float ps = (-0.1666666716337204f + (z * 0.008333329111337662f))
                      + (z2 * (-0.0001983933470910415f + (z * 2.71831163445313e-06f)));
     const float pc = (-0.5f + (z * 0.04166661947965622f))
                      + (z2 * (-0.001388668199069798f + (z * 2.4383567506447434e-05f)));
-    /* sin r = r below 2^-12 (the correction is under half an ulp) */
-    const float sr = (fabsf(r) < 2.44140625e-04f) ? r : (r + ((r * z) * ps));
-    const float cr = 1.0f + (z * pc);
+    /* sin r = r + lo below 2^-12 (within half an ulp) */
+    const float sl = (fabsf(r) < 2.44140625e-04f) ? lo : (lo + ((r * z) * ps));
+    const float sr = r + sl;
+    const float cr = 1.0f + ((z * pc) - (r * lo));
     union {
         float value;
         uint32_t bits;
@@ -246,7 +251,7 @@ TRAILER_TRIG_INLINE void trailer_sincos_kernel(double x, double *s, double *c)
     const double w = k * 6.07710050630396597660e-11;
     const double r2 = r1 - w;
     const double r3 = r2 - (k * 2.02226624879595063154e-21);
-    /* r2's error (Fast2Sum) corrects r; this order keeps -0's sign; z from r3 */
+    /* r2's error (Fast2Sum) corrects r; keeps -0's sign */
     const double r = r3 - (w - (r1 - r2));
     const double z = r3 * r3;
     const double z2 = z * z;
@@ -259,7 +264,7 @@ TRAILER_TRIG_INLINE void trailer_sincos_kernel(double x, double *s, double *c)
                        + (z2 * (-1.38888888888741095749e-03 + (z * 2.48015872894767294178e-05))))
                       + (z4 * ((-2.75573143513906633035e-07 + (z * 2.08757232129817482790e-09))
                                + (z2 * -1.13596475577881948265e-11)));
-    /* sin r = r below 2^-27 (the correction is under half an ulp); keeps -0's sign. */
+    /* sin r = r below 2^-27 (within half an ulp); keeps -0's sign */
     const double sr = (fabs(r) < 7.450580596923828125e-09) ? r : (r + ((r * z) * ps));
     const double cr = 1.0 + (z * pc);
     union {
@@ -294,6 +299,8 @@ TRAILER_TRIG_INLINE double trailer_cos(double x)
 }
 #endif
 
+#endif
+
 TRAILER_TRIG_INLINE void trailer_sincos_bounded(trailer_real_t x, trailer_real_t *s,
     trailer_real_t *c)
 {
@@ -305,7 +312,6 @@ TRAILER_TRIG_INLINE void trailer_sincos_checked(trailer_real_t x, trailer_real_t
 {
     trailer_sincos_kernel(x, s, c);
 }
-#endif
 
 /* The controller kernels': no libm reduction (0.5 KB of Cortex-M4 stack); NaN beyond. */
 TRAILER_TRIG_INLINE trailer_real_t trailer_sin_bounded(trailer_real_t x)
