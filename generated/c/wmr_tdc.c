@@ -329,9 +329,9 @@ WMR_STEP_INLINE wmr_status_t wmr_tdc_step_as(wmr_tdc_state_t *state, const wmr_t
     gain = state->gain;
     s_norm = state->s_norm;
     /* sin and cos of the angles Mhat depends on, once a step: kept for (17) in the next.
-       q is within MAX_ABS_INPUT (checked above), where sincos_bounded's reduction is exact. */
+       q is within MAX_ABS_INPUT (checked above), where sincos_checked's reduction is exact. */
     if (paper) {
-        wmr_sincos_bounded(q[2], &trig[0], &trig[1]);
+        wmr_sincos_checked(q[2], &trig[0], &trig[1]);
     } else {
         trig[0] = WMR_LIT(0.0);
         trig[1] = WMR_LIT(0.0);

@@ -69,10 +69,10 @@ def test_tde_step_calls_the_trig_kernels() -> None:
         text = (GENERATED_DIR / "c" / f"wmr_{ctrl}.c").read_text()
         # the step's body: specialised per formulation, wmr_<ctrl>_step_as
         step = text[text.index(f"wmr_status_t wmr_{ctrl}_step_as("):]
-        # once, through the bounded sincos (q is checked against its bound before)
-        assert step.count("wmr_sincos_bounded(q[2], &trig[0], &trig[1]);") == 1, ctrl
+        # once, through sincos_checked (q is checked against its bound before)
+        assert step.count("wmr_sincos_checked(q[2], &trig[0], &trig[1]);") == 1, ctrl
         assert "WMR_SIN(" not in step and "WMR_COS(" not in step, ctrl
-        assert step.index("wmr_check_step_inputs(") < step.index("wmr_sincos_bounded("), ctrl
+        assert step.index("wmr_check_step_inputs(") < step.index("wmr_sincos_checked("), ctrl
         # the shared kernels (wmr_kernels.h), reading the values _init kept
         assert (f"wmr_k_paper_{ctrl}_law_trig(kept_paper_{ctrl}_law_trig, trig,"
                 in step), ctrl

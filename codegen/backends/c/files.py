@@ -20,6 +20,7 @@ from pathlib import Path
 
 from codegen import template_util
 from codegen.backend import FunctionIR, function_ir
+from codegen.backends.c import trig_table
 from codegen.backends.c.config import CConfig
 from codegen.backends.c.format import WIDTH, format_c
 from codegen.backends.c.lowering import (
@@ -177,6 +178,7 @@ def render_types(
         inline_math=[m.name for m in config.math_macros if m.name in INLINE_MATH],
         generated_trig=[m.name for m in config.math_macros if m.name in GENERATED_TRIG],
         trig_bound=TRIG_BOUND,
+        **trig_table.context(),
         norms=sorted(set(norms)),
         structs=_structs(specs, config),
         width=WIDTH,

@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAIN5_CODE_ID 0x0f755b60u
+#define TRAIN5_CODE_ID 0x8302dae0u
 
 #ifdef TRAIN5_FLOAT32
 typedef float train5_real_t;
@@ -91,28 +91,24 @@ static inline train5_exp_bits_t train5_exp_carry(train5_real_t x)
     return (rep.bits & TRAIN5_EXP_FIELD) + TRAIN5_EXP_LOWEST;
 }
 
-/* sin and cos. train5_sincos_bounded(x, &s, &c): both, for |x| <= 2.0e6 (twice the controller
-   steps' input bound: an input angle, or the difference of two, a yaw relative to the
-   root's; NaN beyond, and for Inf and NaN), from one argument reduction and without a
-   library call: the steps use it. train5_sin / train5_cos are the same within that bound and
-   libm's beyond (sin, cos; sinf, cosf in float32), and TRAIN5_SIN / TRAIN5_COS (the model
-   functions) call them. -DTRAIN5_LIBM_TRIG: libm's throughout. x = k pi/2 + r, |r| <= pi/4
-   (Cody and Waite), then minimax polynomials in r^2 by Estrin's scheme (fdlibm's in
-   double, degree 13 and 14; degree 7 and 8 in float32; each within a small fraction of an
-   ulp for |r| <= pi/4): within 2.5 ulp of the exact values in double (2 ulp of glibc's)
-   and 2 ulp in float32 (tests). Needs IEEE evaluation: round-to-nearest, no -ffast-math,
-   FLT_EVAL_METHOD 0 (k = round(2x/pi) by adding and subtracting 1.5 * 2^52, or 2^23; an
-   x87 build is refused below); FMA contraction (-ffp-contract=fast) costs double up to
-   about 3.4 ulp. */
-/* The trig helpers are inlined wherever they are called, however large the caller (at -O2
-   gcc declines to inline them into a large function): a sin and a cos of one angle then
-   share one reduction and one pair of polynomials instead of two calls computing both.
-   Optimising for size (-Os, the firmware images), one shared copy as the compiler likes. */
+/* sin and cos. train5_sincos_bounded(x, &s, &c): both, for |x| <= 2.0e6 (twice the steps'
+   input bound), NaN beyond and for Inf and NaN, no library call; train5_sincos_checked: for
+   an x checked so (the steps). train5_sin / train5_cos (TRAIN5_SIN / TRAIN5_COS): libm's beyond.
+   x = k pi/2 + r (Cody and Waite; pi/8 in float32 on x86), minimax polynomials: within 2.5
+   ulp of the exact values in double, 2 ulp in float32 (tests). Needs round-to-nearest, no
+   -ffast-math, FLT_EVAL_METHOD 0 (k = x 2/pi + 1.5 * 2^52 - 1.5 * 2^52, or 2^23); FMA
+   contraction costs double 3.4 ulp. Forced inline: a sin and a cos of one angle share one
+   kernel. -DTRAIN5_LIBM_TRIG: libm's. */
 #if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
 #define TRAIN5_TRIG_INLINE static inline __attribute__((always_inline))
 #else
 #define TRAIN5_TRIG_INLINE static inline
 #endif
+/* 1 where the reductions below are exact: |x| <= 2.0e6; 0 for Inf and NaN. */
+TRAIN5_TRIG_INLINE int train5_trig_in_range(train5_real_t x)
+{
+    return TRAIN5_FABS(x) <= TRAIN5_LIT(2.0e6);
+}
 #ifdef TRAIN5_LIBM_TRIG
 #ifndef TRAIN5_FLOAT32
 TRAIN5_TRIG_INLINE double train5_sin(double x)
@@ -136,7 +132,7 @@ TRAIN5_TRIG_INLINE float train5_cos(float x)
 }
 #endif
 
-TRAIN5_TRIG_INLINE void train5_sincos_bounded(train5_real_t x, train5_real_t *s, train5_real_t *c)
+TRAIN5_TRIG_INLINE void train5_sincos_kernel(train5_real_t x, train5_real_t *s, train5_real_t *c)
 {
     *s = TRAIN5_SIN(x);
     *c = TRAIN5_COS(x);
@@ -145,61 +141,94 @@ TRAIN5_TRIG_INLINE void train5_sincos_bounded(train5_real_t x, train5_real_t *s,
 #if defined(__FAST_MATH__) || (defined(FLT_EVAL_METHOD) && (FLT_EVAL_METHOD != 0))
 #error "the generated sin/cos need IEEE evaluation: define TRAIN5_LIBM_TRIG"
 #endif
-/* 1 where the reductions below are exact: |x| <= 2.0e6; 0 for Inf and NaN. */
-TRAIN5_TRIG_INLINE int train5_trig_in_range(train5_real_t x)
-{
-    return TRAIN5_FABS(x) <= TRAIN5_LIT(2.0e6);
-}
 
+/* The kernels: NaN for Inf and NaN, finite beyond the bound. */
 #ifdef TRAIN5_FLOAT32
-TRAIN5_TRIG_INLINE void train5_sincos_bounded(float x, float *s, float *c)
-{
-    const float shift = 12582912.0f;
-    const float k = ((x * 0.636619772f) + shift) - shift;
 #if !defined(__FP_FAST_FMAF) && defined(__SSE2_MATH__)
-    /* An x86 host without -mfma, where fmaf is a library call and double arithmetic is
-       as fast as float's: the reduction in double, pi/2 in parts as in the double build
-       (k part1 and x - k part1 exact for |k| < 2^21), rounded to float once. */
-    const double kd = (double)k;
-    const float rk = (float)((((double)x - (kd * 1.57079632673412561417e+00))
-                              - (kd * 6.07710050630396597660e-11))
-                             - (kd * 2.02226624879595063154e-21));
+/* x86 without -mfma (fmaf a call; double as fast): in double, as glibc's sincosf. x = k
+   pi/8 + r (k part0, x - k part0 exact), sin r, cos r (minimax, within 2^-29.7, 2^-26.9),
+   the angle sum with (sin, cos)(k pi/8), rounded once. */
+TRAIN5_TRIG_INLINE void train5_sincos_kernel(float x, float *s, float *c)
+{
+    /* (sin, cos)(j pi/8): row k mod 16, 4 on (cos, -sin); -0.0: sin(-0) = -0 */
+    static const double table[20][2] = {
+        {-0.0, 1.0}, {0.3826834323650898, 0.9238795325112867},
+        {0.7071067811865476, 0.7071067811865476}, {0.9238795325112867, 0.3826834323650898},
+        {1.0, 0.0}, {0.9238795325112867, -0.3826834323650898},
+        {0.7071067811865476, -0.7071067811865476}, {0.3826834323650898, -0.9238795325112867},
+        {0.0, -1.0}, {-0.3826834323650898, -0.9238795325112867},
+        {-0.7071067811865476, -0.7071067811865476}, {-0.9238795325112867, -0.3826834323650898},
+        {-1.0, 0.0}, {-0.9238795325112867, 0.3826834323650898},
+        {-0.7071067811865476, 0.7071067811865476}, {-0.3826834323650898, 0.9238795325112867},
+        {0.0, 1.0}, {0.3826834323650898, 0.9238795325112867},
+        {0.7071067811865476, 0.7071067811865476}, {0.9238795325112867, 0.3826834323650898}
+    };
+    const double xd = (double)x;
+    const double kf = (xd * 2.5464790894703255) + 6755399441055744.0;
+    const double k = kf - 6755399441055744.0;
+    const double r = (xd - (k * 0.39269908145070076)) - (k * 2.480233949201351e-10);
+    const double z = r * r;
+    const double sr = r * (1.0 + (z * (-0.16666659283831897 + (z * 0.00832377290469326))));
+    const double cr = 1.0 + (z * (-0.49999948330042876 + (z * 0.04159975441693307)));
+    union {
+        double value;
+        uint64_t bits;
+    } rep;
+    rep.value = kf;  /* k mod 16: kf's low bits, for any x */
+    {
+        const double (*const v)[2] = &table[rep.bits & 15u];
+        *s = (float)((v[0][0] * cr) + (v[4][0] * sr));
+        *c = (float)((v[0][1] * cr) + (v[4][1] * sr));
+    }
+}
 #else
-    /* pi/2 in three floats: each product is exact inside fmaf (one instruction where the
-       compiler defines __FP_FAST_FMAF, e.g. a Cortex-M4F), and x - k part1 is exact (a
-       multiple of 2^-23 below 2 in magnitude for |k| < 2^22). */
+/* In float (Cortex-M4F; x86 -mfma): x - k part1 exact by fmaf, pi/2's other two floats
+   then as a pair r + lo (fmaf's and 2Sum's errors; r alone cost 2.08 ulp), minimax (sin
+   2^-37, cos 2^-33), the quadrant from kf's low bits. */
+TRAIN5_TRIG_INLINE void train5_sincos_kernel(float x, float *s, float *c)
+{
+    const float kf = (x * 0.636619772f) + 12582912.0f;
+    const float k = kf - 12582912.0f;
     const float r1 = fmaf(-k, 1.57079637f, x);
-    const float r2 = fmaf(-k, -4.37113883e-08f, r1);
-    const float rk = fmaf(-k, -1.71512451e-15f, r2);
-#endif
-    /* below 0.78, k = 0 and r = x: taken as it is, which also keeps -0's sign */
-    const float r = (fabsf(x) < 0.78f) ? x : rk;
+    const float t = k * (-4.37113883e-08f);
+    const float rh = r1 - t;
+    const float b = rh - r1;
+    const float rl = (((r1 - (rh - b)) - (t + b)) - fmaf(k, -4.37113883e-08f, -t))
+                     - (k * (-1.71512451e-15f));
+    /* below 0.78 k = 0: x, and r + -0.0 keeps -0's sign */
+    const float r = (fabsf(x) < 0.78f) ? x : rh;
+    const float lo = (fabsf(x) < 0.78f) ? -0.0f : rl;
     const float z = r * r;
     const float z2 = z * z;
-    /* minimax on |r| <= pi/4: sin within 2^-37, cos within 2^-33 (relative) */
     const float ps = (-0.1666666716337204f + (z * 0.008333329111337662f))
                      + (z2 * (-0.0001983933470910415f + (z * 2.71831163445313e-06f)));
     const float pc = (-0.5f + (z * 0.04166661947965622f))
                      + (z2 * (-0.001388668199069798f + (z * 2.4383567506447434e-05f)));
-    /* sin r = r below 2^-12 (the correction is under half an ulp). */
-    const float sr = (fabsf(r) < 2.44140625e-04f) ? r : (r + ((r * z) * ps));
-    const float cr = 1.0f + (z * pc);
-    const int in_range = train5_trig_in_range(x);
-    /* The quadrant k mod 4 (k is only converted where it is in range). */
-    const unsigned int q = ((unsigned int)(long)((in_range != 0) ? k : 0.0f)) & 3u;
-    const float sq = ((q & 1u) != 0u) ? cr : sr;
-    const float cq = ((q & 1u) != 0u) ? sr : cr;
-    *s = (in_range == 0) ? (float)NAN : (((q & 2u) != 0u) ? -sq : sq);
-    *c = (in_range == 0) ? (float)NAN : ((((q + 1u) & 2u) != 0u) ? -cq : cq);
+    /* sin r = r + lo below 2^-12 (within half an ulp) */
+    const float sl = (fabsf(r) < 2.44140625e-04f) ? lo : (lo + ((r * z) * ps));
+    const float sr = r + sl;
+    const float cr = 1.0f + ((z * pc) - (r * lo));
+    union {
+        float value;
+        uint32_t bits;
+    } rep;
+    unsigned int q;
+    rep.value = kf;
+    q = (unsigned int)(rep.bits & 3u);
+    {
+        const float sq = ((q & 1u) != 0u) ? cr : sr;
+        const float cq = ((q & 1u) != 0u) ? sr : cr;
+        *s = ((q & 2u) != 0u) ? -sq : sq;
+        *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
+    }
 }
+#endif
 
-/* As in double: the bounded reduction within the bound, libm's beyond (where the bounded
-   one's NaN is not used); once inlined, a sin and a cos of one angle share it. */
 TRAIN5_TRIG_INLINE float train5_sin(float x)
 {
     float s;
     float c;
-    train5_sincos_bounded(x, &s, &c);
+    train5_sincos_kernel(x, &s, &c);
     return (train5_trig_in_range(x) != 0) ? s : sinf(x);
 }
 
@@ -207,29 +236,25 @@ TRAIN5_TRIG_INLINE float train5_cos(float x)
 {
     float s;
     float c;
-    train5_sincos_bounded(x, &s, &c);
+    train5_sincos_kernel(x, &s, &c);
     return (train5_trig_in_range(x) != 0) ? c : cosf(x);
 }
 #else
-/* sin and cos of x within the bound (anything finite beyond it). */
 TRAIN5_TRIG_INLINE void train5_sincos_kernel(double x, double *s, double *c)
 {
-    const double shift = 6755399441055744.0;
-    const double k = ((x * 6.36619772367581382433e-01) + shift) - shift;
-    /* pi/2 in two parts of 31 and 32 significant bits and a tail: k * part is exact for
-       |k| < 2^21, x - k part1 is exact (Sterbenz's lemma), and the next subtraction's
-       rounding error is kept. */
+    const double kf = (x * 6.36619772367581382433e-01) + 6755399441055744.0;
+    const double k = kf - 6755399441055744.0;
+    /* pi/2 in parts of 31 and 32 bits and a tail: k part exact for |k| < 2^21 */
     const double r1 = x - (k * 1.57079632673412561417e+00);
     const double w = k * 6.07710050630396597660e-11;
     const double r2 = r1 - w;
     const double r3 = r2 - (k * 2.02226624879595063154e-21);
-    /* r2's rounding error, exact (Fast2Sum), corrects r. r^2 is taken from r3, so that the
-       polynomials need not wait for it: it is below half an ulp of r. */
-    const double r = r3 - (w - (r1 - r2));  /* this order keeps the sign of -0 */
+    /* r2's error (Fast2Sum) corrects r; keeps -0's sign */
+    const double r = r3 - (w - (r1 - r2));
     const double z = r3 * r3;
     const double z2 = z * z;
     const double z4 = z2 * z2;
-    /* fdlibm's minimax coefficients (k_sin.c, k_cos.c): within 2^-58 on |r| <= pi/4 */
+    /* fdlibm's (k_sin.c, k_cos.c): within 2^-58 on |r| <= pi/4 */
     const double ps = ((-1.66666666666666324348e-01 + (z * 8.33333333332248946124e-03))
                        + (z2 * (-1.98412698298579493134e-04 + (z * 2.75573137070700676789e-06))))
                       + (z4 * (-2.50507602534068634195e-08 + (z * 1.58969099521155010221e-10)));
@@ -237,28 +262,24 @@ TRAIN5_TRIG_INLINE void train5_sincos_kernel(double x, double *s, double *c)
                        + (z2 * (-1.38888888888741095749e-03 + (z * 2.48015872894767294178e-05))))
                       + (z4 * ((-2.75573143513906633035e-07 + (z * 2.08757232129817482790e-09))
                                + (z2 * -1.13596475577881948265e-11)));
-    /* sin r = r below 2^-27 (the correction is under half an ulp); keeps -0's sign. */
+    /* sin r = r below 2^-27 (within half an ulp); keeps -0's sign */
     const double sr = (fabs(r) < 7.450580596923828125e-09) ? r : (r + ((r * z) * ps));
     const double cr = 1.0 + (z * pc);
-    /* The quadrant k mod 4 (k is only converted where it is in range). */
-    const unsigned int q = ((unsigned int)(long)((train5_trig_in_range(x) != 0) ? k : 0.0)) & 3u;
-    const double sq = ((q & 1u) != 0u) ? cr : sr;
-    const double cq = ((q & 1u) != 0u) ? sr : cr;
-    *s = ((q & 2u) != 0u) ? -sq : sq;
-    *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
+    union {
+        double value;
+        uint64_t bits;
+    } rep;
+    unsigned int q;
+    rep.value = kf;
+    q = (unsigned int)(rep.bits & 3u);  /* k mod 4: kf's low bits, for any x */
+    {
+        const double sq = ((q & 1u) != 0u) ? cr : sr;
+        const double cq = ((q & 1u) != 0u) ? sr : cr;
+        *s = ((q & 2u) != 0u) ? -sq : sq;
+        *c = (((q + 1u) & 2u) != 0u) ? -cq : cq;
+    }
 }
 
-TRAIN5_TRIG_INLINE void train5_sincos_bounded(double x, double *s, double *c)
-{
-    double sk;
-    double ck;
-    train5_sincos_kernel(x, &sk, &ck);
-    *s = (train5_trig_in_range(x) != 0) ? sk : (double)NAN;
-    *c = (train5_trig_in_range(x) != 0) ? ck : (double)NAN;
-}
-
-/* The kernel's reduction and polynomials are the same code in both: once inlined, a sin
-   and a cos of one angle share them. */
 TRAIN5_TRIG_INLINE double train5_sin(double x)
 {
     double s;
@@ -275,13 +296,20 @@ TRAIN5_TRIG_INLINE double train5_cos(double x)
     return (train5_trig_in_range(x) != 0) ? c : cos(x);
 }
 #endif
+
 #endif
 
-/* sin and cos in the controller kernels (train5_laws and the steps' own copies): their angles
-   are a step's validated inputs or differences of two (|x| <= 2.0e6), so the bounded
-   reduction above alone, in both precisions (NaN beyond the bound, as train5_sincos_bounded): no
-   libm sinf/cosf
-   and their argument reduction (about 0.5 KB of stack on a Cortex-M4) in a controller. */
+TRAIN5_TRIG_INLINE void train5_sincos_bounded(train5_real_t x, train5_real_t *s, train5_real_t *c)
+{
+    train5_sincos_kernel((train5_trig_in_range(x) != 0) ? x : (train5_real_t)NAN, s, c);
+}
+
+TRAIN5_TRIG_INLINE void train5_sincos_checked(train5_real_t x, train5_real_t *s, train5_real_t *c)
+{
+    train5_sincos_kernel(x, s, c);
+}
+
+/* The controller kernels': no libm reduction (0.5 KB of Cortex-M4 stack); NaN beyond. */
 TRAIN5_TRIG_INLINE train5_real_t train5_sin_bounded(train5_real_t x)
 {
     train5_real_t s;

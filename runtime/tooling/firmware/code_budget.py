@@ -36,7 +36,7 @@ PARTS: tuple[Part, ...] = (
          re.compile(r"\w+_step(_detail|_as)?|saturate|cap_gain|push_history|controlled_slice")),
     Part("control law and estimators (from SymPy)", "every step",
          re.compile(rf"(\w+_k_)?(({'|'.join(FORMULATIONS)})_\w+|\w+_weighted_gain)"
-                    r"|norm(\d+|_scaled)|sincos_bounded|(sin|cos)(_bounded)?")),
+                    r"|norm(\d+|_scaled)|sincos_(bounded|checked|kernel)|(sin|cos)(_bounded)?")),
 )
 UNCLASSIFIED = "unclassified"
 

@@ -354,7 +354,7 @@ def render(r: Report) -> str:
         "  input; a generated model/law function checks the entries it reads and ignores",
         "  the others, as its header lists.",
         "* sin and cos: the TDC and TDROC steps take both of an angle from",
-        "  `wmr_sincos_bounded` (`wmr_types.h`: one argument reduction, exact to twice the",
+        "  `wmr_sincos_checked` (`wmr_types.h`: one argument reduction, exact to twice the",
         "  steps' input bound 1e6, within 2 ulp in float32; through `fmaf`, one `vfms` here),",
         "  so they link no libm trigonometry; the ROC and ASMC laws and the model functions",
         "  call `wmr_sin`/`wmr_cos`: the same reduction within its bound, `sinf`/`cosf` beyond.",
@@ -497,7 +497,7 @@ def render(r: Report) -> str:
             *(
                 [
                     "The ARM and host float32 torques are bit for bit the same: the step's sin and",
-                    "cos are the generated `wmr_sincos_bounded` (no libm call), and every other",
+                    "cos are the generated `wmr_sincos_checked` (no libm call), and every other",
                     "operation is IEEE single precision on both.",
                 ]
                 if c.max_ulps == 0 else [

@@ -160,6 +160,6 @@ def box_of(program: Program, angles: Sequence[bool], params: Mapping[str, Interv
 
 def input_errors(program: Program) -> dict[sp.Symbol, float]:
     """Inputs that arrive already rounded in float32 with a known error: sin and cos from
-    ``wmr_sincos_bounded`` (2 ulp of a value within [-1, 1])."""
+    ``wmr_sincos_checked`` (2 ulp of a value within [-1, 1])."""
     return {s: 2.0 * 2.0 * U for s, a in program.input_names.items()
             if a.startswith(("trig[", "trig_prev["))}

@@ -3,7 +3,7 @@ from the rest of the step.
 
 A step (``wmr_<ctrl>_step``) computes, in float32: the tracking errors ``e = q_des - q``
 and ``edot = qdot_des - qdot`` (one subtraction each), sin and cos of the angles
-(``wmr_sincos_bounded``, 2 ulp), P from ``lyapunov_p`` (at ``_init``), H1hat from the
+(``wmr_sincos_checked``, 2 ulp), P from ``lyapunov_p`` (at ``_init``), H1hat from the
 TDE kernel, k-hat from the weighted gain over the window's difference norms, then the
 law; the torque is the law's rows of the driven wheels, saturated at tau_max (clamping
 is 1-Lipschitz: the bound holds after it). Against the exact step (every one of those in
