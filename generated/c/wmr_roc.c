@@ -101,12 +101,11 @@ static inline bool wmr_roc_config_unchanged(const wmr_roc_config_t *config,
     wmr_bits_t diff = 0u;
     if ((WMR_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
         && (sizeof(wmr_roc_config_t) == (25u * sizeof(wmr_bits_t)))) {
-        /* Its 25 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* a float32 build on a core with vectors: its 25 words, no padding, as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = wmr_words_diff(bytes, kept_bytes, 0, 24)            | wmr_words_diff(bytes,
-                kept_bytes, 24, 1);
+        diff = ((wmr_words_diff(bytes, kept_bytes, 0, 24)            | wmr_words_diff(bytes,
+                kept_bytes, 24, 1)) != 0u) ? 1u : 0u;
     } else {
         /* value by value (a double build pads after each int) */
         diff |= wmr_real_bits(config->k1[0]) ^ wmr_real_bits(kept->k1[0]);
@@ -348,7 +347,7 @@ WMR_STEP_INLINE wmr_status_t wmr_roc_step_as(wmr_roc_state_t *state, const wmr_r
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;
-    wmr_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
+    wmr_push_history(formulation, state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
                      state->u_prev2, q, qdot, out_tau);
     state->tau[0] = out_tau[0];
     state->tau[1] = out_tau[1];

@@ -98,11 +98,10 @@ static inline bool wmr_tdc_config_unchanged(const wmr_tdc_config_t *config,
     wmr_bits_t diff = 0u;
     if ((WMR_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
         && (sizeof(wmr_tdc_config_t) == (24u * sizeof(wmr_bits_t)))) {
-        /* Its 24 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* a float32 build on a core with vectors: its 24 words, no padding, as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = wmr_words_diff(bytes, kept_bytes, 0, 24);
+        diff = ((wmr_words_diff(bytes, kept_bytes, 0, 24)) != 0u) ? 1u : 0u;
     } else {
         /* value by value (a double build pads after each int) */
         diff |= wmr_real_bits(config->k1[0]) ^ wmr_real_bits(kept->k1[0]);
@@ -400,16 +399,17 @@ WMR_STEP_INLINE wmr_status_t wmr_tdc_step_as(wmr_tdc_state_t *state, const wmr_t
     }
     status = wmr_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 5; ++i) {
+    for (i = 0; i < nc; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    for (i = 0; i < 2; ++i) {
+    /* the formulation's sin and cos (the rest are 0 in every step of it) */
+    for (i = 0; i < (paper ? 2 : 0); ++i) {
         state->trig_prev[i] = trig[i];
     }
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;
-    wmr_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
+    wmr_push_history(formulation, state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
                      state->u_prev2, q, qdot, out_tau);
     state->tau[0] = out_tau[0];
     state->tau[1] = out_tau[1];

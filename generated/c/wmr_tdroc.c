@@ -125,12 +125,11 @@ static inline bool wmr_tdroc_config_unchanged(const wmr_tdroc_config_t *config,
     wmr_bits_t diff = 0u;
     if ((WMR_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
         && (sizeof(wmr_tdroc_config_t) == (29u * sizeof(wmr_bits_t)))) {
-        /* Its 29 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* a float32 build on a core with vectors: its 29 words, no padding, as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = wmr_words_diff(bytes, kept_bytes, 0, 28)            | wmr_words_diff(bytes,
-                kept_bytes, 28, 1);
+        diff = ((wmr_words_diff(bytes, kept_bytes, 0, 28)            | wmr_words_diff(bytes,
+                kept_bytes, 28, 1)) != 0u) ? 1u : 0u;
     } else {
         /* value by value (a double build pads after each int) */
         diff |= wmr_real_bits(config->k1[0]) ^ wmr_real_bits(kept->k1[0]);
@@ -510,10 +509,11 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     }
     status = wmr_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 5; ++i) {
+    for (i = 0; i < nc; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    for (i = 0; i < 2; ++i) {
+    /* the formulation's sin and cos (the rest are 0 in every step of it) */
+    for (i = 0; i < (paper ? 2 : 0); ++i) {
         state->trig_prev[i] = trig[i];
     }
     if (pushed) {
@@ -525,7 +525,7 @@ WMR_STEP_INLINE wmr_status_t wmr_tdroc_step_as(wmr_tdroc_state_t *state,
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;
-    wmr_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
+    wmr_push_history(formulation, state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
                      state->u_prev2, q, qdot, out_tau);
     state->tau[0] = out_tau[0];
     state->tau[1] = out_tau[1];

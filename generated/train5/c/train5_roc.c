@@ -95,12 +95,11 @@ static inline bool train5_roc_config_unchanged(const train5_roc_config_t *config
     train5_bits_t diff = 0u;
     if ((TRAIN5_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(train5_bits_t))
         && (sizeof(train5_roc_config_t) == (91u * sizeof(train5_bits_t)))) {
-        /* Its 91 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* a float32 build on a core with vectors: its 91 words, no padding, as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = train5_words_diff(bytes, kept_bytes, 0, 88)            | train5_words_diff(bytes,
-                kept_bytes, 88, 3);
+        diff = ((train5_words_diff(bytes, kept_bytes, 0, 88)            | train5_words_diff(bytes,
+                kept_bytes, 88, 3)) != 0u) ? 1u : 0u;
     } else {
         /* value by value (a double build pads after each int) */
         int i;
