@@ -327,7 +327,7 @@ WMR_STEP_INLINE wmr_status_t wmr_roc_step_as(wmr_roc_state_t *state, const wmr_r
        in the switching term is 0, so that step is not done either). One test for all (x - x is NaN
        exactly when x is not finite), then which one, in the status order. */
     if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
-            + (s_norm - s_norm) + (u_discarded - u_discarded)) != 0) {
+            + (s_norm - s_norm) + (paper ? (u_discarded - u_discarded) : WMR_LIT(-0.0))) != 0) {
         if (!isfinite(out_tau[0])) {
             return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
         }

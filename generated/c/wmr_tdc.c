@@ -387,8 +387,8 @@ WMR_STEP_INLINE wmr_status_t wmr_tdc_step_as(wmr_tdc_state_t *state, const wmr_t
     u_discarded = paper ? wmr_norm3(u[0], u[1], u[2]) : WMR_LIT(0.0);  /* cannot overflow */
     /* The outputs that can be non-finite: out_tau[0], out_tau[1], u_discarded. One test for all (x
        - x is NaN exactly when x is not finite), then which one, in the status order. */
-    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (u_discarded - u_discarded))
-            != 0) {
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1])
+            + (paper ? (u_discarded - u_discarded) : WMR_LIT(-0.0))) != 0) {
         if (!isfinite(out_tau[0])) {
             return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
         }
