@@ -290,6 +290,23 @@ static inline void wmr_push_history(int formulation, wmr_real_t q_prev[5], wmr_r
 {
     int i;
     (void)formulation;  /* unread when the formulation is chosen at compile time */
+#if !WMR_STEP_PER_FORMULATION
+    {
+        /* one body for both formulations (optimising for size): one loop over the rows */
+        const int first = WMR_IS_PAPER(formulation) ? 0 : 3;
+        if (WMR_IS_PAPER(formulation)) {
+            (void)memcpy(q_prev, q, 5u * sizeof q_prev[0]);
+        }
+        for (i = first; i < 5; ++i) {
+            qdot_prev2[i] = qdot_prev[i];
+            qdot_prev[i] = qdot[i];
+            u_prev2[i] = u_prev[i];
+            u_prev[i] = WMR_LIT(0.0);
+        }
+        u_prev[3] = tau[0];
+        u_prev[4] = tau[1];
+    }
+#else
     if (WMR_IS_PAPER(formulation)) {
         /* whole arrays, in this order (each read before it is overwritten): a copy the
            compiler does in vector moves, where an element loop over five arrays stays scalar */
@@ -310,6 +327,7 @@ static inline void wmr_push_history(int formulation, wmr_real_t q_prev[5], wmr_r
         (void)memcpy(&u_prev2[3], &u_prev[3], 2u * sizeof u_prev2[0]);
         (void)memcpy(&u_prev[3], tau, 2u * sizeof u_prev[0]);
     }
+#endif
 }
 
 /** Clip tau to +-tau_max: WMR_WARN_SATURATED if it had to, else WMR_OK. */

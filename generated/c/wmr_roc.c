@@ -326,8 +326,15 @@ WMR_STEP_INLINE wmr_status_t wmr_roc_step_as(wmr_roc_state_t *state, const wmr_r
        and ||u rows 1-3|| can overflow in float32 with large gains while tau is finite: then s/||s||
        in the switching term is 0, so that step is not done either). One test for all (x - x is NaN
        exactly when x is not finite), then which one, in the status order. */
+    /* (the minimal formulation's u_discarded is 0: its term there is -0.0, which x + -0.0 = x
+       lets the compiler drop, where it cannot drop + 0.0; optimising for size, one test) */
+#if WMR_STEP_PER_FORMULATION
     if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
             + (s_norm - s_norm) + (paper ? (u_discarded - u_discarded) : WMR_LIT(-0.0))) != 0) {
+#else
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
+            + (s_norm - s_norm) + (u_discarded - u_discarded)) != 0) {
+#endif
         if (!isfinite(out_tau[0])) {
             return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
         }

@@ -387,8 +387,15 @@ WMR_STEP_INLINE wmr_status_t wmr_tdc_step_as(wmr_tdc_state_t *state, const wmr_t
     u_discarded = paper ? wmr_norm3(u[0], u[1], u[2]) : WMR_LIT(0.0);  /* cannot overflow */
     /* The outputs that can be non-finite: out_tau[0], out_tau[1], u_discarded. One test for all (x
        - x is NaN exactly when x is not finite), then which one, in the status order. */
+    /* (the minimal formulation's u_discarded is 0: its term there is -0.0, which x + -0.0 = x
+       lets the compiler drop, where it cannot drop + 0.0; optimising for size, one test) */
+#if WMR_STEP_PER_FORMULATION
     if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1])
             + (paper ? (u_discarded - u_discarded) : WMR_LIT(-0.0))) != 0) {
+#else
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (u_discarded - u_discarded))
+            != 0) {
+#endif
         if (!isfinite(out_tau[0])) {
             return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
         }
@@ -402,8 +409,13 @@ WMR_STEP_INLINE wmr_status_t wmr_tdc_step_as(wmr_tdc_state_t *state, const wmr_t
     for (i = 0; i < nc; ++i) {
         state->H1hat[i] = H1hat[i];
     }
-    /* the formulation's sin and cos (the rest are 0 in every step of it) */
+    /* the formulation's sin and cos (the rest are 0 in every step of it; optimising for
+       size, one loop for both formulations) */
+#if WMR_STEP_PER_FORMULATION
     for (i = 0; i < (paper ? 2 : 0); ++i) {
+#else
+    for (i = 0; i < 2; ++i) {
+#endif
         state->trig_prev[i] = trig[i];
     }
     state->gain = gain;
