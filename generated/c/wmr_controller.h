@@ -214,12 +214,16 @@ static inline uint64_t wmr_words_diff(const unsigned char *bytes_a,
         (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
         diff[0] |= x ^ y;
     }
-    if (sizeof diff == 16u) {  /* float32: a vector, reduced in halves */
+    uint64_t all;
+    if (sizeof diff == 16u) {  /* float32: in halves */
         uint64_t halves[2];
         (void)memcpy((unsigned char *)halves, (const unsigned char *)diff, sizeof halves);
-        return halves[0] | halves[1];
+        all = halves[0] | halves[1];
+    } else {
+        const wmr_bits_t folded = (diff[0] | diff[1]) | (diff[2] | diff[3]);
+        all = (uint64_t)folded;
     }
-    return (uint64_t)((diff[0] | diff[1]) | (diff[2] | diff[3]));
+    return all;
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
@@ -293,11 +297,16 @@ static inline void wmr_push_history(int formulation, wmr_real_t q_prev[5], wmr_r
 #if !WMR_STEP_PER_FORMULATION
     {
         /* one body for both formulations (optimising for size): one loop over the rows */
-        const int first = WMR_IS_PAPER(formulation) ? 0 : 3;
+        int first = 0;
+        int end = 5;
+        if (!WMR_IS_PAPER(formulation)) {
+            first = 3;
+            end = 5;
+        }
         if (WMR_IS_PAPER(formulation)) {
             (void)memcpy(q_prev, q, 5u * sizeof q_prev[0]);
         }
-        for (i = first; i < 5; ++i) {
+        for (i = first; i < end; ++i) {
             qdot_prev2[i] = qdot_prev[i];
             qdot_prev[i] = qdot[i];
             u_prev2[i] = u_prev[i];

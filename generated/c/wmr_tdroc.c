@@ -125,11 +125,14 @@ static inline bool wmr_tdroc_config_unchanged(const wmr_tdroc_config_t *config,
     wmr_bits_t diff = 0u;
     if ((WMR_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
         && (sizeof(wmr_tdroc_config_t) == (29u * sizeof(wmr_bits_t)))) {
-        /* a float32 build on a core with vectors: its 29 words, no padding, as one array */
+        /* float32 with vectors: its 29 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = ((wmr_words_diff(bytes, kept_bytes, 0, 28)            | wmr_words_diff(bytes,
-                kept_bytes, 28, 1)) != 0u) ? 1u : 0u;
+        const uint64_t words = wmr_words_diff(bytes, kept_bytes, 0, 28)
+                | wmr_words_diff(bytes, kept_bytes, 28, 1);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         diff |= wmr_real_bits(config->k1[0]) ^ wmr_real_bits(kept->k1[0]);

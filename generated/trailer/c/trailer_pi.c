@@ -105,11 +105,14 @@ static inline bool trailer_pi_config_unchanged(const trailer_pi_config_t *config
     trailer_bits_t diff = 0u;
     if ((TRAILER_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer_bits_t))
         && (sizeof(trailer_pi_config_t) == (23u * sizeof(trailer_bits_t)))) {
-        /* a float32 build on a core with vectors: its 23 words, no padding, as one array */
+        /* float32 with vectors: its 23 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = ((trailer_words_diff(bytes, kept_bytes, 0, 20)            | trailer_words_diff(bytes,
-                kept_bytes, 20, 3)) != 0u) ? 1u : 0u;
+        const uint64_t words = trailer_words_diff(bytes, kept_bytes, 0, 20)
+                | trailer_words_diff(bytes, kept_bytes, 20, 3);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         diff |= trailer_nominal_diff(&config->nominal, &kept->nominal);

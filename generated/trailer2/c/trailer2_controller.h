@@ -208,12 +208,16 @@ static inline uint64_t trailer2_words_diff(const unsigned char *bytes_a,
         (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
         diff[0] |= x ^ y;
     }
-    if (sizeof diff == 16u) {  /* float32: a vector, reduced in halves */
+    uint64_t all;
+    if (sizeof diff == 16u) {  /* float32: in halves */
         uint64_t halves[2];
         (void)memcpy((unsigned char *)halves, (const unsigned char *)diff, sizeof halves);
-        return halves[0] | halves[1];
+        all = halves[0] | halves[1];
+    } else {
+        const trailer2_bits_t folded = (diff[0] | diff[1]) | (diff[2] | diff[3]);
+        all = (uint64_t)folded;
     }
-    return (uint64_t)((diff[0] | diff[1]) | (diff[2] | diff[3]));
+    return all;
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */

@@ -127,10 +127,13 @@ static inline bool trailer2_tdroc_config_unchanged(const trailer2_tdroc_config_t
     trailer2_bits_t diff = 0u;
     if ((TRAILER2_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer2_bits_t))
         && (sizeof(trailer2_tdroc_config_t) == (56u * sizeof(trailer2_bits_t)))) {
-        /* a float32 build on a core with vectors: its 56 words, no padding, as one array */
+        /* float32 with vectors: its 56 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = ((trailer2_words_diff(bytes, kept_bytes, 0, 56)) != 0u) ? 1u : 0u;
+        const uint64_t words = trailer2_words_diff(bytes, kept_bytes, 0, 56);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;
