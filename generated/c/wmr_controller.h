@@ -168,22 +168,20 @@ void wmr_window_weights(int active, wmr_real_t a, wmr_real_t w[WMR_MAX_WINDOW]);
 #define WMR_STEP_PER_ENTRY 0  /* _step calls _step_detail */
 #endif
 
-/* 1 where the compiler has 128-bit vectors (x86-64's SSE2, Arm's NEON): a float32 step then
-   compares its configuration, 32-bit words without padding, as one array, four words to an
-   instruction (wmr_words_diff). Elsewhere (a Cortex-M4) that loop takes more
-   instructions than the member compares (about 100 a step, measured), so it is not used. */
+/* 1 where the compiler has 128-bit vectors (SSE2, NEON): a float32 step compares its
+   configuration (32-bit words, no padding) as one array, four words a vector
+   (wmr_words_diff); on a Cortex-M4 that takes about 100 instructions more a step than
+   the member compares (measured), so it is not used there. */
 #if defined(__SSE2__) || defined(__ARM_NEON)
 #define WMR_CONFIG_AS_WORDS 1
 #else
 #define WMR_CONFIG_AS_WORDS 0
 #endif
 
-/* gcc -O2 keeps a vectorised loop a loop (a count, a compare and a branch per four words:
-   about 20 of the 60 instructions of a float32 Drishti step's configuration compare); told
-   to unroll it, it unrolls before it vectorises when the count is below the factor (one
-   scalar XOR per word). So the loop below is over groups of four words into four
-   accumulators, which gcc unrolls whatever the count, then vectorises as straight-line code
-   (one vector XOR and OR per group). Other compilers: as they like. */
+/* gcc -O2 keeps a vectorised loop a loop (a count, compare and branch per four words); told
+   to unroll it, it unrolls before it vectorises when the count is below the factor. So the
+   loop below is over groups of four words into four accumulators, which gcc unrolls, then
+   vectorises as straight-line code. Other compilers: as they like. */
 #if defined(__GNUC__) && !defined(__clang__) && (__GNUC__ >= 8)
 #define WMR_UNROLL_WORDS _Pragma("GCC unroll 32")
 #else
@@ -191,7 +189,7 @@ void wmr_window_weights(int active, wmr_real_t a, wmr_real_t w[WMR_MAX_WINDOW]);
 #endif
 
 /** The XOR of the bits of n words of two objects' bytes from word `first` on, OR-ed. */
-static inline wmr_bits_t wmr_words_diff(const unsigned char *bytes_a,
+static inline uint64_t wmr_words_diff(const unsigned char *bytes_a,
     const unsigned char *bytes_b, int first, int n)
 {
     wmr_bits_t diff[4] = {0u, 0u, 0u, 0u};
@@ -216,7 +214,16 @@ static inline wmr_bits_t wmr_words_diff(const unsigned char *bytes_a,
         (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
         diff[0] |= x ^ y;
     }
-    return (diff[0] | diff[1]) | (diff[2] | diff[3]);
+    uint64_t all;
+    if (sizeof diff == 16u) {  /* float32: in halves */
+        uint64_t halves[2];
+        (void)memcpy((unsigned char *)halves, (const unsigned char *)diff, sizeof halves);
+        all = halves[0] | halves[1];
+    } else {
+        const wmr_bits_t folded = (diff[0] | diff[1]) | (diff[2] | diff[3]);
+        all = (uint64_t)folded;
+    }
+    return all;
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
@@ -273,23 +280,63 @@ static inline int wmr_controlled_slice(int formulation, const wmr_real_t q[5],
     return nc;
 }
 
-/** Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h). */
-static inline void wmr_push_history(wmr_real_t q_prev[5], wmr_real_t qdot_prev[5],
+/**
+ * Shift the history (17) needs: q(t-h), qdot(t-h), qdot(t-2h), u(t-h) = B tau, u(t-2h),
+ * of the rows the formulation's steps read and of those only: every row in the paper
+ * formulation; in the minimal one, its controlled rows 3..4,
+ * and no row of q(t-h), which its (17) does not read.
+ * The rows a formulation's steps do not read stay as _init left them (zero): the
+ * formulation cannot change without _init (a step compares the configuration bit for bit).
+ */
+static inline void wmr_push_history(int formulation, wmr_real_t q_prev[5], wmr_real_t qdot_prev[5],
     wmr_real_t qdot_prev2[5], wmr_real_t u_prev[5], wmr_real_t u_prev2[5], const wmr_real_t q[5],
     const wmr_real_t qdot[5], const wmr_real_t tau[2])
 {
     int i;
-    /* whole arrays, in this order (each read before it is overwritten): a copy the
-       compiler does in vector moves, where an element loop over five arrays stays scalar */
-    (void)memcpy(q_prev, q, 5u * sizeof q_prev[0]);
-    (void)memcpy(qdot_prev2, qdot_prev, 5u * sizeof qdot_prev2[0]);
-    (void)memcpy(qdot_prev, qdot, 5u * sizeof qdot_prev[0]);
-    (void)memcpy(u_prev2, u_prev, 5u * sizeof u_prev2[0]);
-    for (i = 0; i < 5; ++i) {
-        u_prev[i] = WMR_LIT(0.0);
+    (void)formulation;  /* unread when the formulation is chosen at compile time */
+#if !WMR_STEP_PER_FORMULATION
+    {
+        /* one body for both formulations (optimising for size): one loop over the rows */
+        int first = 0;
+        int end = 5;
+        if (!WMR_IS_PAPER(formulation)) {
+            first = 3;
+            end = 5;
+        }
+        if (WMR_IS_PAPER(formulation)) {
+            (void)memcpy(q_prev, q, 5u * sizeof q_prev[0]);
+        }
+        for (i = first; i < end; ++i) {
+            qdot_prev2[i] = qdot_prev[i];
+            qdot_prev[i] = qdot[i];
+            u_prev2[i] = u_prev[i];
+            u_prev[i] = WMR_LIT(0.0);
+        }
+        u_prev[3] = tau[0];
+        u_prev[4] = tau[1];
     }
-    u_prev[3] = tau[0];
-    u_prev[4] = tau[1];
+#else
+    if (WMR_IS_PAPER(formulation)) {
+        /* whole arrays, in this order (each read before it is overwritten): a copy the
+           compiler does in vector moves, where an element loop over five arrays stays scalar */
+        (void)memcpy(q_prev, q, 5u * sizeof q_prev[0]);
+        (void)memcpy(qdot_prev2, qdot_prev, 5u * sizeof qdot_prev2[0]);
+        (void)memcpy(qdot_prev, qdot, 5u * sizeof qdot_prev[0]);
+        (void)memcpy(u_prev2, u_prev, 5u * sizeof u_prev2[0]);
+        for (i = 0; i < 5; ++i) {
+            u_prev[i] = WMR_LIT(0.0);
+        }
+        u_prev[3] = tau[0];
+        u_prev[4] = tau[1];
+    } else {
+        /* the controlled rows, each an actuated coordinate (u = tau): runs of 2, copied
+           whole (vector moves, where an element loop stays scalar) */
+        (void)memcpy(&qdot_prev2[3], &qdot_prev[3], 2u * sizeof qdot_prev2[0]);
+        (void)memcpy(&qdot_prev[3], &qdot[3], 2u * sizeof qdot_prev[0]);
+        (void)memcpy(&u_prev2[3], &u_prev[3], 2u * sizeof u_prev2[0]);
+        (void)memcpy(&u_prev[3], tau, 2u * sizeof u_prev[0]);
+    }
+#endif
 }
 
 /** Clip tau to +-tau_max: WMR_WARN_SATURATED if it had to, else WMR_OK. */

@@ -110,12 +110,14 @@ static inline bool wmr_pi_config_unchanged(const wmr_pi_config_t *config,
     wmr_bits_t diff = 0u;
     if ((WMR_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
         && (sizeof(wmr_pi_config_t) == (15u * sizeof(wmr_bits_t)))) {
-        /* Its 15 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 15 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = wmr_words_diff(bytes, kept_bytes, 0, 12)            | wmr_words_diff(bytes,
-                kept_bytes, 12, 3);
+        const uint64_t words = wmr_words_diff(bytes, kept_bytes, 0, 12)
+                | wmr_words_diff(bytes, kept_bytes, 12, 3);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         diff |= wmr_nominal_diff(&config->nominal, &kept->nominal);
@@ -306,8 +308,8 @@ wmr_status_t wmr_pi_step_detail(wmr_pi_state_t *state, const wmr_pi_config_t *co
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;
-    wmr_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
-                     state->u_prev2, q, qdot, out_tau);
+    wmr_push_history(WMR_FORMULATION_MINIMAL, state->q_prev, state->qdot_prev, state->qdot_prev2,
+                     state->u_prev, state->u_prev2, q, qdot, out_tau);
     state->tau[0] = out_tau[0];
     state->tau[1] = out_tau[1];
     /* Saturating: only steps >= 2 is ever asked, so nothing changes once it stops. */

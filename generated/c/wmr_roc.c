@@ -101,12 +101,14 @@ static inline bool wmr_roc_config_unchanged(const wmr_roc_config_t *config,
     wmr_bits_t diff = 0u;
     if ((WMR_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(wmr_bits_t))
         && (sizeof(wmr_roc_config_t) == (25u * sizeof(wmr_bits_t)))) {
-        /* Its 25 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 25 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = wmr_words_diff(bytes, kept_bytes, 0, 24)            | wmr_words_diff(bytes,
-                kept_bytes, 24, 1);
+        const uint64_t words = wmr_words_diff(bytes, kept_bytes, 0, 24)
+                | wmr_words_diff(bytes, kept_bytes, 24, 1);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         diff |= wmr_real_bits(config->k1[0]) ^ wmr_real_bits(kept->k1[0]);
@@ -327,8 +329,15 @@ WMR_STEP_INLINE wmr_status_t wmr_roc_step_as(wmr_roc_state_t *state, const wmr_r
        and ||u rows 1-3|| can overflow in float32 with large gains while tau is finite: then s/||s||
        in the switching term is 0, so that step is not done either). One test for all (x - x is NaN
        exactly when x is not finite), then which one, in the status order. */
+    /* (the minimal formulation's u_discarded is 0: its term there is -0.0, which x + -0.0 = x
+       lets the compiler drop, where it cannot drop + 0.0; optimising for size, one test) */
+#if WMR_STEP_PER_FORMULATION
+    if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
+            + (s_norm - s_norm) + (paper ? (u_discarded - u_discarded) : WMR_LIT(-0.0))) != 0) {
+#else
     if (isnan((out_tau[0] - out_tau[0]) + (out_tau[1] - out_tau[1]) + (gain - gain)
             + (s_norm - s_norm) + (u_discarded - u_discarded)) != 0) {
+#endif
         if (!isfinite(out_tau[0])) {
             return wmr_fail(detail, WMR_ERR_NONFINITE_OUTPUT, WMR_FIELD_TAU, 0);
         }
@@ -348,7 +357,7 @@ WMR_STEP_INLINE wmr_status_t wmr_roc_step_as(wmr_roc_state_t *state, const wmr_r
     state->gain = gain;
     state->s_norm = s_norm;
     state->u_discarded = u_discarded;
-    wmr_push_history(state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
+    wmr_push_history(formulation, state->q_prev, state->qdot_prev, state->qdot_prev2, state->u_prev,
                      state->u_prev2, q, qdot, out_tau);
     state->tau[0] = out_tau[0];
     state->tau[1] = out_tau[1];

@@ -53,6 +53,9 @@ typedef struct {
     wmr_real_t p12[5];      /* P of (20) per coordinate (from K1, K2, Q at init) */
     wmr_real_t p22[5];
     wmr_real_t q_prev[5];   /* q(t-h) */
+    /* rows: every one in the paper formulation; the minimal one's steps write its controlled
+       rows 3..4 only (and no row of q_prev), and H1hat's first 2: the others stay as _init left
+       them (0) */
     wmr_real_t qdot_prev[5];  /* qdot(t-h) */
     wmr_real_t qdot_prev2[5]; /* qdot(t-2h) */
     wmr_real_t u_prev[5];   /* u(t-h) applied: B tau (paper) or tau (minimal) */

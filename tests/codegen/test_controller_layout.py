@@ -248,7 +248,7 @@ def test_generic_nominal_check(c_texts: dict[str, str]) -> None:
     assert ("diff |= ((toy_bits_t)(unsigned int)config->formulation) ^ ((toy_bits_t)(unsigned "
             "int)kept->formulation);" in " ".join(compared.split()))
     # a float32 build (words of one size, no padding) compares the struct as one array
-    assert "diff = toy_words_diff(bytes, kept_bytes, 0, " in compared
+    assert "const uint64_t words = toy_words_diff(bytes, kept_bytes, 0, " in compared
 
 
 def test_example_scatters_the_kinematics(c_texts: dict[str, str]) -> None:

@@ -190,6 +190,7 @@ class CBackend:
                 nominal_conditions=nominal_conditions(target, config),
                 nominal_guards=nominal_guards(target, config),
                 nominal_bounds=nominal_bounds(target), **c_common_context(target.controllers),
+                minimal_reads_q_prev=kernels.reads("minimal_tde", "q_prev"),
             )
         text = template_util.render(TEMPLATE_DIR, "step_kernels.c.jinja",
                                     functions=list(kernels.contexts), laws=laws.name,
@@ -204,7 +205,8 @@ class CBackend:
                 layout=layout, c=info, max_abs_input=MAX_ABS_INPUT, step_kernel_prefix=kp,
                 **c_controller_context(info, param_fields, layout, target.model),
                 **kernels.controller_context(info.name, kernels_h),
-                gate=certified_gate_context(info, pre))
+                gate=certified_gate_context(info, pre),
+                minimal_reads_q_prev=kernels.reads("minimal_tde", "q_prev"))
             step = context.pop("step_kernels")
             files[f"{pre}_{info.name}.h"] = _template("controller.h.jinja", law, **context)
             files[f"{pre}_{info.name}.c"] = _template("controller.c.jinja", law,

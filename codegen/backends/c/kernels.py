@@ -11,7 +11,7 @@ computed here once (:func:`step_calls`), never found by reading a rendered step.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from codegen.backend import FunctionIR
 from codegen.backends.c.config import CConfig
@@ -190,6 +190,12 @@ class StepKernels:
     contexts: tuple[dict[str, object], ...]
     kept: tuple[KeptKernel, ...]
     norms: frozenset[int]
+    # kernel (spec name) -> the inputs its per-step body does not read (the `(void)` ones)
+    unread: Mapping[str, frozenset[str]] = field(default_factory=dict)
+
+    def reads(self, kernel: str, arg: str) -> bool:
+        """Whether a step's ``kernel`` reads its input ``arg`` (False: no step calls it)."""
+        return kernel in self.called and arg not in self.unread.get(kernel, frozenset())
 
     @property
     def called(self) -> frozenset[str]:
@@ -233,6 +239,7 @@ def step_kernels(controllers: Iterable[ControllerSpec], layout: ControllerLayout
         raise ValueError(f"{module}: the steps call {sorted(unknown)}, not kernels of it")
     contexts: list[dict[str, object]] = []
     kept: list[KeptKernel] = []
+    unread: dict[str, frozenset[str]] = {}
     keeps: dict[tuple[object, ...], str] = {}  # a _keep's parameters and body -> its name
     for f in functions:
         if f.spec.name not in called:
@@ -252,13 +259,22 @@ def step_kernels(controllers: Iterable[ControllerSpec], layout: ControllerLayout
                 split = replace(split, keep={**split.keep, "name": same})
             kept.append(split)
             contexts.append({**split.call, "unless": ""})
+            unread[f.spec.name] = _unread(split.call)
             continue
         ctx = function_context(f, config, module)
+        unread[f.spec.name] = _unread(ctx)
         ctx["origin"] = f"the body of {ctx['name']}"
         ctx["name"] = f"{kp}{f.spec.name}"
         ctx["unless"] = ""
         contexts.append(ctx)
-    return StepKernels(calls, tuple(contexts), tuple(kept), context_norms(contexts))
+    return StepKernels(calls, tuple(contexts), tuple(kept), context_norms(contexts), unread)
+
+
+def _unread(ctx: dict[str, object]) -> frozenset[str]:
+    """The inputs a lowered body does not read (its ``(void)`` lines)."""
+    body = ctx["body"]
+    assert isinstance(body, list)
+    return frozenset(line.target for line in body if isinstance(line, Line) and line.kind == "void")
 
 
 def law_wrappers(functions: Sequence[FunctionIR], kernels: StepKernels, kp: str,

@@ -94,12 +94,14 @@ static inline bool trailer_asmc_config_unchanged(const trailer_asmc_config_t *co
     trailer_bits_t diff = 0u;
     if ((TRAILER_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer_bits_t))
         && (sizeof(trailer_asmc_config_t) == (39u * sizeof(trailer_bits_t)))) {
-        /* Its 39 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 39 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = trailer_words_diff(bytes, kept_bytes, 0, 36)            | trailer_words_diff(bytes,
-                kept_bytes, 36, 3);
+        const uint64_t words = trailer_words_diff(bytes, kept_bytes, 0, 36)
+                | trailer_words_diff(bytes, kept_bytes, 36, 3);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;

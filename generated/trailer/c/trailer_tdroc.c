@@ -118,12 +118,14 @@ static inline bool trailer_tdroc_config_unchanged(const trailer_tdroc_config_t *
     trailer_bits_t diff = 0u;
     if ((TRAILER_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer_bits_t))
         && (sizeof(trailer_tdroc_config_t) == (43u * sizeof(trailer_bits_t)))) {
-        /* Its 43 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 43 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = trailer_words_diff(bytes, kept_bytes, 0, 40)            | trailer_words_diff(bytes,
-                kept_bytes, 40, 3);
+        const uint64_t words = trailer_words_diff(bytes, kept_bytes, 0, 40)
+                | trailer_words_diff(bytes, kept_bytes, 40, 3);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;
@@ -439,7 +441,7 @@ trailer_status_t trailer_tdroc_step_detail(trailer_tdroc_state_t *state,
     }
     status = trailer_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 8; ++i) {
+    for (i = 0; i < nc; ++i) {
         state->H1hat[i] = H1hat[i];
     }
     for (i = 0; i < 4; ++i) {

@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER_CODE_ID 0x95d77b02u
+#define TRAILER_CODE_ID 0x4f262986u
 
 #ifdef TRAILER_FLOAT32
 typedef float trailer_real_t;

@@ -101,11 +101,13 @@ static inline bool trailer2_asmc_config_unchanged(const trailer2_asmc_config_t *
     trailer2_bits_t diff = 0u;
     if ((TRAILER2_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer2_bits_t))
         && (sizeof(trailer2_asmc_config_t) == (52u * sizeof(trailer2_bits_t)))) {
-        /* Its 52 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 52 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = trailer2_words_diff(bytes, kept_bytes, 0, 52);
+        const uint64_t words = trailer2_words_diff(bytes, kept_bytes, 0, 52);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;

@@ -162,22 +162,20 @@ void trailer2_window_weights(int active, trailer2_real_t a, trailer2_real_t w[TR
 #define TRAILER2_STEP_PER_ENTRY 0  /* _step calls _step_detail */
 #endif
 
-/* 1 where the compiler has 128-bit vectors (x86-64's SSE2, Arm's NEON): a float32 step then
-   compares its configuration, 32-bit words without padding, as one array, four words to an
-   instruction (trailer2_words_diff). Elsewhere (a Cortex-M4) that loop takes more
-   instructions than the member compares (about 100 a step, measured), so it is not used. */
+/* 1 where the compiler has 128-bit vectors (SSE2, NEON): a float32 step compares its
+   configuration (32-bit words, no padding) as one array, four words a vector
+   (trailer2_words_diff); on a Cortex-M4 that takes about 100 instructions more a step than
+   the member compares (measured), so it is not used there. */
 #if defined(__SSE2__) || defined(__ARM_NEON)
 #define TRAILER2_CONFIG_AS_WORDS 1
 #else
 #define TRAILER2_CONFIG_AS_WORDS 0
 #endif
 
-/* gcc -O2 keeps a vectorised loop a loop (a count, a compare and a branch per four words:
-   about 20 of the 60 instructions of a float32 Drishti step's configuration compare); told
-   to unroll it, it unrolls before it vectorises when the count is below the factor (one
-   scalar XOR per word). So the loop below is over groups of four words into four
-   accumulators, which gcc unrolls whatever the count, then vectorises as straight-line code
-   (one vector XOR and OR per group). Other compilers: as they like. */
+/* gcc -O2 keeps a vectorised loop a loop (a count, compare and branch per four words); told
+   to unroll it, it unrolls before it vectorises when the count is below the factor. So the
+   loop below is over groups of four words into four accumulators, which gcc unrolls, then
+   vectorises as straight-line code. Other compilers: as they like. */
 #if defined(__GNUC__) && !defined(__clang__) && (__GNUC__ >= 8)
 #define TRAILER2_UNROLL_WORDS _Pragma("GCC unroll 32")
 #else
@@ -185,7 +183,7 @@ void trailer2_window_weights(int active, trailer2_real_t a, trailer2_real_t w[TR
 #endif
 
 /** The XOR of the bits of n words of two objects' bytes from word `first` on, OR-ed. */
-static inline trailer2_bits_t trailer2_words_diff(const unsigned char *bytes_a,
+static inline uint64_t trailer2_words_diff(const unsigned char *bytes_a,
     const unsigned char *bytes_b, int first, int n)
 {
     trailer2_bits_t diff[4] = {0u, 0u, 0u, 0u};
@@ -210,7 +208,16 @@ static inline trailer2_bits_t trailer2_words_diff(const unsigned char *bytes_a,
         (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
         diff[0] |= x ^ y;
     }
-    return (diff[0] | diff[1]) | (diff[2] | diff[3]);
+    uint64_t all;
+    if (sizeof diff == 16u) {  /* float32: in halves */
+        uint64_t halves[2];
+        (void)memcpy((unsigned char *)halves, (const unsigned char *)diff, sizeof halves);
+        all = halves[0] | halves[1];
+    } else {
+        const trailer2_bits_t folded = (diff[0] | diff[1]) | (diff[2] | diff[3]);
+        all = (uint64_t)folded;
+    }
+    return all;
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
@@ -304,7 +311,6 @@ static inline void trailer2_push_history(trailer2_real_t qdot_prev[2],
         u_prev[i] = tau[i];
     }
 }
-
 /** Clip tau to +-tau_max: TRAILER2_WARN_SATURATED if it had to, else TRAILER2_OK. */
 static inline trailer2_status_t trailer2_saturate(trailer2_real_t tau[2], trailer2_real_t tau_max)
 {

@@ -100,12 +100,14 @@ static inline bool trailer2_tdc_config_unchanged(const trailer2_tdc_config_t *co
     trailer2_bits_t diff = 0u;
     if ((TRAILER2_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer2_bits_t))
         && (sizeof(trailer2_tdc_config_t) == (51u * sizeof(trailer2_bits_t)))) {
-        /* Its 51 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 51 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = trailer2_words_diff(bytes, kept_bytes, 0, 48)            | trailer2_words_diff(bytes,
-                kept_bytes, 48, 3);
+        const uint64_t words = trailer2_words_diff(bytes, kept_bytes, 0, 48)
+                | trailer2_words_diff(bytes, kept_bytes, 48, 3);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;
@@ -354,7 +356,7 @@ trailer2_status_t trailer2_tdc_step_detail(trailer2_tdc_state_t *state,
     }
     status = trailer2_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 11; ++i) {
+    for (i = 0; i < nc; ++i) {
         state->H1hat[i] = H1hat[i];
     }
     for (i = 0; i < 4; ++i) {

@@ -21,7 +21,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define TRAILER2_CODE_ID 0x9b8a3232u
+#define TRAILER2_CODE_ID 0xbb24f5a1u
 
 #ifdef TRAILER2_FLOAT32
 typedef float trailer2_real_t;

@@ -112,12 +112,14 @@ static inline bool trailer3_pi_config_unchanged(const trailer3_pi_config_t *conf
     trailer3_bits_t diff = 0u;
     if ((TRAILER3_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer3_bits_t))
         && (sizeof(trailer3_pi_config_t) == (37u * sizeof(trailer3_bits_t)))) {
-        /* Its 37 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 37 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = trailer3_words_diff(bytes, kept_bytes, 0, 36)            | trailer3_words_diff(bytes,
-                kept_bytes, 36, 1);
+        const uint64_t words = trailer3_words_diff(bytes, kept_bytes, 0, 36)
+                | trailer3_words_diff(bytes, kept_bytes, 36, 1);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         diff |= trailer3_nominal_diff(&config->nominal, &kept->nominal);

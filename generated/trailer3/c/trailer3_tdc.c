@@ -100,11 +100,13 @@ static inline bool trailer3_tdc_config_unchanged(const trailer3_tdc_config_t *co
     trailer3_bits_t diff = 0u;
     if ((TRAILER3_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(trailer3_bits_t))
         && (sizeof(trailer3_tdc_config_t) == (64u * sizeof(trailer3_bits_t)))) {
-        /* Its 64 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 64 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = trailer3_words_diff(bytes, kept_bytes, 0, 64);
+        const uint64_t words = trailer3_words_diff(bytes, kept_bytes, 0, 64);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;
@@ -351,7 +353,7 @@ trailer3_status_t trailer3_tdc_step_detail(trailer3_tdc_state_t *state,
     }
     status = trailer3_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 14; ++i) {
+    for (i = 0; i < nc; ++i) {
         state->H1hat[i] = H1hat[i];
     }
     for (i = 0; i < 4; ++i) {

@@ -94,12 +94,14 @@ static inline bool train5_asmc_config_unchanged(const train5_asmc_config_t *conf
     train5_bits_t diff = 0u;
     if ((TRAIN5_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(train5_bits_t))
         && (sizeof(train5_asmc_config_t) == (91u * sizeof(train5_bits_t)))) {
-        /* Its 91 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 91 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = train5_words_diff(bytes, kept_bytes, 0, 88)            | train5_words_diff(bytes,
-                kept_bytes, 88, 3);
+        const uint64_t words = train5_words_diff(bytes, kept_bytes, 0, 88)
+                | train5_words_diff(bytes, kept_bytes, 88, 3);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;

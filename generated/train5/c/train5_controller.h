@@ -159,22 +159,20 @@ void train5_window_weights(int active, train5_real_t a, train5_real_t w[TRAIN5_M
 #define TRAIN5_STEP_PER_ENTRY 0  /* _step calls _step_detail */
 #endif
 
-/* 1 where the compiler has 128-bit vectors (x86-64's SSE2, Arm's NEON): a float32 step then
-   compares its configuration, 32-bit words without padding, as one array, four words to an
-   instruction (train5_words_diff). Elsewhere (a Cortex-M4) that loop takes more
-   instructions than the member compares (about 100 a step, measured), so it is not used. */
+/* 1 where the compiler has 128-bit vectors (SSE2, NEON): a float32 step compares its
+   configuration (32-bit words, no padding) as one array, four words a vector
+   (train5_words_diff); on a Cortex-M4 that takes about 100 instructions more a step than
+   the member compares (measured), so it is not used there. */
 #if defined(__SSE2__) || defined(__ARM_NEON)
 #define TRAIN5_CONFIG_AS_WORDS 1
 #else
 #define TRAIN5_CONFIG_AS_WORDS 0
 #endif
 
-/* gcc -O2 keeps a vectorised loop a loop (a count, a compare and a branch per four words:
-   about 20 of the 60 instructions of a float32 Drishti step's configuration compare); told
-   to unroll it, it unrolls before it vectorises when the count is below the factor (one
-   scalar XOR per word). So the loop below is over groups of four words into four
-   accumulators, which gcc unrolls whatever the count, then vectorises as straight-line code
-   (one vector XOR and OR per group). Other compilers: as they like. */
+/* gcc -O2 keeps a vectorised loop a loop (a count, compare and branch per four words); told
+   to unroll it, it unrolls before it vectorises when the count is below the factor. So the
+   loop below is over groups of four words into four accumulators, which gcc unrolls, then
+   vectorises as straight-line code. Other compilers: as they like. */
 #if defined(__GNUC__) && !defined(__clang__) && (__GNUC__ >= 8)
 #define TRAIN5_UNROLL_WORDS _Pragma("GCC unroll 32")
 #else
@@ -182,7 +180,7 @@ void train5_window_weights(int active, train5_real_t a, train5_real_t w[TRAIN5_M
 #endif
 
 /** The XOR of the bits of n words of two objects' bytes from word `first` on, OR-ed. */
-static inline train5_bits_t train5_words_diff(const unsigned char *bytes_a,
+static inline uint64_t train5_words_diff(const unsigned char *bytes_a,
     const unsigned char *bytes_b, int first, int n)
 {
     train5_bits_t diff[4] = {0u, 0u, 0u, 0u};
@@ -207,7 +205,16 @@ static inline train5_bits_t train5_words_diff(const unsigned char *bytes_a,
         (void)memcpy((unsigned char *)&y, &bytes_b[(size_t)i * sizeof y], sizeof y);
         diff[0] |= x ^ y;
     }
-    return (diff[0] | diff[1]) | (diff[2] | diff[3]);
+    uint64_t all;
+    if (sizeof diff == 16u) {  /* float32: in halves */
+        uint64_t halves[2];
+        (void)memcpy((unsigned char *)halves, (const unsigned char *)diff, sizeof halves);
+        all = halves[0] | halves[1];
+    } else {
+        const train5_bits_t folded = (diff[0] | diff[1]) | (diff[2] | diff[3]);
+        all = (uint64_t)folded;
+    }
+    return all;
 }
 
 /* A real's bits: a change of any bit of a value (the sign of a zero included) is a change. */
@@ -327,7 +334,6 @@ static inline void train5_push_history(train5_real_t qdot_prev[2], train5_real_t
         u_prev[i] = tau[i];
     }
 }
-
 /** Clip tau to +-tau_max: TRAIN5_WARN_SATURATED if it had to, else TRAIN5_OK. */
 static inline train5_status_t train5_saturate(train5_real_t tau[2], train5_real_t tau_max)
 {

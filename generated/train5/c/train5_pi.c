@@ -105,12 +105,14 @@ static inline bool train5_pi_config_unchanged(const train5_pi_config_t *config,
     train5_bits_t diff = 0u;
     if ((TRAIN5_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(train5_bits_t))
         && (sizeof(train5_pi_config_t) == (51u * sizeof(train5_bits_t)))) {
-        /* Its 51 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 51 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = train5_words_diff(bytes, kept_bytes, 0, 48)            | train5_words_diff(bytes,
-                kept_bytes, 48, 3);
+        const uint64_t words = train5_words_diff(bytes, kept_bytes, 0, 48)
+                | train5_words_diff(bytes, kept_bytes, 48, 3);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         diff |= train5_nominal_diff(&config->nominal, &kept->nominal);

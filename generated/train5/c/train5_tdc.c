@@ -92,12 +92,14 @@ static inline bool train5_tdc_config_unchanged(const train5_tdc_config_t *config
     train5_bits_t diff = 0u;
     if ((TRAIN5_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(train5_bits_t))
         && (sizeof(train5_tdc_config_t) == (90u * sizeof(train5_bits_t)))) {
-        /* Its 90 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 90 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = train5_words_diff(bytes, kept_bytes, 0, 88)            | train5_words_diff(bytes,
-                kept_bytes, 88, 2);
+        const uint64_t words = train5_words_diff(bytes, kept_bytes, 0, 88)
+                | train5_words_diff(bytes, kept_bytes, 88, 2);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;
@@ -337,7 +339,7 @@ train5_status_t train5_tdc_step_detail(train5_tdc_state_t *state, const train5_t
     }
     status = train5_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 20; ++i) {
+    for (i = 0; i < nc; ++i) {
         state->H1hat[i] = H1hat[i];
     }
     for (i = 0; i < 4; ++i) {

@@ -120,12 +120,14 @@ static inline bool train5_tdroc_config_unchanged(const train5_tdroc_config_t *co
     train5_bits_t diff = 0u;
     if ((TRAIN5_CONFIG_AS_WORDS != 0) && (sizeof(int) == sizeof(train5_bits_t))
         && (sizeof(train5_tdroc_config_t) == (95u * sizeof(train5_bits_t)))) {
-        /* Its 95 reals and ints are words of one size and it has no padding (a
-           float32 build) on a core with vectors: one array of words, four to a vector. */
+        /* float32 with vectors: its 95 words (no padding) as one array */
         const unsigned char *const bytes = (const unsigned char *)config;
         const unsigned char *const kept_bytes = (const unsigned char *)kept;
-        diff = train5_words_diff(bytes, kept_bytes, 0, 92)            | train5_words_diff(bytes,
-                kept_bytes, 92, 3);
+        const uint64_t words = train5_words_diff(bytes, kept_bytes, 0, 92)
+                | train5_words_diff(bytes, kept_bytes, 92, 3);
+        if (words != 0u) {
+            diff = 1u;
+        }
     } else {
         /* value by value (a double build pads after each int) */
         int i;
@@ -437,7 +439,7 @@ train5_status_t train5_tdroc_step_detail(train5_tdroc_state_t *state,
     }
     status = train5_saturate(out_tau, cfg->tau_max);
     /* Commit. History for (17): the input actually applied, u = B tau. */
-    for (i = 0; i < 20; ++i) {
+    for (i = 0; i < nc; ++i) {
         state->H1hat[i] = H1hat[i];
     }
     for (i = 0; i < 4; ++i) {

@@ -333,6 +333,12 @@ def render(r: Report) -> str:
         "  `*detail` is written on error; the status codes are unchanged.",
         "* `wmr_<ctrl>_reset(state)`: an initialised state back to what `_init` left",
         "  (history, estimates, count, adapted gain), configuration-derived data kept.",
+        "* History: a step writes the rows of the history (q(t-h), qdot(t-h), qdot(t-2h),",
+        "  u(t-h), u(t-2h)) and of H1hat that its formulation's steps read, and no other: all",
+        "  five in the paper formulation; in the minimal one the controlled rows 4-5, H1hat's",
+        "  first two (its estimate, packed) and no row of q(t-h), which its (17) does not",
+        "  read. The other rows stay as `_init` left them",
+        "  (zero): the formulation cannot change without `_init`.",
         "* Traction (optional, after a step; `wmr_model.h`): "
         "`wmr_wheel_contact_forces(p, q,",
         "  wheel_rates, tau, longitudinal, lateral)` (the multipliers of (9); tau: the net",
