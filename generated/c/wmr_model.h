@@ -110,7 +110,7 @@ void wmr_bias_forces(const wmr_params_t *p, const wmr_real_t *q, const wmr_real_
  *
  * float32 (python -m codegen.backends.c.certify; box and method: docs/FLOAT32.md):
  * proved over its declared box: no intermediate overflows or is NaN; |float32 - exact| <=
- * qddot 0.0029 (largest entry).
+ * qddot 0.0027 (largest entry).
  */
 wmr_status_t wmr_forward_dynamics(const wmr_params_t *p, const wmr_real_t *q,
     const wmr_real_t *qdot, const wmr_real_t *tau, wmr_real_t *qddot);

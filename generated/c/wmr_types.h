@@ -20,7 +20,7 @@
 /* This generated code's identity: the first 32 bits of a SHA-256 of every generated file
    of the robot but the example, with this value as 0. A header the toolchain's `freeze`
    command made for this code refuses to compile with any other. */
-#define WMR_CODE_ID 0xd57b2720u
+#define WMR_CODE_ID 0x0b0cb839u
 
 #ifdef WMR_FLOAT32
 typedef float wmr_real_t;
