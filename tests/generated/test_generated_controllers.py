@@ -41,15 +41,26 @@ DRISHTI = wmr.robot_model()
 RTOL_SYMPY_LAW = 1e-9  # steps vs the SymPy laws evaluated directly (other rounding)
 
 
+# The history rows Drishti's minimal step keeps (issue 52): the controlled rows 4-5 of the
+# rates and inputs, no q(t-h). The C step leaves the others as _init did (zero:
+# tests/firmware/test_history_rows.py); the Python mirror keeps every row, which nothing reads.
+MINIMAL_KEPT = {"qdot_prev": slice(3, 5), "qdot_prev2": slice(3, 5), "u_prev": slice(3, 5),
+                "u_prev2": slice(3, 5), "q_prev": slice(0, 0)}
+
+
 def _compare_states(
-    c_fields: dict[str, Any], py_state: dict[str, Any], info: ControllerSpec
+    c_fields: dict[str, Any], py_state: dict[str, Any], info: ControllerSpec, form: str
 ) -> None:
     required = {"steps", "gain", "s_norm", "H1hat", "tau"}
     required |= ({"omega_ring"} if info.window else set()) | ({"trig_prev"} if info.tde else set())
     common = {k for k in c_fields.keys() & py_state.keys() if not isinstance(c_fields[k], dict)}
     assert required <= common, sorted(required - common)
     for key in sorted(common):
-        assert _close(c_fields[key], py_state[key], RTOL_CONTROLLER), (
+        c_value, py_value = c_fields[key], py_state[key]
+        if form == "minimal" and key in MINIMAL_KEPT:
+            c_value = list(c_value)[MINIMAL_KEPT[key]]
+            py_value = list(py_value)[MINIMAL_KEPT[key]]
+        assert _close(c_value, py_value, RTOL_CONTROLLER), (
             f"{key}: C {c_fields[key]} vs Python {py_state[key]}"
         )
 
@@ -62,7 +73,7 @@ def test_controller_c_equals_python(c_builds: dict[str, CBuild], name: str, form
         config = _config(name, FORMULATIONS[form], accel_estimator=estimator)
         c_ctl = CController(c_builds["double"], name, config)
         py_ctl = PY_CLASSES[name](config)
-        _compare_states(c_ctl.fields(), py_ctl.state(), info)
+        _compare_states(c_ctl.fields(), py_ctl.state(), info, form)
         seq = _smooth_sequence(7 + estimator, 60, config.h)
         gains = []
         for k, inputs in enumerate(seq):
@@ -70,7 +81,7 @@ def test_controller_c_equals_python(c_builds: dict[str, CBuild], name: str, form
             tau_py = py_ctl.step(*inputs)
             assert status == STATUS[py_ctl.last_status], (k, status, py_ctl.last_status)
             assert _close(list(tau_c), tau_py, RTOL_CONTROLLER), (k, list(tau_c), tau_py)
-            _compare_states(c_ctl.fields(), py_ctl.state(), info)
+            _compare_states(c_ctl.fields(), py_ctl.state(), info, form)
             gains.append(py_ctl.gain)
         assert py_ctl.steps == len(seq)
         if info.switching:  # the switching gain is exercised, not identically zero
